@@ -1,0 +1,70 @@
+#include "core/collision_set.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ccd {
+namespace {
+
+template <class Pair>
+void normalize_contacts(std::vector<Contact<Pair>>& contacts) {
+  // NaN (no TOI) sorts after every reported time, so the first of each run is the earliest reported TOI.
+  std::sort(contacts.begin(), contacts.end(), [](const Contact<Pair>& x, const Contact<Pair>& y) {
+    if (x.pair != y.pair) return x.pair < y.pair;
+    if (std::isnan(x.toi)) return false;
+    return std::isnan(y.toi) || x.toi < y.toi;
+  });
+  contacts.erase(std::unique(contacts.begin(), contacts.end(),
+                             [](const Contact<Pair>& x, const Contact<Pair>& y) { return x.pair == y.pair; }),
+                 contacts.end());
+}
+
+template <class Pair>
+bool contains_pair(const std::vector<Contact<Pair>>& contacts, const Pair& pair) {
+  const auto it = std::lower_bound(contacts.begin(), contacts.end(), pair,
+                                   [](const Contact<Pair>& c, const Pair& p) { return c.pair < p; });
+  return it != contacts.end() && it->pair == pair;
+}
+
+template <class Pair>
+bool same_pair_lists(const std::vector<Contact<Pair>>& x, const std::vector<Contact<Pair>>& y) {
+  return std::equal(x.begin(), x.end(), y.begin(), y.end(),
+                    [](const Contact<Pair>& p, const Contact<Pair>& q) { return p.pair == q.pair; });
+}
+
+template <class Pair>
+std::vector<Contact<Pair>> contacts_difference(const std::vector<Contact<Pair>>& a,
+                                               const std::vector<Contact<Pair>>& b) {
+  std::vector<Contact<Pair>> out;
+  std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out),
+                      [](const Contact<Pair>& x, const Contact<Pair>& y) { return x.pair < y.pair; });
+  return out;
+}
+
+}  // namespace
+
+void CollisionSet::append(const CollisionSet& other) {
+  vertex_face_.insert(vertex_face_.end(), other.vertex_face_.begin(), other.vertex_face_.end());
+  edge_edge_.insert(edge_edge_.end(), other.edge_edge_.begin(), other.edge_edge_.end());
+}
+
+void CollisionSet::normalize() {
+  normalize_contacts(vertex_face_);
+  normalize_contacts(edge_edge_);
+}
+
+bool CollisionSet::contains(const VertexFacePair& pair) const { return contains_pair(vertex_face_, pair); }
+bool CollisionSet::contains(const EdgeEdgePair& pair) const { return contains_pair(edge_edge_, pair); }
+
+bool CollisionSet::same_pairs(const CollisionSet& other) const {
+  return same_pair_lists(vertex_face_, other.vertex_face_) && same_pair_lists(edge_edge_, other.edge_edge_);
+}
+
+CollisionSet set_difference(const CollisionSet& a, const CollisionSet& b) {
+  CollisionSet out;
+  for (const auto& c : contacts_difference(a.vertex_face(), b.vertex_face())) out.add(c.pair, c.toi);
+  for (const auto& c : contacts_difference(a.edge_edge(), b.edge_edge())) out.add(c.pair, c.toi);
+  return out;
+}
+
+}  // namespace ccd

@@ -1,0 +1,26 @@
+#include "datasets/data_dir.hpp"
+
+#include "ccd/config.hpp"
+
+#include <cstdlib>
+#include <string_view>
+
+namespace ccd::datasets {
+
+std::optional<std::filesystem::path> external_data_dir() {
+  if (const char* value = std::getenv("CCDBENCH_DATA_DIR"); value != nullptr && *value != '\0') {
+    return std::filesystem::path(value);
+  }
+  const std::filesystem::path checkout(CCDBENCH_SOURCE_DIR);
+  for (const std::filesystem::path& candidate : {checkout.parent_path() / "shared" / "data", checkout / "data" / "external"}) {
+    if (std::filesystem::is_directory(candidate)) return candidate;
+  }
+  return std::nullopt;
+}
+
+bool external_data_required() {
+  const char* value = std::getenv("CCDBENCH_REQUIRE_DATA");
+  return value != nullptr && std::string_view(value) == "1";
+}
+
+}  // namespace ccd::datasets

@@ -1,0 +1,17 @@
+#pragma once
+/// @file
+/// Where the public data with exact ground truth lives (DESIGN.md §7).
+
+#include <filesystem>
+#include <optional>
+
+namespace ccd::datasets {
+
+/// CCDBENCH_DATA_DIR when set; else `../shared/data` beside the checkout when it exists; else `data/external`
+/// of the checkout (where scripts/fetch-data.sh puts it) when it exists; else nullopt.
+std::optional<std::filesystem::path> external_data_dir();
+
+/// Whether CCDBENCH_REQUIRE_DATA=1: a test that would skip for lack of data fails instead (CI sets it).
+bool external_data_required();
+
+}  // namespace ccd::datasets

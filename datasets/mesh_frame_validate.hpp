@@ -1,0 +1,31 @@
+#pragma once
+// Template definition of validate_mesh_frame (mesh_frame.hpp); included from there only.
+
+#include "core/error.hpp"
+#include "datasets/mesh_frame.hpp"
+
+#include <cmath>
+
+namespace ccd::datasets {
+
+template <class WhereVertex, class WhereFace>
+void validate_mesh_frame(const std::filesystem::path& path, const MeshFrame& frame, WhereVertex where_vertex,
+                         WhereFace where_face) {
+  static constexpr const char* kAxis[3] = {"x", "y", "z"};
+  for (std::size_t i = 0; i < frame.positions.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const double value = frame.positions[i][k];
+      if (!std::isfinite(value)) {
+        throw InputError(path, where_vertex(i),
+                         std::string("coordinate ") + kAxis[k] + " of vertex " + std::to_string(i) + " is " +
+                             (std::isnan(value) ? "NaN" : "infinite"));
+      }
+    }
+  }
+  if (auto problem = find_face_list_problem(frame.positions.size(), frame.faces)) {
+    throw InputError(path, where_face(problem->face), "face " + std::to_string(problem->face) + ": " + problem->reason);
+  }
+  warn_unused_vertices(path, frame);
+}
+
+}  // namespace ccd::datasets
