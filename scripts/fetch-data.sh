@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Fetches the public data with exact ground truth into data/external (ignored by git), by commit, for users
+# who have the network. The layout is the one of ../shared/data (see its README). Tests find it there when
+# ../shared/data is absent, or wherever CCDBENCH_DATA_DIR points.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+target=data/external
+queries_repo=Continuous-Collision-Detection/Sample-Queries
+queries_commit=a744562c7a842e9eee033fcea290e75a4a8e7b4e
+scalable_repo=Continuous-Collision-Detection/Sample-Scalable-CCD-Data
+scalable_commit=d1de594b017d98b37be67f02f74e541e74804109
+
+command -v curl >/dev/null || { echo "fetch-data: needs curl (apt-get install curl)" >&2; exit 1; }
+
+fetch() {  # fetch REPO COMMIT PATH DESTINATION
+  local url="https://raw.githubusercontent.com/$1/$2/$3"
+  mkdir -p "$(dirname "$4")"
+  curl -fsSL --retry 3 -o "$4.part" "$url"
+  # Large files may be stored with Git LFS: the raw file is then a pointer; fetch the media instead.
+  if head -c 40 "$4.part" | grep -q "git-lfs.github.com/spec"; then
+    curl -fsSL --retry 3 -o "$4.part" "https://media.githubusercontent.com/media/$1/$2/$3"
+  fi
+  mv "$4.part" "$4"
+  echo "fetch-data: $4"
+}
+
+fetch "$queries_repo" "$queries_commit" LICENSE "$target/sample-queries/LICENSE"
+for kind in edge-edge vertex-face; do
+  for file in data_0_0.csv data_0_1.csv; do
+    fetch "$queries_repo" "$queries_commit" "unit-tests/$kind/$file" "$target/sample-queries/unit-tests/$kind/$file"
+  done
+done
+
+fetch "$scalable_repo" "$scalable_commit" LICENSE "$target/scalable-ccd-sample/LICENSE"
+for scene_step in cloth-funnel:227:228 rod-twist:3036:3037; do
+  IFS=: read -r scene step next <<<"$scene_step"
+  base="$target/scalable-ccd-sample/$scene"
+  fetch "$scalable_repo" "$scalable_commit" "$scene/frames/$step.ply" "$base/frames/$step.ply"
+  fetch "$scalable_repo" "$scalable_commit" "$scene/frames/$next.ply" "$base/frames/$next.ply"
+  for kind in vf ee; do
+    fetch "$scalable_repo" "$scalable_commit" "$scene/boxes/$step$kind.json" "$base/boxes/$step$kind.json"
+    fetch "$scalable_repo" "$scalable_commit" "$scene/queries/$step$kind.csv" "$base/queries/$step$kind.csv"
+    fetch "$scalable_repo" "$scalable_commit" "$scene/mma_bool/${step}${kind}_mma_bool.json" \
+      "$base/mma_bool/${step}${kind}_mma_bool.json"
+  done
+done
+echo "fetch-data: done; check the counts with: build/release/bin/ccdbench inspect $target/sample-queries"

@@ -1,0 +1,58 @@
+#include "core/collision_set.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace ccd {
+namespace {
+
+TEST(PairId, EdgeEdgePairIsCanonicalInEitherOrder) {
+  const Edge p = make_edge(7, 3), q = make_edge(1, 9);
+  EXPECT_EQ(p, (Edge{3, 7}));
+  EXPECT_EQ(make_edge_edge_pair(p, q), make_edge_edge_pair(q, p));
+  EXPECT_EQ(make_edge_edge_pair(p, q).a, q);
+}
+
+TEST(CollisionSet, NormalizeSortsDeduplicatesAndKeepsEarliestToi) {
+  CollisionSet set;
+  set.add(VertexFacePair{5, 2}, 0.75);
+  set.add(VertexFacePair{1, 9});
+  set.add(VertexFacePair{5, 2});
+  set.add(VertexFacePair{5, 2}, 0.25);
+  set.add(make_edge_edge_pair(make_edge(0, 1), make_edge(2, 3)), 0.5);
+  set.add(make_edge_edge_pair(make_edge(3, 2), make_edge(1, 0)));
+  set.normalize();
+  ASSERT_EQ(set.vertex_face().size(), 2u);
+  EXPECT_EQ(set.vertex_face()[0].pair, (VertexFacePair{1, 9}));
+  EXPECT_TRUE(std::isnan(set.vertex_face()[0].toi));
+  EXPECT_EQ(set.vertex_face()[1].toi, 0.25);
+  ASSERT_EQ(set.edge_edge().size(), 1u);
+  EXPECT_EQ(set.edge_edge()[0].toi, 0.5);
+  EXPECT_TRUE(set.contains(VertexFacePair{5, 2}));
+  EXPECT_FALSE(set.contains(VertexFacePair{2, 5}));
+}
+
+TEST(CollisionSet, DifferenceGivesMissesAndFalseAlarms) {
+  CollisionSet truth, reported;
+  truth.add(VertexFacePair{1, 1});
+  truth.add(VertexFacePair{2, 2});
+  reported.add(VertexFacePair{2, 2});
+  reported.add(VertexFacePair{3, 3});
+  truth.normalize();
+  reported.normalize();
+  const CollisionSet missed = set_difference(truth, reported);
+  const CollisionSet false_alarms = set_difference(reported, truth);
+  ASSERT_EQ(missed.size(), 1u);
+  EXPECT_EQ(missed.vertex_face()[0].pair, (VertexFacePair{1, 1}));
+  ASSERT_EQ(false_alarms.size(), 1u);
+  EXPECT_EQ(false_alarms.vertex_face()[0].pair, (VertexFacePair{3, 3}));
+  EXPECT_FALSE(truth.same_pairs(reported));
+  CollisionSet copy = truth;
+  copy.append(truth);
+  copy.normalize();
+  EXPECT_TRUE(copy.same_pairs(truth));
+}
+
+}  // namespace
+}  // namespace ccd

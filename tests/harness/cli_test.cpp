@@ -1,0 +1,98 @@
+// End-to-end tests of the ccdbench executable: what a user types, what a script reads.
+
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdio>
+#include <sys/wait.h>
+
+namespace ccd {
+namespace {
+
+struct CommandResult {
+  int exit_code;
+  std::string output;  // stdout and stderr together
+};
+
+CommandResult run_ccdbench(const std::string& arguments) {
+  const std::string command = std::string(CCDBENCH_EXECUTABLE) + " " + arguments + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return {-1, "popen failed"};
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) output += buffer.data();
+  const int status = ::pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+nlohmann::json inspect_json(const std::filesystem::path& path) {
+  const CommandResult result = run_ccdbench("inspect --json '" + path.string() + "'");
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  return nlohmann::json::parse(result.output);
+}
+
+TEST(Cli, HelpExplainsTheCommands) {
+  const CommandResult help = run_ccdbench("--help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("inspect"), std::string::npos) << help.output;
+  const CommandResult inspect_help = run_ccdbench("inspect --help");
+  EXPECT_NE(inspect_help.output.find("--json"), std::string::npos) << inspect_help.output;
+  EXPECT_NE(run_ccdbench("").exit_code, 0);
+  EXPECT_NE(run_ccdbench("no-such-command").exit_code, 0);
+  EXPECT_EQ(run_ccdbench("--version").exit_code, 0);
+}
+
+TEST(Cli, InspectPrintsTheDataReadmeCountsForEveryFileOfTheSharedData) {
+  CCD_REQUIRE_EXTERNAL_DATA(data);
+  const auto queries = inspect_json(data / "sample-queries");
+  EXPECT_EQ(queries["queries"], 324);
+  EXPECT_EQ(queries["positives"], 160);
+  EXPECT_EQ(inspect_json(data / "sample-queries/unit-tests/vertex-face/data_0_0.csv")["queries"], 125);
+
+  struct Step {
+    const char* name;
+    const char* step;
+    int vertices, faces, vf, vf_positives, ee, ee_positives;
+  };
+  for (const Step& s : {Step{"cloth-funnel", "227", 9450, 18484, 92, 27, 263, 107},
+                        Step{"rod-twist", "3036", 39940, 79864, 801, 765, 4370, 4179}}) {
+    SCOPED_TRACE(s.name);
+    const auto base = data / "scalable-ccd-sample" / s.name;
+    const auto step = inspect_json(base);
+    EXPECT_EQ(step["type"], "sample_step");
+    EXPECT_EQ(step["vertices"], s.vertices);
+    EXPECT_EQ(step["faces"], s.faces);
+    EXPECT_EQ(step["steps"], 1);
+    EXPECT_GT(step["max_displacement"][0].get<double>(), 0.0);
+    EXPECT_EQ(step["vf_queries"]["positives"], s.vf_positives);
+    EXPECT_EQ(step["ee_queries"]["positives"], s.ee_positives);
+    const std::string vf = std::string(s.step) + "vf", ee = std::string(s.step) + "ee";
+    EXPECT_EQ(inspect_json(base / "frames" / (std::string(s.step) + ".ply"))["faces"], s.faces);
+    EXPECT_EQ(inspect_json(base / "boxes" / (vf + ".json"))["pairs"], s.vf);
+    EXPECT_EQ(inspect_json(base / "boxes" / (ee + ".json"))["pairs"], s.ee);
+    EXPECT_EQ(inspect_json(base / "queries" / (vf + ".csv"))["positives"], s.vf_positives);
+    EXPECT_EQ(inspect_json(base / "queries" / (ee + ".csv"))["queries"], s.ee);
+    EXPECT_EQ(inspect_json(base / "mma_bool" / (vf + "_mma_bool.json"))["positives"], s.vf_positives);
+    EXPECT_EQ(inspect_json(base / "mma_bool" / (ee + "_mma_bool.json"))["entries"], s.ee);
+    EXPECT_EQ(inspect_json(base / "frames")["steps"], 1);
+  }
+}
+
+TEST(Cli, BadInputExitsNonZeroNamingFileAndLine) {
+  testing::TempDir dir;
+  testing::write_text(dir / "vertex-face/bad.csv", "1,1,1,1,1,1,1\n1,1,1,0,1,1,1\n");
+  const CommandResult result = run_ccdbench("inspect '" + (dir / "vertex-face/bad.csv").string() + "'");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.output.find("bad.csv:line 2: column 4: zero denominator"), std::string::npos) << result.output;
+  const CommandResult missing = run_ccdbench("inspect '" + (dir / "nothing.ply").string() + "'");
+  EXPECT_NE(missing.exit_code, 0);
+  testing::write_text(dir / "notes.txt", "hello");
+  EXPECT_NE(run_ccdbench("inspect '" + (dir / "notes.txt").string() + "'").output.find("not a ccdbench input"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace ccd

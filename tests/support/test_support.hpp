@@ -1,0 +1,58 @@
+#pragma once
+/// @file
+/// Helpers shared by the test suites: temporary folders, small meshes, and the rule for tests that need the
+/// public data (skip with a reason, or fail when CCDBENCH_REQUIRE_DATA=1).
+
+#include "core/topology.hpp"
+#include "core/vec.hpp"
+#include "datasets/data_dir.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace ccd::testing {
+
+/// A fresh folder under the system temporary directory, removed with its contents on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// Writes `text` to `path` as it is (no newline added).
+void write_text(const std::filesystem::path& path, const std::string& text);
+
+/// An n x n vertex grid in the z = 0 plane, spacing 1, two triangles per cell: 2(n-1)^2 faces.
+std::vector<Face> grid_faces(std::size_t n);
+std::vector<Vec3> grid_positions(std::size_t n, double z = 0.0);
+/// A closed tetrahedron (4 vertices, 4 faces, 6 edges).
+std::vector<Face> tetrahedron_faces();
+
+/// The external data folder, when present with the expected content; otherwise nullopt and the reason.
+std::optional<std::filesystem::path> external_data_or_reason(std::string& reason);
+
+}  // namespace ccd::testing
+
+/// Binds `dir` to the public data folder, or skips the test saying why (fails instead under
+/// CCDBENCH_REQUIRE_DATA=1, as CI sets it).
+#define CCD_REQUIRE_EXTERNAL_DATA(dir)                                                   \
+  std::filesystem::path dir;                                                             \
+  {                                                                                      \
+    std::string ccd_reason_;                                                             \
+    const auto ccd_found_ = ::ccd::testing::external_data_or_reason(ccd_reason_);       \
+    if (!ccd_found_) {                                                                   \
+      if (::ccd::datasets::external_data_required()) FAIL() << ccd_reason_;              \
+      GTEST_SKIP() << ccd_reason_;                                                       \
+    }                                                                                    \
+    dir = *ccd_found_;                                                                   \
+  }
