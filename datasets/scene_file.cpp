@@ -60,7 +60,8 @@ std::unique_ptr<FrameSource> frame_source_from_json(const json& frames, const st
     throw InputError(file, where, "must be an object with exactly one of: files, pattern, directory, cache");
   }
   reject_unknown_keys(file, where, frames, {"files", "pattern", "directory", "cache"});
-  const auto& [key, value] = *frames.items().begin();
+  const std::string key = frames.begin().key();
+  const json& value = frames.begin().value();
   if (key == "files") {
     if (!value.is_array() || value.empty()) throw InputError(file, where + ".files", "must be a non-empty array");
     std::vector<std::filesystem::path> files;
