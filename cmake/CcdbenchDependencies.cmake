@@ -1,11 +1,13 @@
 # Every dependency is a Debian 12 package; scripts/setup.sh installs them.
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 find_package(TBB REQUIRED)
+find_package(CGAL 5.5 REQUIRED)
 find_package(nlohmann_json 3.10 REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(PkgConfig REQUIRED)
-pkg_check_modules(GMP REQUIRED IMPORTED_TARGET gmp gmpxx)
-pkg_check_modules(MPFR REQUIRED IMPORTED_TARGET mpfr)
+# Prefixed: CGAL's own FindGMP/FindMPFR read the unprefixed GMP_* and MPFR_* variables.
+pkg_check_modules(CCD_GMP REQUIRED IMPORTED_TARGET gmp gmpxx)
+pkg_check_modules(CCD_MPFR REQUIRED IMPORTED_TARGET mpfr)
 
 # Optional backends: ON by default when the distribution's package is found, and said clearly when OFF.
 find_package(OpenCL QUIET)

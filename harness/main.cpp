@@ -2,7 +2,8 @@
 
 #include "ccd/config.hpp"
 #include "core/error.hpp"
-#include "harness/inspect.hpp"
+#include "harness/commands.hpp"
+#include "harness/query_scoring.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -21,18 +22,6 @@ std::string version_text() {
          (CCDBENCH_WITH_OPENCL ? "on" : "off") + ", FCL " + (CCDBENCH_WITH_FCL ? "on" : "off") + ")";
 }
 
-int run_inspect(const std::vector<std::string>& paths, bool as_json) {
-  for (const std::string& path : paths) {
-    const nlohmann::json description = ccd::harness::inspect_path(path);
-    if (as_json) {
-      std::cout << description.dump() << '\n';
-    } else {
-      ccd::harness::print_inspection(description, std::cout);
-    }
-  }
-  return 0;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -40,8 +29,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", version_text());
   app.require_subcommand(1);
 
-  std::vector<std::string> inspect_paths;
-  bool inspect_json = false;
+  ccd::harness::InspectOptions inspect_options;
   CLI::App* inspect = app.add_subcommand(
       "inspect",
       "Print what a file or folder holds: counts of vertices, faces, edges, frames, steps, queries and truth\n"
@@ -49,8 +37,45 @@ int main(int argc, char** argv) {
       "folder or printf pattern (frame_%04d.ply), a scene file (.json, or a folder with scene.json), a\n"
       "Scalable-CCD sample step folder, a query file (.csv) or folder, a truth file (mma_bool/*.json), a\n"
       "candidate file (boxes/*.json) or a frame cache.");
-  inspect->add_option("PATH", inspect_paths, "files or folders to describe")->required();
-  inspect->add_flag("--json", inspect_json, "print one JSON object per PATH (one per line) instead of text");
+  inspect->add_option("PATH", inspect_options.paths, "files or folders to describe")->required();
+  inspect->add_flag("--json", inspect_options.json, "print one JSON object per PATH (one per line) instead of text");
+
+  ccd::harness::QueriesOptions queries_options;
+  std::string methods = "exact";
+  CLI::App* queries = app.add_subcommand(
+      "queries",
+      "Score methods on rational query files: per file and in total, queries, truth positives, reported,\n"
+      "false negatives (FN), false positives (FP) and time per query. Folders are searched for .csv files; a\n"
+      "file under vertex-face/ or named *vf.csv is vertex-face, under edge-edge/ or *ee.csv edge-edge; truth\n"
+      "is column 7 or mma_bool/NAME_mma_bool.json beside queries/NAME.csv.");
+  queries->add_option("PATH", queries_options.paths, "query files or folders")->required();
+  queries->add_option("--method", methods, "comma-separated methods; `exact` is the reference itself")
+      ->capture_default_str();
+  queries->add_option("--thickness", queries_options.thickness, "thickness δ >= 0 (the data's truth is for 0)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  queries->add_option("--repeat", queries_options.repeats, "timing passes per file; ns/query is their median")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  queries->add_option("--json", queries_options.json, "also write the scores as a JSON array to this file");
+
+  ccd::harness::TruthOptions truth_options;
+  CLI::App* truth = app.add_subcommand(
+      "truth",
+      "Exact whole-step truth: every vertex-face and edge-edge pair that comes within the thickness during the\n"
+      "step, found by a certified sort-and-sweep of swept boxes and decided by the reference (certified\n"
+      "filter, then exact root isolation). Prints the colliding counts and how the pairs were decided.");
+  truth->add_option("--frames", truth_options.frames, "two mesh files: the step's first and last frame")
+      ->expected(2);
+  truth->add_option("--scene", truth_options.scene, "a scene file (or folder with scene.json)");
+  truth->add_option("--step", truth_options.step, "step K of the scene: frame K -> K+1")->capture_default_str();
+  truth->add_option("--sample", truth_options.sample,
+                    "a Scalable-CCD sample step folder: also compare with its own truth");
+  truth->add_option("--thickness", truth_options.thickness,
+                    "thickness δ >= 0 (default: the scene's; 0 for --frames and --sample)")
+      ->check(CLI::NonNegativeNumber);
+  truth->add_flag("--toi", truth_options.toi, "also compute every colliding pair's earliest contact time exactly");
+  truth->add_option("--json", truth_options.json, "also write the counts and statistics as JSON to this file");
 
   try {
     app.parse(argc, argv);
@@ -59,7 +84,12 @@ int main(int argc, char** argv) {
   }
 
   try {
-    if (*inspect) return run_inspect(inspect_paths, inspect_json);
+    if (*inspect) return ccd::harness::run_inspect(inspect_options, std::cout);
+    if (*queries) {
+      queries_options.methods = CLI::detail::split(methods, ',');
+      return ccd::harness::run_queries(queries_options, std::cout);
+    }
+    if (*truth) return ccd::harness::run_truth(truth_options, std::cout);
   } catch (const ccd::InputError& error) {
     std::cerr << "ccdbench: error: " << error.what() << '\n';
     return 2;

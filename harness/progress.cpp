@@ -16,6 +16,11 @@ void Progress::update(std::size_t done) {
   std::cerr << label_ << ": " << done_ << "/" << total_ << '\n';
 }
 
+void Progress::update(std::size_t done, std::size_t total) {
+  total_ = total;
+  update(done);
+}
+
 Progress::~Progress() {
   if (printed_) std::cerr << label_ << ": " << done_ << "/" << total_ << " done\n";
 }

@@ -13,6 +13,8 @@ class Progress {
   Progress(std::string label, std::size_t total);
   /// Marks `done` items finished (prints when due).
   void update(std::size_t done);
+  /// The same, for work whose total is known only once it starts.
+  void update(std::size_t done, std::size_t total);
   /// Prints the final count if anything was printed before.
   ~Progress();
 

@@ -1,0 +1,141 @@
+#include "harness/commands.hpp"
+
+#include "core/error.hpp"
+#include "datasets/sample_step.hpp"
+#include "datasets/scene_file.hpp"
+#include "harness/inspect.hpp"
+#include "harness/json_output.hpp"
+#include "harness/progress.hpp"
+#include "harness/query_scoring.hpp"
+#include "harness/sample_comparison.hpp"
+#include "reference/step_truth.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <iomanip>
+#include <iostream>
+
+namespace ccd::harness {
+
+int run_inspect(const InspectOptions& options, std::ostream& out) {
+  for (const auto& path : options.paths) {
+    const nlohmann::json description = inspect_path(path);
+    if (options.json) {
+      out << description.dump() << '\n';
+    } else {
+      print_inspection(description, out);
+    }
+  }
+  return 0;
+}
+
+int run_queries(const QueriesOptions& options, std::ostream& out) {
+  for (const std::string& method : options.methods) make_query_method(method);  // unknown names fail before work
+  std::vector<datasets::QueryFile> files;
+  for (const auto& path : datasets::discover_query_files(options.paths)) files.push_back(datasets::read_query_file(path));
+  if (files.empty()) throw InputError({}, {}, "no query files found under the given paths");
+  Progress progress("queries: files", files.size());
+  const std::vector<QueryScore> scores = score_query_files(
+      files, {options.methods, options.thickness, options.repeats},
+      [&](std::size_t done, std::size_t) { progress.update(done); });
+  print_query_scores(scores, out);
+  if (options.thickness > 0) {
+    out << "note: the data's truth labels are for zero thickness; at thickness " << options.thickness
+        << " a method may rightly report more (counted as FP here), never fewer.\n";
+  }
+  if (options.json) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (const QueryScore& score : scores) rows.push_back(to_json(score));
+    write_json_file(*options.json, rows);
+  }
+  return 0;
+}
+
+namespace {
+
+struct LoadedStep {
+  std::string name;
+  Scene scene;
+  std::vector<Vec3> x0, x1;
+  std::optional<datasets::SampleStep> sample;
+};
+
+LoadedStep load_step(const TruthOptions& options) {
+  const int sources = (options.frames.empty() ? 0 : 1) + (options.scene ? 1 : 0) + (options.sample ? 1 : 0);
+  if (sources != 1) throw std::invalid_argument("give exactly one of --frames A B, --scene FILE --step K, --sample DIR");
+  if (options.sample) {
+    datasets::SampleStep step = datasets::load_sample_step(*options.sample);
+    const std::size_t num_vertices = step.topology.num_vertices();
+    Scene scene({{"mesh", ObjectKind::deformable, true, num_vertices, step.topology.faces()}}, {},
+                options.thickness.value_or(0.0));
+    LoadedStep loaded{options.sample->string(), std::move(scene), step.x0, step.x1, std::nullopt};
+    loaded.sample = std::move(step);
+    return loaded;
+  }
+  if (!options.frames.empty()) {
+    if (options.frames.size() != 2) throw std::invalid_argument("--frames takes exactly two files (the step's frames)");
+    const datasets::SceneSequence sequence =
+        datasets::scene_from_frame_files(options.frames, options.thickness.value_or(0.0));
+    return {options.frames[0].string() + " -> " + options.frames[1].string(), sequence.scene(), sequence.frame(0),
+            sequence.frame(1), std::nullopt};
+  }
+  datasets::SceneSequence sequence = datasets::load_scene_file(*options.scene);
+  if (options.thickness) sequence.set_thickness(*options.thickness);
+  if (options.step >= sequence.num_steps()) {
+    throw InputError(*options.scene, "step " + std::to_string(options.step),
+                     "the scene has " + std::to_string(sequence.num_steps()) + " steps (0.." +
+                         std::to_string(sequence.num_steps() == 0 ? 0 : sequence.num_steps() - 1) + ")");
+  }
+  return {options.scene->string() + " step " + std::to_string(options.step), sequence.scene(),
+          sequence.frame(options.step), sequence.frame(options.step + 1), std::nullopt};
+}
+
+}  // namespace
+
+int run_truth(const TruthOptions& options, std::ostream& out) {
+  const LoadedStep step = load_step(options);
+  reference::TruthRequest request;
+  request.thickness = step.scene.thickness();
+  request.with_toi = options.toi;
+  Progress progress("truth: pairs decided", 0);
+  request.progress = [&](std::size_t done, std::size_t total) { progress.update(done, total); };
+  const reference::StepTruth truth = reference::compute_step_truth(step.scene, step.x0, step.x1, request);
+  const reference::TruthStatistics& s = truth.statistics;
+
+  nlohmann::json result = {{"step", step.name},
+                           {"thickness", request.thickness},
+                           {"vertices", step.scene.topology().num_vertices()},
+                           {"faces", step.scene.topology().num_faces()},
+                           {"vf", truth.collisions.vertex_face().size()},
+                           {"ee", truth.collisions.edge_edge().size()},
+                           {"vf_pairs_enumerated", s.vertex_face_pairs},
+                           {"ee_pairs_enumerated", s.edge_edge_pairs},
+                           {"decided_by_filter", s.decided_by_filter},
+                           {"decided_exactly", s.decided_exactly},
+                           {"enumeration_ms", s.enumeration_milliseconds},
+                           {"decision_ms", s.decision_milliseconds}};
+  out << "truth for " << step.name << " (thickness " << request.thickness << ")\n"
+      << "  colliding pairs: vertex-face " << truth.collisions.vertex_face().size() << ", edge-edge "
+      << truth.collisions.edge_edge().size() << "\n"
+      << "  pairs enumerated (overlapping swept boxes): vertex-face " << s.vertex_face_pairs << ", edge-edge "
+      << s.edge_edge_pairs << "\n"
+      << "  decided by the certified filter " << s.decided_by_filter << ", exactly " << s.decided_exactly << "\n"
+      << std::fixed << std::setprecision(1) << "  time: enumeration " << s.enumeration_milliseconds
+      << " ms, decisions " << s.decision_milliseconds << " ms\n";
+  out.unsetf(std::ios::fixed);
+  if (step.sample) {
+    const SampleComparison comparison = compare_with_sample(*step.sample, truth.collisions);
+    result["sample"] = to_json(comparison);
+    out << "  sample's own truth: vertex-face " << comparison.vertex_face_found << " of "
+        << comparison.vertex_face_positives << " found, edge-edge " << comparison.edge_edge_found << " of "
+        << comparison.edge_edge_positives << " found\n"
+        << "  colliding pairs outside the sample's candidate list: vertex-face "
+        << comparison.vertex_face_outside_candidates << ", edge-edge " << comparison.edge_edge_outside_candidates
+        << "\n";
+    for (const std::string& missing : comparison.missing) out << "  MISSING " << missing << "\n";
+  }
+  if (options.json) write_json_file(*options.json, result);
+  return 0;
+}
+
+}  // namespace ccd::harness

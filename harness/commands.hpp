@@ -1,0 +1,42 @@
+#pragma once
+/// @file
+/// The `ccdbench` commands behind the command line (main.cpp parses options into these structs).
+
+#include <filesystem>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ccd::harness {
+
+struct InspectOptions {
+  std::vector<std::filesystem::path> paths;
+  bool json = false;
+};
+int run_inspect(const InspectOptions& options, std::ostream& out);
+
+struct QueriesOptions {
+  std::vector<std::filesystem::path> paths;
+  std::vector<std::string> methods{"exact"};
+  double thickness = 0.0;
+  int repeats = 1;
+  std::optional<std::filesystem::path> json;
+};
+/// Scores every method on every discovered query file; prints a table. Exit status 0.
+int run_queries(const QueriesOptions& options, std::ostream& out);
+
+struct TruthOptions {
+  /// Exactly one source: two frame files, a scene file and step, or a sample step folder.
+  std::vector<std::filesystem::path> frames;
+  std::optional<std::filesystem::path> scene;
+  std::size_t step = 0;
+  std::optional<std::filesystem::path> sample;
+  std::optional<double> thickness;
+  bool toi = false;
+  std::optional<std::filesystem::path> json;
+};
+/// Whole-step truth with counts and statistics; with a sample step, also the comparison with its truth.
+int run_truth(const TruthOptions& options, std::ostream& out);
+
+}  // namespace ccd::harness

@@ -1,0 +1,142 @@
+#include "harness/query_scoring.hpp"
+
+#include "reference/elementary_pair.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <iomanip>
+#include <map>
+#include <ostream>
+#include <stdexcept>
+
+namespace ccd::harness {
+namespace {
+
+/// The reference on the query's exact rationals: the harness calling the oracle, not a strategy's narrow phase.
+class ExactQueryMethod final : public QueryMethod {
+ public:
+  std::string name() const override { return "exact"; }
+  bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
+    reference::ExactPair pair;
+    pair.kind = kind == datasets::QueryKind::vertex_face ? reference::PairKind::vertex_face
+                                                         : reference::PairKind::edge_edge;
+    pair.rows = query.exact;
+    return reference::decide(pair, mpq_class(thickness)).collides;
+  }
+};
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2;
+}
+
+}  // namespace
+
+std::unique_ptr<QueryMethod> make_query_method(const std::string& name) {
+  if (name == "exact") return std::make_unique<ExactQueryMethod>();
+  std::string known;
+  for (const std::string& n : query_method_names()) known += (known.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("unknown method '" + name + "' (known: " + known + ")");
+}
+
+std::vector<std::string> query_method_names() { return {"exact"}; }
+
+nlohmann::json to_json(const QueryScore& s) {
+  return {{"method", s.method},
+          {"file", s.file},
+          {"thickness", s.thickness},
+          {"queries", s.queries},
+          {"positives", s.positives},
+          {"reported", s.reported},
+          {"false_negatives", s.false_negatives},
+          {"false_positives", s.false_positives},
+          {"unlabeled", s.unlabeled},
+          {"ns_per_query", s.ns_per_query},
+          {"false_negative_lines", s.false_negative_lines}};
+}
+
+std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files,
+                                          const QueryScoringRequest& request,
+                                          const std::function<void(std::size_t, std::size_t)>& on_file) {
+  std::vector<std::unique_ptr<QueryMethod>> methods;
+  for (const std::string& name : request.methods) methods.push_back(make_query_method(name));
+  std::vector<QueryScore> scores;
+  std::map<std::string, QueryScore> totals;
+  std::map<std::string, double> total_nanoseconds;
+  for (std::size_t index = 0; index < files.size(); ++index) {
+    const datasets::QueryFile& file = files[index];
+    for (const auto& method : methods) {
+      QueryScore score;
+      score.method = method->name();
+      score.file = file.path.string();
+      score.thickness = request.thickness;
+      std::vector<double> per_query;
+      for (int repeat = 0; repeat < std::max(1, request.repeats); ++repeat) {
+        std::vector<char> answers(file.queries.size());
+        const auto start = std::chrono::steady_clock::now();
+        for (std::size_t q = 0; q < file.queries.size(); ++q) {
+          answers[q] = method->collides(file.queries[q], file.kind, request.thickness) ? 1 : 0;
+        }
+        const std::chrono::duration<double, std::nano> elapsed = std::chrono::steady_clock::now() - start;
+        per_query.push_back(file.queries.empty() ? 0.0 : elapsed.count() / static_cast<double>(file.queries.size()));
+        if (repeat > 0) continue;  // verdicts from the first pass; later passes only time
+        for (std::size_t q = 0; q < file.queries.size(); ++q) {
+          const datasets::Query& query = file.queries[q];
+          const bool reported = answers[q] != 0;
+          score.queries += 1;
+          score.reported += reported ? 1 : 0;
+          if (!query.truth) {
+            score.unlabeled += 1;
+            continue;
+          }
+          score.positives += *query.truth ? 1 : 0;
+          if (*query.truth && !reported) {
+            score.false_negatives += 1;
+            if (score.false_negative_lines.size() < 20) score.false_negative_lines.push_back(query.first_line);
+          }
+          if (!*query.truth && reported) score.false_positives += 1;
+        }
+      }
+      score.ns_per_query = median(per_query);
+      QueryScore& total = totals[score.method];
+      total.method = score.method;
+      total.file = "(all)";
+      total.thickness = request.thickness;
+      total.queries += score.queries;
+      total.positives += score.positives;
+      total.reported += score.reported;
+      total.false_negatives += score.false_negatives;
+      total.false_positives += score.false_positives;
+      total.unlabeled += score.unlabeled;
+      total_nanoseconds[score.method] += score.ns_per_query * static_cast<double>(score.queries);
+      scores.push_back(std::move(score));
+    }
+    if (on_file) on_file(index + 1, files.size());
+  }
+  for (const auto& method : methods) {
+    QueryScore& total = totals.at(method->name());
+    total.ns_per_query = total.queries == 0 ? 0.0 : total_nanoseconds[method->name()] / static_cast<double>(total.queries);
+    scores.push_back(total);
+  }
+  return scores;
+}
+
+void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out) {
+  std::size_t file_width = 4;
+  for (const QueryScore& s : scores) file_width = std::max(file_width, s.file.size());
+  out << std::left << std::setw(14) << "method" << std::setw(static_cast<int>(file_width) + 2) << "file" << std::right
+      << std::setw(9) << "queries" << std::setw(10) << "positive" << std::setw(10) << "reported" << std::setw(8)
+      << "FN" << std::setw(8) << "FP" << std::setw(14) << "ns/query" << '\n';
+  for (const QueryScore& s : scores) {
+    out << std::left << std::setw(14) << s.method << std::setw(static_cast<int>(file_width) + 2) << s.file
+        << std::right << std::setw(9) << s.queries << std::setw(10) << s.positives << std::setw(10) << s.reported
+        << std::setw(8) << s.false_negatives << std::setw(8) << s.false_positives << std::setw(14) << std::fixed
+        << std::setprecision(0) << s.ns_per_query << '\n';
+    out.unsetf(std::ios::fixed);
+  }
+}
+
+}  // namespace ccd::harness

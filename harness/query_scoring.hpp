@@ -1,0 +1,66 @@
+#pragma once
+/// @file
+/// Scoring methods on query files (`ccdbench queries`): the same queries, every method, one run.
+
+#include "datasets/query_file.hpp"
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ccd::harness {
+
+/// A way of answering "do these primitives come within δ during the step?" for one query.
+class QueryMethod {
+ public:
+  virtual ~QueryMethod() = default;
+  virtual std::string name() const = 0;
+  /// The answer for `query` at thickness δ (the method decides whether it uses the exact rationals or the
+  /// doubles they round to).
+  virtual bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const = 0;
+};
+
+/// Methods by name: `exact` (the reference: certified filter, then exact root isolation, on the rationals).
+/// @throws std::invalid_argument naming the known methods for an unknown name.
+std::unique_ptr<QueryMethod> make_query_method(const std::string& name);
+std::vector<std::string> query_method_names();
+
+/// One method on one file (or on all files: file = "(all)"), fields as DESIGN.md §5.
+struct QueryScore {
+  std::string method;
+  std::string file;
+  double thickness = 0.0;
+  std::size_t queries = 0;
+  std::size_t positives = 0;
+  std::size_t reported = 0;
+  std::size_t false_negatives = 0;
+  std::size_t false_positives = 0;
+  /// Queries without a truth label: counted in `reported` but in neither error count.
+  std::size_t unlabeled = 0;
+  /// Median over repeats of (time for the file / queries).
+  double ns_per_query = 0.0;
+  /// First lines of the missed queries (for the regression library), at most 20.
+  std::vector<std::size_t> false_negative_lines;
+};
+
+nlohmann::json to_json(const QueryScore& score);
+
+struct QueryScoringRequest {
+  std::vector<std::string> methods;
+  double thickness = 0.0;
+  int repeats = 1;
+};
+
+/// Scores every method on every file; returns per-file scores followed by one "(all)" score per method.
+/// `on_file(index, count)` is called after each file (progress).
+std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files,
+                                          const QueryScoringRequest& request,
+                                          const std::function<void(std::size_t, std::size_t)>& on_file = {});
+
+/// A fixed-width table of the scores.
+void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out);
+
+}  // namespace ccd::harness

@@ -1,0 +1,46 @@
+#include "reference/elementary_pair.hpp"
+
+#include "reference/certified_filter.hpp"
+#include "reference/exact_decision.hpp"
+
+namespace ccd::reference {
+
+ExactPair exact_pair_from_doubles(PairKind kind, const std::array<Vec3, 8>& rows) {
+  ExactPair pair;
+  pair.kind = kind;
+  for (int r = 0; r < 8; ++r) {
+    for (int k = 0; k < 3; ++k) pair.rows[r][k] = mpq_class(rows[r][k]);  // exact: every double is a rational
+  }
+  return pair;
+}
+
+namespace {
+
+/// The filter first when asked, then the exact path; `exact_inputs()` builds the rationals only when needed.
+template <class ExactInputs>
+Decision filter_then_exact(PairKind kind, const std::array<IntervalPoint, 8>& intervals, Interval thickness,
+                           const DecisionRequest& request, ExactInputs exact_inputs) {
+  if (request.use_filter) {
+    const FilterVerdict verdict = filter_decide(kind, intervals, thickness);
+    if (verdict == FilterVerdict::certainly_no) return {false, DecidedBy::filter, std::nullopt};
+    if (verdict == FilterVerdict::certainly_yes && !request.want_toi) return {true, DecidedBy::filter, std::nullopt};
+  }
+  const auto [pair, exact_thickness] = exact_inputs();
+  const ExactResult exact = decide_exactly(pair, exact_thickness, request.want_toi ? request.toi_bits : 0);
+  return {exact.collides, DecidedBy::exact, exact.toi};
+}
+
+}  // namespace
+
+Decision decide(const ExactPair& pair, const mpq_class& thickness, const DecisionRequest& request) {
+  return filter_then_exact(pair.kind, interval_rows(pair.rows), enclosing_interval(thickness), request,
+                           [&] { return std::pair<const ExactPair&, const mpq_class&>(pair, thickness); });
+}
+
+Decision decide(PairKind kind, const std::array<Vec3, 8>& rows, double thickness, const DecisionRequest& request) {
+  return filter_then_exact(kind, interval_rows(rows), Interval(thickness), request, [&] {
+    return std::pair<ExactPair, mpq_class>(exact_pair_from_doubles(kind, rows), mpq_class(thickness));
+  });
+}
+
+}  // namespace ccd::reference
