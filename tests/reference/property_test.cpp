@@ -1,0 +1,121 @@
+// Seeded random pairs, near-degenerate ones included: the filter never changes an answer, answers are monotone
+// in δ, and symmetries of the problem never change them (metamorphic tests).
+
+#include "reference/elementary_pair.hpp"
+#include "tests/support/rational_rows.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace ccd::reference {
+namespace {
+
+constexpr std::uint64_t kSeed = 0x5eed2026;
+
+struct RandomPair {
+  PairKind kind;
+  std::array<Vec3, 8> rows;
+};
+
+/// Three families, so degenerate configurations are common: coordinates on a coarse grid of eighths (coplanar,
+/// collinear and touching configurations arise often), small perturbations of a touching configuration, and
+/// general doubles.
+std::vector<RandomPair> random_pairs(std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_int_distribution<int> grid(-8, 8);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::uniform_int_distribution<int> exponent(-40, -10);
+  std::vector<RandomPair> pairs;
+  for (std::size_t i = 0; i < count; ++i) {
+    RandomPair pair{i % 2 == 0 ? PairKind::vertex_face : PairKind::edge_edge, {}};
+    const int family = static_cast<int>(i % 6) / 2;
+    for (Vec3& row : pair.rows) {
+      for (int k = 0; k < 3; ++k) {
+        if (family == 0) row[k] = grid(random) / 8.0;
+        else if (family == 1) row[k] = grid(random) / 4.0 + (random() % 3 == 0 ? std::ldexp(uniform(random), exponent(random)) : 0.0);
+        else row[k] = uniform(random);
+      }
+    }
+    if (family == 0 && random() % 2 == 0) {
+      for (int k = 0; k < 4; ++k) pair.rows[k + 4] = pair.rows[k];  // zero motion
+    }
+    pairs.push_back(pair);
+  }
+  return pairs;
+}
+
+std::string describe(const RandomPair& pair, double thickness) {
+  return std::string(pair.kind == PairKind::vertex_face ? "vertex-face" : "edge-edge") + ", δ = " +
+         std::to_string(thickness) + ", seed " + std::to_string(kSeed) + ":\n" + testing::rational_rows(pair.rows);
+}
+
+TEST(ReferenceProperty, FilterThenExactEqualsExactOnly) {
+  std::cout << "seed " << kSeed << "\n";
+  for (double thickness : {0.0, 0.05}) {
+    for (const RandomPair& pair : random_pairs(1500, kSeed)) {
+      const bool exact_only = decide(pair.kind, pair.rows, thickness, {false, false, 0}).collides;
+      const bool filtered = decide(pair.kind, pair.rows, thickness).collides;
+      ASSERT_EQ(filtered, exact_only) << describe(pair, thickness);
+    }
+  }
+}
+
+TEST(ReferenceProperty, MonotoneInThickness) {
+  const double thicknesses[] = {0.0, 1.0 / 64, 1.0 / 16, 0.25};
+  for (const RandomPair& pair : random_pairs(1500, kSeed + 1)) {
+    bool previous = false;
+    for (double thickness : thicknesses) {
+      const bool collides = decide(pair.kind, pair.rows, thickness).collides;
+      ASSERT_TRUE(collides || !previous) << "collides at a smaller δ but not at " << describe(pair, thickness);
+      previous = collides;
+    }
+  }
+}
+
+/// Variants of a pair that describe the same geometric question.
+std::vector<std::pair<std::string, RandomPair>> symmetric_variants(const RandomPair& pair, double& thickness_scale) {
+  std::vector<std::pair<std::string, RandomPair>> variants;
+  const auto& r = pair.rows;
+  RandomPair reversed = pair;
+  for (int k = 0; k < 4; ++k) std::swap(reversed.rows[k], reversed.rows[k + 4]);
+  variants.emplace_back("time reversed", reversed);
+  auto permuted = [&](std::array<int, 4> order) {
+    RandomPair p = pair;
+    for (int k = 0; k < 4; ++k) {
+      p.rows[k] = r[order[k]];
+      p.rows[k + 4] = r[order[k] + 4];
+    }
+    return p;
+  };
+  if (pair.kind == PairKind::vertex_face) {
+    variants.emplace_back("face corners rotated", permuted({0, 2, 3, 1}));
+    variants.emplace_back("face corners reflected", permuted({0, 1, 3, 2}));
+  } else {
+    variants.emplace_back("edge a endpoints swapped", permuted({1, 0, 2, 3}));
+    variants.emplace_back("edge b endpoints swapped", permuted({0, 1, 3, 2}));
+    variants.emplace_back("edges swapped", permuted({2, 3, 0, 1}));
+  }
+  thickness_scale = std::ldexp(1.0, -20);
+  RandomPair scaled = pair;
+  for (Vec3& row : scaled.rows) row *= thickness_scale;
+  variants.emplace_back("scaled by 2^-20 (with δ)", scaled);
+  return variants;
+}
+
+TEST(ReferenceProperty, SymmetriesNeverChangeTheAnswer) {
+  for (double thickness : {0.0, 0.05}) {
+    for (const RandomPair& pair : random_pairs(1200, kSeed + 2)) {
+      const bool answer = decide(pair.kind, pair.rows, thickness).collides;
+      double scale = 1.0;
+      for (const auto& [name, variant] : symmetric_variants(pair, scale)) {
+        const double variant_thickness = name.rfind("scaled", 0) == 0 ? thickness * scale : thickness;
+        ASSERT_EQ(decide(variant.kind, variant.rows, variant_thickness).collides, answer)
+            << name << " changed the answer of " << describe(pair, thickness);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ccd::reference

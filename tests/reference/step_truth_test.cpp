@@ -1,0 +1,123 @@
+// Whole-step truth on small hand-made scenes, checked against brute force over every elementary pair.
+
+#include "core/scene.hpp"
+#include "reference/elementary_pair.hpp"
+#include "reference/step_truth.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <random>
+
+namespace ccd::reference {
+namespace {
+
+/// Every elementary pair the scene allows, decided exactly: the independent check of the sweep's culling.
+CollisionSet brute_force_truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, double delta) {
+  const MeshTopology& topology = scene.topology();
+  CollisionSet truth;
+  for (VertexId v = 0; v < topology.num_vertices(); ++v) {
+    if (!topology.is_used(v)) continue;
+    for (FaceId f = 0; f < topology.num_faces(); ++f) {
+      const Face& face = topology.face(f);
+      if (v == face[0] || v == face[1] || v == face[2]) continue;
+      if (!scene.may_collide(scene.object_of_vertex(v), scene.object_of_face(f))) continue;
+      const std::array<Vec3, 8> rows = {x0[v], x0[face[0]], x0[face[1]], x0[face[2]],
+                                        x1[v], x1[face[0]], x1[face[1]], x1[face[2]]};
+      if (decide(PairKind::vertex_face, rows, delta).collides) truth.add(VertexFacePair{v, f});
+    }
+  }
+  for (EdgeId i = 0; i < topology.num_edges(); ++i) {
+    for (EdgeId j = i + 1; j < topology.num_edges(); ++j) {
+      const Edge a = topology.edge(i), b = topology.edge(j);
+      if (a.v0 == b.v0 || a.v0 == b.v1 || a.v1 == b.v0 || a.v1 == b.v1) continue;
+      if (!scene.may_collide(scene.object_of_vertex(a.v0), scene.object_of_vertex(b.v0))) continue;
+      const std::array<Vec3, 8> rows = {x0[a.v0], x0[a.v1], x0[b.v0], x0[b.v1], x1[a.v0], x1[a.v1], x1[b.v0], x1[b.v1]};
+      if (decide(PairKind::edge_edge, rows, delta).collides) truth.add(make_edge_edge_pair(a, b));
+    }
+  }
+  truth.normalize();
+  return truth;
+}
+
+/// A 5x5 cloth falling through a static 3x3 plate while its raised right half folds over and through its left
+/// half, plus an unused vertex in the middle of everything.
+struct FoldScene {
+  Scene scene;
+  std::vector<Vec3> x0, x1;
+};
+
+FoldScene fold_scene(bool cloth_self, bool cloth_plate) {
+  std::vector<Vec3> cloth0 = testing::grid_positions(5, 1.0), cloth1 = cloth0;
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> jitter(-0.05, 0.05);
+  for (std::size_t i = 0; i < cloth1.size(); ++i) {
+    const double x = cloth0[i].x();
+    if (x > 2) cloth0[i].z() += x - 2;
+    // The left half drops to z = -0.2; the right half swings over to x -> 4 - x and ends below it, at z = -0.5.
+    cloth1[i] = x > 2 ? Vec3(4 - x + jitter(random), cloth0[i].y(), -0.5) : Vec3(x, cloth0[i].y(), -0.2);
+  }
+  std::vector<Vec3> plate = testing::grid_positions(3, 0.0);
+  for (Vec3& p : plate) p = Vec3(p.x() * 1.5 + 0.25, p.y() * 1.5 + 0.25, 0.0);
+  std::vector<Vec3> x0 = cloth0, x1 = cloth1;
+  x0.insert(x0.end(), plate.begin(), plate.end());
+  x1.insert(x1.end(), plate.begin(), plate.end());
+  x0.emplace_back(1.5, 1.5, 0.5);  // the unused vertex sits in the middle of everything
+  x1.emplace_back(1.5, 1.5, -0.5);
+  std::vector<std::pair<ObjectId, ObjectId>> collidable;
+  if (cloth_plate) collidable.emplace_back(0, 1);
+  Scene scene({{"cloth", ObjectKind::deformable, cloth_self, 25, testing::grid_faces(5)},
+               {"plate", ObjectKind::static_object, false, 10, testing::grid_faces(3)}},
+              collidable, 0.0);
+  return {std::move(scene), std::move(x0), std::move(x1)};
+}
+
+TEST(StepTruth, EqualsBruteForceForEveryCollisionFilterAndThickness) {
+  for (bool self : {true, false}) {
+    for (bool inter : {true, false}) {
+      for (double delta : {0.0, 0.1}) {
+        SCOPED_TRACE("self " + std::to_string(self) + ", inter " + std::to_string(inter) + ", δ " + std::to_string(delta));
+        FoldScene fold = fold_scene(self, inter);
+        const Scene scene = fold.scene.with_thickness(delta);
+        const StepTruth truth = compute_step_truth(scene, fold.x0, fold.x1, {delta, false, {}});
+        const CollisionSet expected = brute_force_truth(scene, fold.x0, fold.x1, delta);
+        EXPECT_TRUE(truth.collisions.same_pairs(expected))
+            << "sweep " << truth.collisions.size() << " pairs, brute force " << expected.size();
+        if (self || inter) {
+          EXPECT_GT(expected.size(), 0u) << "the scene must exercise the filter it tests";
+        } else {
+          EXPECT_EQ(truth.collisions.size(), 0u);
+        }
+      }
+    }
+  }
+}
+
+TEST(StepTruth, UnusedVerticesAreNeverPrimitives) {
+  FoldScene fold = fold_scene(true, true);
+  const StepTruth truth = compute_step_truth(fold.scene, fold.x0, fold.x1, {0.0, false, {}});
+  for (const auto& contact : truth.collisions.vertex_face()) EXPECT_NE(contact.pair.v, 35u);
+}
+
+TEST(StepTruth, SameSetsForOneAndTwoThreadsAndTois) {
+  FoldScene fold = fold_scene(true, true);
+  CollisionSet one, two;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = compute_step_truth(fold.scene, fold.x0, fold.x1, {0.0, true, {}}).collisions;
+  }
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    two = compute_step_truth(fold.scene, fold.x0, fold.x1, {0.0, true, {}}).collisions;
+  }
+  ASSERT_TRUE(one.same_pairs(two));
+  for (std::size_t i = 0; i < one.vertex_face().size(); ++i) {
+    EXPECT_EQ(one.vertex_face()[i].toi, two.vertex_face()[i].toi);
+    EXPECT_GE(one.vertex_face()[i].toi, 0.0);
+    EXPECT_LE(one.vertex_face()[i].toi, 1.0);
+  }
+}
+
+}  // namespace
+}  // namespace ccd::reference
