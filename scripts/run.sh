@@ -22,3 +22,7 @@ if [[ -z $data ]]; then
 fi
 "$ccdbench" inspect "$data/sample-queries" "$data/scalable-ccd-sample/cloth-funnel" \
   "$data/scalable-ccd-sample/rod-twist"
+echo
+"$ccdbench" queries "$data/sample-queries" "$data/scalable-ccd-sample" --method exact
+echo
+"$ccdbench" truth --sample "$data/scalable-ccd-sample/cloth-funnel"

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdio>
+#include <fstream>
 #include <sys/wait.h>
 
 namespace ccd {
@@ -92,6 +93,62 @@ TEST(Cli, BadInputExitsNonZeroNamingFileAndLine) {
   testing::write_text(dir / "notes.txt", "hello");
   EXPECT_NE(run_ccdbench("inspect '" + (dir / "notes.txt").string() + "'").output.find("not a ccdbench input"),
             std::string::npos);
+}
+
+nlohmann::json read_json(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+TEST(Cli, QueriesWithTheExactMethodScoreEverySharedQueryRight) {
+  CCD_REQUIRE_EXTERNAL_DATA(data);
+  testing::TempDir dir;
+  const CommandResult result = run_ccdbench("queries '" + (data / "sample-queries").string() + "' '" +
+                                            (data / "scalable-ccd-sample").string() + "' --method exact --json '" +
+                                            (dir / "scores.json").string() + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json scores = read_json(dir / "scores.json");
+  ASSERT_EQ(scores.size(), 9u);  // 8 files and the total
+  const nlohmann::json& total = scores.back();
+  EXPECT_EQ(total["file"], "(all)");
+  EXPECT_EQ(total["method"], "exact");
+  EXPECT_EQ(total["queries"], 324 + 92 + 263 + 801 + 4370);
+  EXPECT_EQ(total["positives"], 160 + 27 + 107 + 765 + 4179);
+  EXPECT_EQ(total["false_negatives"], 0);
+  EXPECT_EQ(total["false_positives"], 0);
+  for (const char* field : {"reported", "ns_per_query"}) EXPECT_TRUE(total.contains(field)) << field;
+}
+
+TEST(Cli, TruthOnASampleStepFindsEveryLabelledCollision) {
+  CCD_REQUIRE_EXTERNAL_DATA(data);
+  testing::TempDir dir;
+  const CommandResult result = run_ccdbench("truth --sample '" + (data / "scalable-ccd-sample/cloth-funnel").string() +
+                                            "' --json '" + (dir / "truth.json").string() + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json truth = read_json(dir / "truth.json");
+  EXPECT_GE(truth["vf"].get<int>(), 27);
+  EXPECT_GE(truth["ee"].get<int>(), 107);
+  EXPECT_EQ(truth["sample"]["vf_found"], 27);
+  EXPECT_EQ(truth["sample"]["ee_found"], 107);
+  EXPECT_EQ(truth["decided_by_filter"].get<int>() + truth["decided_exactly"].get<int>(),
+            truth["vf_pairs_enumerated"].get<int>() + truth["ee_pairs_enumerated"].get<int>());
+  const auto frames = data / "scalable-ccd-sample/cloth-funnel/frames";
+  const CommandResult by_frames = run_ccdbench("truth --frames '" + (frames / "227.ply").string() + "' '" +
+                                               (frames / "228.ply").string() + "' --json '" +
+                                               (dir / "frames.json").string() + "'");
+  ASSERT_EQ(by_frames.exit_code, 0) << by_frames.output;
+  EXPECT_EQ(read_json(dir / "frames.json")["vf"], truth["vf"]);
+}
+
+TEST(Cli, QueriesAndTruthRejectBadArguments) {
+  testing::TempDir dir;
+  testing::write_text(dir / "vertex-face/q.csv", "0,1,0,1,0,1,0\n0,1,0,1,0,1,0\n");
+  EXPECT_NE(run_ccdbench("queries '" + dir.path().string() + "' --method nonsense").output.find("unknown method"),
+            std::string::npos);
+  EXPECT_EQ(run_ccdbench("queries '" + dir.path().string() + "'").exit_code, 2);
+  EXPECT_NE(run_ccdbench("queries '" + dir.path().string() + "' --thickness -1").exit_code, 0);
+  EXPECT_NE(run_ccdbench("truth").output.find("exactly one of"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.json"));
 }
 
 }  // namespace
