@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "datasets/frame_cache.hpp"
+#include "datasets/procedural_scenes.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -25,6 +26,12 @@ std::map<std::string, SceneGeneratorFunction>& generator_registry() {
 std::mutex& generator_registry_mutex() {
   static std::mutex mutex;
   return mutex;
+}
+
+/// The built-in procedural scenes join the registry the first time anyone looks into it.
+void ensure_builtin_generators() {
+  static std::once_flag once;
+  std::call_once(once, register_procedural_scene_generators);
 }
 
 /// Reports keys outside `allowed` in object `value` found at `where`.
@@ -80,6 +87,7 @@ std::unique_ptr<FrameSource> frame_source_from_json(const json& frames, const st
 SceneSequence scene_from_generator(const json& block, const std::filesystem::path& file) {
   if (!block.is_object()) throw InputError(file, "generator", "must be an object with a 'name'");
   const std::string name = require(file, "generator", block, "name", json::value_t::string, "a string").get<std::string>();
+  ensure_builtin_generators();
   SceneGeneratorFunction generator;
   {
     std::lock_guard lock(generator_registry_mutex());
@@ -105,6 +113,7 @@ void register_scene_generator(const std::string& name, SceneGeneratorFunction ge
 }
 
 std::vector<std::string> scene_generator_names() {
+  ensure_builtin_generators();
   std::lock_guard lock(generator_registry_mutex());
   std::vector<std::string> names;
   for (const auto& entry : generator_registry()) names.push_back(entry.first);

@@ -1,6 +1,7 @@
 #include "harness/commands.hpp"
 
 #include "core/error.hpp"
+#include "datasets/procedural_scenes.hpp"
 #include "datasets/sample_step.hpp"
 #include "datasets/scene_file.hpp"
 #include "harness/inspect.hpp"
@@ -135,6 +136,66 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
     for (const std::string& missing : comparison.missing) out << "  MISSING " << missing << "\n";
   }
   if (options.json) write_json_file(*options.json, result);
+  return 0;
+}
+
+int run_scenes(std::ostream& out) {
+  for (const datasets::ProceduralSceneInfo& scene : datasets::procedural_scenes()) {
+    out << scene.name << ": " << scene.description << "\n";
+    for (const datasets::SceneParameter& parameter : scene.parameters) {
+      out << "  " << std::left << std::setw(12) << parameter.name << std::right << std::setw(8) << parameter.default_value
+          << "  " << parameter.description << "\n";
+    }
+  }
+  out << "Generate one with: ccdbench generate NAME [--resolution N] [--frames N] [--seed S] [--set NAME=VALUE] --out DIR\n"
+      << "or name it in a scene file: {\"generator\": {\"name\": \"flag\", \"wind\": 12}}\n";
+  return 0;
+}
+
+int run_generate(const GenerateOptions& options, std::ostream& out) {
+  datasets::SceneParameters parameters;
+  if (options.resolution) parameters["resolution"] = *options.resolution;
+  if (options.frames) parameters["frames"] = *options.frames;
+  if (options.seed) parameters["seed"] = *options.seed;
+  for (const std::string& setting : options.settings) {
+    const auto equals = setting.find('=');
+    if (equals == std::string::npos) throw std::invalid_argument("--set takes NAME=VALUE, got '" + setting + "'");
+    std::size_t used = 0;
+    const std::string value = setting.substr(equals + 1);
+    double number = 0;
+    try {
+      number = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != value.size()) throw std::invalid_argument("--set " + setting + ": the value must be a number");
+    parameters[setting.substr(0, equals)] = number;
+  }
+  Progress progress("generate " + options.name + ": frames", 0);
+  bool header_printed = false;
+  datasets::GenerateRequest request{options.name, parameters, options.out,
+                                    [&](std::size_t done, std::size_t total) { progress.update(done, total); }, {}};
+  if (options.report) {
+    request.report = [&](const datasets::FrameReport& report) {
+      if (!header_printed) {
+        out << std::setw(6) << "frame";
+        for (const auto& [name, value] : report.metrics) out << "  " << std::setw(std::max<int>(12, static_cast<int>(name.size()))) << name;
+        out << "\n";
+        header_printed = true;
+      }
+      out << std::setw(6) << report.frame;
+      for (const auto& [name, value] : report.metrics) {
+        out << "  " << std::setw(std::max<int>(12, static_cast<int>(name.size()))) << std::setprecision(5) << value;
+      }
+      out << "\n";
+    };
+  }
+  const datasets::GenerateResult result = datasets::generate_procedural_scene(request);
+  out << options.name << ": " << result.frames << " frames, " << result.cloth_triangles << " cloth triangles ("
+      << result.triangles << " in all), thickness " << result.thickness << ", "
+      << (result.from_cache ? "from the cache in " : "generated in ") << std::fixed << std::setprecision(2)
+      << result.seconds << " s\n  scene file: " << result.scene_file.string() << "\n";
+  out.unsetf(std::ios::fixed);
   return 0;
 }
 

@@ -39,4 +39,19 @@ struct TruthOptions {
 /// Whole-step truth with counts and statistics; with a sample step, also the comparison with its truth.
 int run_truth(const TruthOptions& options, std::ostream& out);
 
+/// Lists the built-in procedural scenes with their parameters and defaults.
+int run_scenes(std::ostream& out);
+
+struct GenerateOptions {
+  std::string name;
+  std::optional<double> resolution, frames, seed;
+  /// Any scene parameter as NAME=VALUE.
+  std::vector<std::string> settings;
+  std::filesystem::path out;
+  /// Print the scene's per-frame measurements.
+  bool report = false;
+};
+/// Simulates a built-in scene into a folder (or finds it there already, generated with the same parameters).
+int run_generate(const GenerateOptions& options, std::ostream& out);
+
 }  // namespace ccd::harness

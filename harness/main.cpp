@@ -7,7 +7,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include <tbb/global_control.h>
+
 #include <iostream>
+#include <optional>
 
 namespace {
 
@@ -28,6 +31,9 @@ int main(int argc, char** argv) {
   CLI::App app(kDescription, "ccdbench");
   app.set_version_flag("--version", version_text());
   app.require_subcommand(1);
+  std::size_t threads = 0;
+  app.add_option("--threads", threads, "worker threads for every command (default: all cores); results never depend on it")
+      ->check(CLI::PositiveNumber);
 
   ccd::harness::InspectOptions inspect_options;
   CLI::App* inspect = app.add_subcommand(
@@ -77,11 +83,30 @@ int main(int argc, char** argv) {
   truth->add_flag("--toi", truth_options.toi, "also compute every colliding pair's earliest contact time exactly");
   truth->add_option("--json", truth_options.json, "also write the counts and statistics as JSON to this file");
 
+  CLI::App* scenes = app.add_subcommand("scenes", "List the built-in procedural scenes, their parameters and defaults.");
+
+  ccd::harness::GenerateOptions generate_options;
+  CLI::App* generate = app.add_subcommand(
+      "generate",
+      "Simulate a built-in scene into a folder: scene.json and one PLY per object per frame\n"
+      "(OBJECT/frame_0000.ply, ...). The same parameters give bit-identical frames on any thread count, and a\n"
+      "second call with the same parameters reads the folder's cache instead of simulating again.");
+  generate->add_option("NAME", generate_options.name, "scene name (see `ccdbench scenes`)")->required();
+  generate->add_option("--resolution", generate_options.resolution, "cloth grid side N (N x N vertices)");
+  generate->add_option("--frames", generate_options.frames, "number of frames");
+  generate->add_option("--seed", generate_options.seed, "random seed");
+  generate->add_option("--set", generate_options.settings, "any scene parameter, NAME=VALUE (repeatable)");
+  generate->add_option("--out", generate_options.out, "output folder")->required();
+  generate->add_flag("--report", generate_options.report, "print the scene's measurements for every frame");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     return app.exit(error);
   }
+
+  std::optional<tbb::global_control> thread_limit;
+  if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, threads);
 
   try {
     if (*inspect) return ccd::harness::run_inspect(inspect_options, std::cout);
@@ -90,6 +115,8 @@ int main(int argc, char** argv) {
       return ccd::harness::run_queries(queries_options, std::cout);
     }
     if (*truth) return ccd::harness::run_truth(truth_options, std::cout);
+    if (*scenes) return ccd::harness::run_scenes(std::cout);
+    if (*generate) return ccd::harness::run_generate(generate_options, std::cout);
   } catch (const ccd::InputError& error) {
     std::cerr << "ccdbench: error: " << error.what() << '\n';
     return 2;

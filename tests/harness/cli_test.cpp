@@ -151,5 +151,28 @@ TEST(Cli, QueriesAndTruthRejectBadArguments) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out.json"));
 }
 
+TEST(Cli, ScenesListsEveryBuiltInSceneAndGenerateCaches) {
+  const CommandResult scenes = run_ccdbench("scenes");
+  ASSERT_EQ(scenes.exit_code, 0);
+  for (const char* name : {"spinning-ball", "drape", "flag", "twist", "funnel", "pile"}) {
+    EXPECT_NE(scenes.output.find(std::string(name) + ":"), std::string::npos) << name;
+  }
+  testing::TempDir dir;
+  const std::string generate = "generate spinning-ball --resolution 8 --frames 4 --out '" + dir.path().string() + "'";
+  const CommandResult first = run_ccdbench(generate + " --report");
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_NE(first.output.find("min_distance_to_ball"), std::string::npos) << first.output;
+  EXPECT_NE(first.output.find("generated in"), std::string::npos) << first.output;
+  EXPECT_NE(run_ccdbench(generate).output.find("from the cache"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir / "cloth/frame_0003.ply"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "ball/frame_0003.ply"));
+  const auto inspected = inspect_json(dir.path());
+  EXPECT_EQ(inspected["type"], "scene");
+  EXPECT_EQ(inspected["steps"], 3);
+  const CommandResult bad = run_ccdbench("generate flag --set wnd=3 --out '" + (dir / "x").string() + "'");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("no parameter 'wnd'"), std::string::npos) << bad.output;
+}
+
 }  // namespace
 }  // namespace ccd

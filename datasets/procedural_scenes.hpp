@@ -1,0 +1,74 @@
+#pragma once
+/// @file
+/// The built-in procedural scenes (the paper's benchmarks as deterministic, scalable frame sequences):
+/// spinning-ball, drape, flag, twist, funnel, pile. Each takes a cloth resolution N (N x N vertices,
+/// 2(N-1)² triangles per cloth), a frame count and a seed; the same parameters give bit-identical frames on any
+/// thread count. Obstacles are triangle meshes with their own frames (a spinning ball moves, a table does not).
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace ccd::datasets {
+
+struct SceneParameter {
+  std::string name;
+  double default_value;
+  std::string description;
+};
+
+struct ProceduralSceneInfo {
+  std::string name;
+  std::string description;
+  /// resolution, frames and seed first, then the scene's own.
+  std::vector<SceneParameter> parameters;
+};
+
+/// Every built-in scene with its parameters and defaults.
+const std::vector<ProceduralSceneInfo>& procedural_scenes();
+
+/// Parameter values by name; a missing name takes its default.
+using SceneParameters = std::map<std::string, double>;
+
+/// Per-frame measurements that show what the scene does (e.g. spinning-ball: the cloth's distance to the ball
+/// and its rotation).
+struct FrameReport {
+  std::size_t frame = 0;
+  std::vector<std::pair<std::string, double>> metrics;
+};
+
+struct GenerateRequest {
+  std::string name;
+  SceneParameters parameters;
+  /// The scene folder: scene.json, OBJECT/frame_%04d.ply, and cache/OBJECT.frames.
+  std::filesystem::path out;
+  /// (frames done, frames) during simulation.
+  std::function<void(std::size_t, std::size_t)> progress;
+  /// Called once per frame, in order, whether the frames were simulated or read from the cache.
+  std::function<void(const FrameReport&)> report;
+};
+
+struct GenerateResult {
+  std::filesystem::path scene_file;
+  bool from_cache = false;
+  double seconds = 0.0;
+  std::size_t cloth_triangles = 0;
+  std::size_t triangles = 0;
+  std::size_t frames = 0;
+  double thickness = 0.0;
+};
+
+/// Simulates the scene (or finds it already in `out`, generated with the same parameters) and writes its folder.
+/// @throws std::invalid_argument for an unknown scene or parameter, or a value out of range.
+GenerateResult generate_procedural_scene(const GenerateRequest& request);
+
+/// Where scene files' {"generator": ...} blocks put generated scenes: CCDBENCH_CACHE_DIR, else
+/// $XDG_CACHE_HOME/ccdbench, else ~/.cache/ccdbench.
+std::filesystem::path procedural_cache_root();
+
+/// Registers every built-in scene as a scene-file generator: {"generator": {"name": "flag", "wind": 12}}.
+void register_procedural_scene_generators();
+
+}  // namespace ccd::datasets
