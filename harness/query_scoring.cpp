@@ -1,6 +1,7 @@
 #include "harness/query_scoring.hpp"
 
 #include "reference/elementary_pair.hpp"
+#include "strategies/narrowphase/narrow_phase.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -27,6 +28,21 @@ class ExactQueryMethod final : public QueryMethod {
   }
 };
 
+/// A narrow-phase variant on the doubles the query's rationals round to (what a simulator would hand it).
+class NarrowPhaseQueryMethod final : public QueryMethod {
+ public:
+  explicit NarrowPhaseQueryMethod(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase)
+      : narrow_phase_(std::move(narrow_phase)) {}
+  std::string name() const override { return narrow_phase_->name(); }
+  bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
+    return kind == datasets::QueryKind::vertex_face ? narrow_phase_->vertex_face(query.rounded, thickness).collides
+                                                    : narrow_phase_->edge_edge(query.rounded, thickness).collides;
+  }
+
+ private:
+  std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
+};
+
 double median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
   const std::size_t n = values.size();
@@ -35,14 +51,23 @@ double median(std::vector<double> values) {
 
 }  // namespace
 
-std::unique_ptr<QueryMethod> make_query_method(const std::string& name) {
-  if (name == "exact") return std::make_unique<ExactQueryMethod>();
-  std::string known;
-  for (const std::string& n : query_method_names()) known += (known.empty() ? "" : ", ") + n;
-  throw std::invalid_argument("unknown method '" + name + "' (known: " + known + ")");
+std::unique_ptr<QueryMethod> make_query_method(const std::string& spec) {
+  if (spec == "exact") return std::make_unique<ExactQueryMethod>();
+  const std::string name = spec.substr(0, spec.find(':'));
+  const auto names = narrowphase::narrow_phase_names();
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    std::string known;
+    for (const std::string& n : query_method_names()) known += (known.empty() ? "" : ", ") + n;
+    throw std::invalid_argument("unknown method '" + spec + "' (known: " + known + ")");
+  }
+  return std::make_unique<NarrowPhaseQueryMethod>(narrowphase::make_narrow_phase_from_spec(spec));
 }
 
-std::vector<std::string> query_method_names() { return {"exact"}; }
+std::vector<std::string> query_method_names() {
+  std::vector<std::string> names = narrowphase::narrow_phase_names();
+  names.push_back("exact");
+  return names;
+}
 
 nlohmann::json to_json(const QueryScore& s) {
   return {{"method", s.method},

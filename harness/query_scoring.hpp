@@ -23,9 +23,10 @@ class QueryMethod {
   virtual bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const = 0;
 };
 
-/// Methods by name: `exact` (the reference: certified filter, then exact root isolation, on the rationals).
-/// @throws std::invalid_argument naming the known methods for an unknown name.
-std::unique_ptr<QueryMethod> make_query_method(const std::string& name);
+/// Methods by spec: `exact` (the reference: certified filter, then exact root isolation, on the rationals) or a
+/// narrow phase `NAME[:key=value...]` (cubic32, cubic64, conservative, advancement) on the rounded doubles.
+/// @throws std::invalid_argument naming the known methods for an unknown name or parameter.
+std::unique_ptr<QueryMethod> make_query_method(const std::string& spec);
 std::vector<std::string> query_method_names();
 
 /// One method on one file (or on all files: file = "(all)"), fields as DESIGN.md §5.

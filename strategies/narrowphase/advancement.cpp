@@ -1,0 +1,76 @@
+#include "strategies/narrowphase/advancement.hpp"
+
+#include "strategies/narrowphase/primitive_distance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace ccd::narrowphase {
+namespace {
+
+class Advancement final : public NarrowPhase {
+ public:
+  explicit Advancement(const AdvancementSettings& settings) : settings_(settings) {}
+
+  std::string name() const override {
+    std::ostringstream out;
+    out << "advancement:eta=" << settings_.eta << ":max_iterations=" << settings_.max_iterations;
+    return out.str();
+  }
+  bool conservative() const override { return false; }  // up to the rounding of distances
+  NarrowPhaseResult vertex_face(const PairRows& rows, double thickness) const override { return test(rows, thickness, true); }
+  NarrowPhaseResult edge_edge(const PairRows& rows, double thickness) const override { return test(rows, thickness, false); }
+
+ private:
+  NarrowPhaseResult test(const PairRows& rows, double thickness, bool vertex_face) const {
+    std::array<Vec3, 4> x0, dx;
+    Vec3 lower = rows[0], upper = rows[0];
+    for (int k = 0; k < 4; ++k) {
+      x0[k] = rows[k];
+      dx[k] = rows[k + 4] - rows[k];
+    }
+    for (const Vec3& row : rows) {
+      lower = lower.cwiseMin(row);
+      upper = upper.cwiseMax(row);
+    }
+    // Any point of one primitive moves with a convex combination of its vertices' velocities, so the distance
+    // shrinks no faster than the largest relative velocity of a vertex of one against a vertex of the other.
+    double speed = 0;
+    const int split = vertex_face ? 1 : 2;
+    for (int i = 0; i < split; ++i) {
+      for (int j = split; j < 4; ++j) speed = std::max(speed, (dx[i] - dx[j]).norm());
+    }
+    const double stop = thickness + settings_.eta * (upper - lower).norm();
+    NarrowPhaseResult result;
+    result.achieved_tolerance = stop - thickness;
+    double t = 0;
+    for (long iteration = 0; iteration < settings_.max_iterations; ++iteration) {
+      std::array<Vec3, 4> x;
+      for (int k = 0; k < 4; ++k) x[k] = x0[k] + t * dx[k];
+      const double distance = std::sqrt(vertex_face ? point_triangle_squared_distance(x[0], x[1], x[2], x[3])
+                                                    : segment_segment_squared_distance(x[0], x[1], x[2], x[3]));
+      if (distance <= stop) {
+        result.collides = true;
+        result.toi = t;
+        return result;
+      }
+      if (t >= 1 || speed == 0) return result;
+      t = std::min(1.0, t + (distance - thickness) / speed);
+    }
+    result.collides = true;  // the cap: do not claim a miss that was not shown
+    result.toi = t;
+    result.hit_iteration_cap = true;
+    return result;
+  }
+
+  AdvancementSettings settings_;
+};
+
+}  // namespace
+
+std::unique_ptr<NarrowPhase> make_advancement(const AdvancementSettings& settings) {
+  return std::make_unique<Advancement>(settings);
+}
+
+}  // namespace ccd::narrowphase
