@@ -9,6 +9,7 @@
 #include "harness/progress.hpp"
 #include "harness/query_scoring.hpp"
 #include "harness/sample_comparison.hpp"
+#include "harness/stress.hpp"
 #include "reference/step_truth.hpp"
 
 #include <nlohmann/json.hpp>
@@ -136,6 +137,28 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
     for (const std::string& missing : comparison.missing) out << "  MISSING " << missing << "\n";
   }
   if (options.json) write_json_file(*options.json, result);
+  return 0;
+}
+
+int run_stress_command(const StressOptions& options, std::ostream& out) {
+  const std::vector<datasets::ExtremeQuery> suite = datasets::extremes_suite(options.seed);
+  out << "extremes suite: " << suite.size() << " queries in " << datasets::extremes_families().size()
+      << " families (seed " << options.seed << "), at δ = 0 and at each case's δ > 0; truth from the exact reference\n";
+  const std::vector<StressRow> rows = run_stress(suite, options.methods);
+  print_stress(rows, out);
+  for (const StressRow& row : rows) {
+    if (row.family == "(all)") continue;
+    for (const std::string& missed : row.missed) out << "missed by " << row.method << " (δ " << row.thickness << "): " << missed << "\n";
+  }
+  if (options.json) {
+    nlohmann::json document = nlohmann::json::array();
+    for (const StressRow& row : rows) document.push_back(to_json(row));
+    write_json_file(*options.json, document);
+  }
+  if (options.write_queries) {
+    write_extremes_queries(suite, *options.write_queries);
+    out << "wrote the suite as query files under " << options.write_queries->string() << "\n";
+  }
   return 0;
 }
 

@@ -39,6 +39,15 @@ struct TruthOptions {
 /// Whole-step truth with counts and statistics; with a sample step, also the comparison with its truth.
 int run_truth(const TruthOptions& options, std::ostream& out);
 
+struct StressOptions {
+  std::vector<std::string> methods{"cubic32", "cubic64", "conservative", "advancement"};
+  std::uint64_t seed = 1;
+  std::optional<std::filesystem::path> json;
+  std::optional<std::filesystem::path> write_queries;
+};
+/// Runs the narrow phases on the extremes suite and prints family x variant -> false negatives and positives.
+int run_stress_command(const StressOptions& options, std::ostream& out);
+
 /// Lists the built-in procedural scenes with their parameters and defaults.
 int run_scenes(std::ostream& out);
 

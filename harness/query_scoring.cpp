@@ -150,15 +150,19 @@ std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>
 }
 
 void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out) {
-  std::size_t file_width = 4;
-  for (const QueryScore& s : scores) file_width = std::max(file_width, s.file.size());
-  out << std::left << std::setw(14) << "method" << std::setw(static_cast<int>(file_width) + 2) << "file" << std::right
+  std::size_t file_width = 4, method_width = 6;
+  for (const QueryScore& s : scores) {
+    file_width = std::max(file_width, s.file.size());
+    method_width = std::max(method_width, s.method.size());
+  }
+  const int method_column = static_cast<int>(method_width) + 2, file_column = static_cast<int>(file_width) + 2;
+  out << std::left << std::setw(method_column) << "method" << std::setw(file_column) << "file" << std::right
       << std::setw(9) << "queries" << std::setw(10) << "positive" << std::setw(10) << "reported" << std::setw(8)
       << "FN" << std::setw(8) << "FP" << std::setw(14) << "ns/query" << '\n';
   for (const QueryScore& s : scores) {
-    out << std::left << std::setw(14) << s.method << std::setw(static_cast<int>(file_width) + 2) << s.file
-        << std::right << std::setw(9) << s.queries << std::setw(10) << s.positives << std::setw(10) << s.reported
-        << std::setw(8) << s.false_negatives << std::setw(8) << s.false_positives << std::setw(14) << std::fixed
+    out << std::left << std::setw(method_column) << s.method << std::setw(file_column) << s.file << std::right
+        << std::setw(9) << s.queries << std::setw(10) << s.positives << std::setw(10) << s.reported << std::setw(8)
+        << s.false_negatives << std::setw(8) << s.false_positives << std::setw(14) << std::fixed
         << std::setprecision(0) << s.ns_per_query << '\n';
     out.unsetf(std::ios::fixed);
   }

@@ -1,0 +1,103 @@
+#include "harness/stress.hpp"
+
+#include "reference/elementary_pair.hpp"
+#include "strategies/narrowphase/narrow_phase.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <iomanip>
+#include <map>
+#include <ostream>
+
+namespace ccd::harness {
+namespace {
+
+reference::PairKind pair_kind(datasets::QueryKind kind) {
+  return kind == datasets::QueryKind::vertex_face ? reference::PairKind::vertex_face : reference::PairKind::edge_edge;
+}
+
+}  // namespace
+
+nlohmann::json to_json(const StressRow& row) {
+  return {{"family", row.family},
+          {"method", row.method},
+          {"thickness", row.thickness},
+          {"queries", row.queries},
+          {"positives", row.positives},
+          {"false_negatives", row.false_negatives},
+          {"false_positives", row.false_positives},
+          {"missed", row.missed}};
+}
+
+std::vector<StressRow> run_stress(const std::vector<datasets::ExtremeQuery>& suite, const std::vector<std::string>& methods) {
+  std::vector<std::unique_ptr<narrowphase::NarrowPhase>> variants;
+  for (const std::string& spec : methods) variants.push_back(narrowphase::make_narrow_phase_from_spec(spec));
+  std::vector<StressRow> rows;
+  for (const char* pass : {"zero", "positive"}) {
+    std::map<std::pair<std::string, std::string>, StressRow> by_family;  // (family, method)
+    std::map<std::string, StressRow> totals;
+    for (const datasets::ExtremeQuery& query : suite) {
+      const double thickness = std::string(pass) == "zero" ? 0.0 : query.positive_thickness;
+      const bool truth = reference::decide(pair_kind(query.kind), query.rows, thickness).collides;
+      for (const auto& variant : variants) {
+        const narrowphase::NarrowPhaseResult answer = query.kind == datasets::QueryKind::vertex_face
+                                                          ? variant->vertex_face(query.rows, thickness)
+                                                          : variant->edge_edge(query.rows, thickness);
+        for (StressRow* row : {&by_family[{query.family, variant->name()}], &totals[variant->name()]}) {
+          row->family = row == &totals[variant->name()] ? "(all)" : query.family;
+          row->method = variant->name();
+          row->thickness = pass;
+          row->queries += 1;
+          row->positives += truth ? 1 : 0;
+          if (truth && !answer.collides) {
+            row->false_negatives += 1;
+            if (row->missed.size() < 10) row->missed.push_back(query.family + ": " + query.name);
+          }
+          if (!truth && answer.collides) row->false_positives += 1;
+        }
+      }
+    }
+    for (const std::string& family : datasets::extremes_families()) {
+      for (const auto& variant : variants) {
+        const auto it = by_family.find({family, variant->name()});
+        if (it != by_family.end()) rows.push_back(it->second);
+      }
+    }
+    for (const auto& variant : variants) rows.push_back(totals[variant->name()]);
+  }
+  return rows;
+}
+
+void print_stress(const std::vector<StressRow>& rows, std::ostream& out) {
+  std::size_t method_width = 6, family_width = 6;
+  for (const StressRow& row : rows) {
+    method_width = std::max(method_width, row.method.size());
+    family_width = std::max(family_width, row.family.size());
+  }
+  out << std::left << std::setw(static_cast<int>(family_width) + 2) << "family" << std::setw(static_cast<int>(method_width) + 2)
+      << "method" << std::setw(10) << "δ" << std::right << std::setw(8) << "queries" << std::setw(10) << "positive"
+      << std::setw(6) << "FN" << std::setw(6) << "FP" << '\n';
+  for (const StressRow& row : rows) {
+    out << std::left << std::setw(static_cast<int>(family_width) + 2) << row.family
+        << std::setw(static_cast<int>(method_width) + 2) << row.method << std::setw(10)
+        << (row.thickness == "zero" ? "0" : "positive") << std::right << std::setw(8) << row.queries << std::setw(10)
+        << row.positives << std::setw(6) << row.false_negatives << std::setw(6) << row.false_positives << '\n';
+  }
+}
+
+void write_extremes_queries(const std::vector<datasets::ExtremeQuery>& suite, const std::filesystem::path& directory) {
+  std::vector<datasets::Query> vertex_face, edge_edge;
+  for (const datasets::ExtremeQuery& extreme : suite) {
+    datasets::Query query;
+    for (int r = 0; r < 8; ++r) {
+      for (int k = 0; k < 3; ++k) query.exact[r][k] = mpq_class(extreme.rows[r][k]);
+    }
+    query.rounded = extreme.rows;
+    query.truth = reference::decide(pair_kind(extreme.kind), extreme.rows, 0.0).collides;
+    (extreme.kind == datasets::QueryKind::vertex_face ? vertex_face : edge_edge).push_back(std::move(query));
+  }
+  datasets::write_query_file(directory / "vertex-face" / "extremes.csv", vertex_face);
+  datasets::write_query_file(directory / "edge-edge" / "extremes.csv", edge_edge);
+}
+
+}  // namespace ccd::harness
