@@ -75,7 +75,14 @@ TEST(Conservative, AnswersNoOnlyWithProofAndReportsItsCap) {
   const NarrowPhaseResult answer = capped->vertex_face(near_miss, 0.0);
   EXPECT_TRUE(answer.collides);
   EXPECT_TRUE(answer.hit_iteration_cap);
-  EXPECT_FALSE(make_narrow_phase("conservative")->vertex_face(near_miss, 0.0).collides);
+  // 1e-9 is within the default tolerance (1e-6 of the pair's size): a contact is the documented answer there.
+  // 1e-4 beyond the hypotenuse is not, and the full search must prove the miss.
+  EXPECT_TRUE(make_narrow_phase("conservative")->vertex_face(near_miss, 0.0).collides);
+  PairRows clear_miss = near_miss;
+  clear_miss[0].x() = clear_miss[4].x() = 0.5 + 1e-4;
+  const NarrowPhaseResult proven = make_narrow_phase("conservative")->vertex_face(clear_miss, 0.0);
+  EXPECT_FALSE(proven.collides);
+  EXPECT_FALSE(proven.hit_iteration_cap);
 }
 
 TEST(Cubic, FindsACleanCrossingAndMissesCoplanarMotion) {
