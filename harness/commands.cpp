@@ -32,13 +32,14 @@ int run_inspect(const InspectOptions& options, std::ostream& out) {
 }
 
 int run_queries(const QueriesOptions& options, std::ostream& out) {
-  for (const std::string& method : options.methods) make_query_method(method);  // unknown names fail before work
+  const std::vector<std::string> methods = options.sweep ? sweep_methods(options.methods) : options.methods;
+  for (const std::string& method : methods) make_query_method(method);  // unknown names fail before work
   std::vector<datasets::QueryFile> files;
   for (const auto& path : datasets::discover_query_files(options.paths)) files.push_back(datasets::read_query_file(path));
   if (files.empty()) throw InputError({}, {}, "no query files found under the given paths");
   Progress progress("queries: files", files.size());
   const std::vector<QueryScore> scores = score_query_files(
-      files, {options.methods, options.thickness, options.repeats},
+      files, {methods, options.thickness, options.repeats},
       [&](std::size_t done, std::size_t) { progress.update(done); });
   print_query_scores(scores, out);
   if (options.thickness > 0) {
@@ -49,6 +50,10 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
     nlohmann::json rows = nlohmann::json::array();
     for (const QueryScore& score : scores) rows.push_back(to_json(score));
     write_json_file(*options.json, rows);
+  }
+  if (options.report) {
+    write_query_report(*options.report, scores, options.command_line);
+    out << "report: " << (*options.report / "README.md").string() << "\n";
   }
   return 0;
 }

@@ -22,6 +22,11 @@ struct QueriesOptions {
   double thickness = 0.0;
   int repeats = 1;
   std::optional<std::filesystem::path> json;
+  /// Vary each narrow phase's accuracy parameter (see sweep_methods).
+  bool sweep = false;
+  /// Write README.md and scores.json into this folder, with `command_line` above the table.
+  std::optional<std::filesystem::path> report;
+  std::string command_line;
 };
 /// Scores every method on every discovered query file; prints a table. Exit status 0.
 int run_queries(const QueriesOptions& options, std::ostream& out);

@@ -64,6 +64,10 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   queries->add_option("--json", queries_options.json, "also write the scores as a JSON array to this file");
+  queries->add_flag("--sweep", queries_options.sweep,
+                    "vary each narrow phase's accuracy: conservative tolerance 1e-2..1e-7, eta 0..1e-2 of the others");
+  queries->add_option("--report", queries_options.report,
+                      "write README.md (the table under the command that made it) and scores.json to this folder");
 
   ccd::harness::TruthOptions truth_options;
   CLI::App* truth = app.add_subcommand(
@@ -126,6 +130,8 @@ int main(int argc, char** argv) {
     if (*inspect) return ccd::harness::run_inspect(inspect_options, std::cout);
     if (*queries) {
       queries_options.methods = CLI::detail::split(methods, ',');
+      queries_options.command_line = "build/release/bin/ccdbench";
+      for (int i = 1; i < argc; ++i) queries_options.command_line += std::string(" ") + argv[i];
       return ccd::harness::run_queries(queries_options, std::cout);
     }
     if (*truth) return ccd::harness::run_truth(truth_options, std::cout);

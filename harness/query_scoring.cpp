@@ -1,5 +1,7 @@
 #include "harness/query_scoring.hpp"
 
+#include "datasets/atomic_file.hpp"
+#include "harness/json_output.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 
@@ -166,6 +168,42 @@ void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out
         << std::setprecision(0) << s.ns_per_query << '\n';
     out.unsetf(std::ios::fixed);
   }
+}
+
+std::vector<std::string> sweep_methods(const std::vector<std::string>& methods) {
+  std::vector<std::string> swept;
+  for (const std::string& method : methods) {
+    const std::string name = method.substr(0, method.find(':'));
+    if (name == "conservative") {
+      for (const char* tolerance : {"1e-2", "1e-3", "1e-4", "1e-5", "1e-6", "1e-7"}) swept.push_back("conservative:tolerance=" + std::string(tolerance));
+    } else if (name == "cubic32" || name == "cubic64" || name == "advancement") {
+      for (const char* eta : {"0", "1e-8", "1e-6", "1e-4", "1e-2"}) swept.push_back(name + ":eta=" + eta);
+    } else {
+      swept.push_back(method);
+    }
+  }
+  return swept;
+}
+
+void write_query_report(const std::filesystem::path& directory, const std::vector<QueryScore>& scores,
+                        const std::string& command) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const QueryScore& score : scores) rows.push_back(to_json(score));
+  write_json_file(directory / "scores.json", rows);
+  datasets::AtomicFile file(directory / "README.md", std::ios::out);
+  std::ostream& out = file.stream();
+  out << "# Narrow phases: time per query against misses and false alarms\n\n"
+      << "Every method on the same queries, in one run. ns/query is the median over the repeats of each file's time\n"
+      << "divided by its queries; FN are missed collisions (truth positive, answer no), FP false alarms. Narrow phases\n"
+      << "get the doubles the query's rationals round to; `exact` is the reference on the rationals. The truth labels are\n"
+      << "for zero thickness. Reproduce every number with:\n\n```sh\n" << command << "\n```\n\n"
+      << "| method | file | queries | positives | reported | FN | FP | ns/query |\n|---|---|---:|---:|---:|---:|---:|---:|\n";
+  for (const QueryScore& s : scores) {
+    out << "| `" << s.method << "` | " << s.file << " | " << s.queries << " | " << s.positives << " | " << s.reported
+        << " | " << s.false_negatives << " | " << s.false_positives << " | " << static_cast<long long>(s.ns_per_query) << " |\n";
+  }
+  out << "\nThe trade, per variant over all files (`(all)` rows): `tradeoff.png`, drawn by `scripts/plot_narrowphase.py`.\n";
+  file.commit();
 }
 
 }  // namespace ccd::harness

@@ -6,6 +6,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <string>
@@ -60,6 +61,15 @@ struct QueryScoringRequest {
 std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files,
                                           const QueryScoringRequest& request,
                                           const std::function<void(std::size_t, std::size_t)>& on_file = {});
+
+/// The methods of a sweep: each narrow-phase variant of `methods` at a range of its accuracy parameter
+/// (conservative: tolerance; cubic32, cubic64, advancement: eta); `exact` is kept as it is.
+std::vector<std::string> sweep_methods(const std::vector<std::string>& methods);
+
+/// Writes DIR/README.md (the table, with `command` written above it so the numbers can be reproduced) and
+/// DIR/scores.json (the same rows), atomically.
+void write_query_report(const std::filesystem::path& directory, const std::vector<QueryScore>& scores,
+                        const std::string& command);
 
 /// A fixed-width table of the scores.
 void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out);

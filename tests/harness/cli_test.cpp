@@ -174,5 +174,26 @@ TEST(Cli, ScenesListsEveryBuiltInSceneAndGenerateCaches) {
   EXPECT_NE(bad.output.find("no parameter 'wnd'"), std::string::npos) << bad.output;
 }
 
+TEST(Cli, StressPrintsFamiliesAndWritesTheSuiteAsQueries) {
+  testing::TempDir dir;
+  const CommandResult result = run_ccdbench("stress --method cubic64,conservative --json '" + (dir / "stress.json").string() +
+                                            "' --write-queries '" + (dir / "suite").string() + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json rows = read_json(dir / "stress.json");
+  bool saw_conservative_total = false;
+  for (const auto& row : rows) {
+    for (const char* field : {"family", "method", "false_negatives", "false_positives"}) ASSERT_TRUE(row.contains(field));
+    if (row["method"].get<std::string>().rfind("conservative", 0) == 0) {
+      EXPECT_EQ(row["false_negatives"], 0) << row.dump();
+      saw_conservative_total = saw_conservative_total || row["family"] == "(all)";
+    }
+  }
+  EXPECT_TRUE(saw_conservative_total);
+  const CommandResult scored = run_ccdbench("queries '" + (dir / "suite").string() + "' --method exact --json '" +
+                                            (dir / "scores.json").string() + "'");
+  ASSERT_EQ(scored.exit_code, 0) << scored.output;
+  EXPECT_EQ(read_json(dir / "scores.json").back()["false_negatives"], 0);
+}
+
 }  // namespace
 }  // namespace ccd
