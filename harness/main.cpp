@@ -1,9 +1,15 @@
 // ccdbench: the command line of the harness.
 
 #include "ccd/config.hpp"
+#include "datasets/scene_file.hpp"
 #include "core/error.hpp"
 #include "harness/commands.hpp"
+#include "harness/json_output.hpp"
 #include "harness/query_scoring.hpp"
+#include "harness/run.hpp"
+#include "strategies/strategy.hpp"
+
+#include <fstream>
 
 #include <CLI/CLI.hpp>
 
@@ -101,6 +107,41 @@ int main(int argc, char** argv) {
   stress->add_option("--write-queries", stress_options.write_queries,
                      "also write the suite as rational query files (zero-thickness truth) under this folder");
 
+  ccd::harness::RunOptions run_options;
+  std::string run_suite, run_scene, run_strategies = "full", run_verify = "exact";
+  std::vector<std::string> run_frames;
+  CLI::App* run = app.add_subcommand(
+      "run",
+      "Run strategies over every step of the scenes, verify every step against the exact truth, and print per\n"
+      "scene and strategy: ms per step (median; stage breakdown), speed-up over `full` (cells of this run only),\n"
+      "candidate triangle pairs, elementary tests, colliding pairs, missed (culled: never tested / tested: the\n"
+      "elementary test said no) and false alarms. Strategies: NAME[+NARROW][:key=value...], comma-separated:\n"
+      "full (BVH refit + full traversal every step), brute (every triangle pair; small scenes); NARROW is\n"
+      "conservative (default), cubic64, cubic32 or advancement. Truth is cached on disk by content. Finished\n"
+      "cells are kept in --out and reused by the next run unless --fresh.");
+  run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper");
+  run->add_option("--scene", run_scene, "a scene file (or folder with scene.json)");
+  run->add_option("--frames", run_frames, "mesh files: one deformable self-colliding object, one step per pair")
+      ->expected(2, 100000);
+  run->add_option("--strategy", run_strategies, "comma-separated strategy specs")->capture_default_str();
+  run->add_option("--thickness", run_options.thickness, "thickness δ >= 0 (default: the scene's; 0 for --frames)")
+      ->check(CLI::NonNegativeNumber);
+  run->add_option("--verify", run_verify, "exact (every step against the exact truth) or none")
+      ->check(CLI::IsMember({"exact", "none"}))
+      ->capture_default_str();
+  run->add_option("--repeat", run_options.repeats, "timed passes; ms per step is the median")->check(CLI::PositiveNumber);
+  run->add_option("--out", run_options.out, "results folder: results.jsonl and the finished cells")->capture_default_str();
+  run->add_option("--json", run_options.json, "write the summaries (one per scene and strategy) as a JSON array");
+  run->add_option("--report", run_options.report, "write a Markdown page (table, steps.json for the plots) here");
+  run->add_option("--max-steps", run_options.max_steps, "only the first N steps of each scene");
+  run->add_flag("--fresh", run_options.fresh, "rerun cells kept from an earlier run");
+
+  std::string baseline_file, results_file;
+  CLI::App* check = app.add_subcommand(
+      "check", "The CI gate: fail (exit 1) when a result misses more collisions than its baseline allows.");
+  check->add_option("--baseline", baseline_file, "JSON array of {scene, strategy, max_missed}")->required();
+  check->add_option("RESULTS", results_file, "a `ccdbench run --json` summary file")->required();
+
   CLI::App* scenes = app.add_subcommand("scenes", "List the built-in procedural scenes, their parameters and defaults.");
 
   ccd::harness::GenerateOptions generate_options;
@@ -136,6 +177,35 @@ int main(int argc, char** argv) {
     }
     if (*truth) return ccd::harness::run_truth(truth_options, std::cout);
     if (*scenes) return ccd::harness::run_scenes(std::cout);
+    if (*run) {
+      const int sources = (run_suite.empty() ? 0 : 1) + (run_scene.empty() ? 0 : 1) + (run_frames.empty() ? 0 : 1);
+      if (sources != 1) throw std::invalid_argument("give exactly one of --suite, --scene, --frames");
+      if (!run_suite.empty()) run_options.scenes = ccd::harness::suite_scenes(run_suite);
+      if (!run_scene.empty()) {
+        run_options.scenes.push_back({std::filesystem::path(run_scene).filename().string(),
+                                      [run_scene] { return ccd::datasets::load_scene_file(run_scene); }});
+      }
+      if (!run_frames.empty()) {
+        const std::vector<std::filesystem::path> files(run_frames.begin(), run_frames.end());
+        run_options.scenes.push_back({std::filesystem::path(run_frames[0]).parent_path().filename().string() + "/" +
+                                          std::filesystem::path(run_frames[0]).filename().string(),
+                                      [files] { return ccd::datasets::scene_from_frame_files(files, 0.0); }});
+      }
+      run_options.strategies = CLI::detail::split(run_strategies, ',');
+      run_options.verify = run_verify == "exact";
+      run_options.command_line = "build/release/bin/ccdbench";
+      for (int i = 1; i < argc; ++i) run_options.command_line += std::string(" ") + argv[i];
+      ccd::harness::run_benchmark(run_options, std::cout);
+      return 0;
+    }
+    if (*check) {
+      std::ifstream baseline_in(baseline_file), results_in(results_file);
+      if (!baseline_in) throw ccd::InputError(baseline_file, {}, "cannot open baseline");
+      if (!results_in) throw ccd::InputError(results_file, {}, "cannot open results");
+      const bool ok = ccd::harness::check_against_baseline(nlohmann::json::parse(baseline_in), nlohmann::json::parse(results_in), std::cout);
+      std::cout << (ok ? "check: every result within its baseline\n" : "check: FAILED\n");
+      return ok ? 0 : 1;
+    }
     if (*stress) {
       stress_options.methods = CLI::detail::split(stress_methods, ',');
       return ccd::harness::run_stress_command(stress_options, std::cout);

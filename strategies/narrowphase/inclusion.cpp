@@ -163,6 +163,13 @@ class InclusionSearch {
       if (!(std::abs(normal.determinant()) > 0)) continue;
       const Eigen::Vector2d uv = normal.inverse() * Eigen::Vector2d(-X.dot(S), -Y.dot(S));
       double u = uv[0], v = uv[1];
+      // Resting contacts within δ have no zero of F: try the closest domain point at the candidate time first.
+      if (thickness_ > 0) {
+        if (const auto within = point_within_thickness(t, u, v)) {
+          if (!earliest || *within < *earliest) earliest = within;
+          continue;
+        }
+      }
       Eigen::Matrix3d jacobian;
       for (int newton = 0; newton < 3; ++newton) {
         terms_at(t, S, X, Y);
@@ -354,7 +361,8 @@ class InclusionTest final : public NarrowPhase {
     if (const auto proven = search.certify()) {
       NarrowPhaseResult result;
       result.collides = true;
-      result.toi = search.earliest_possible(*proven, kToiBudget);
+      // A contact proven at t = 0 is the earliest there can be; otherwise bound the TOI from below.
+      result.toi = *proven <= 0 ? 0.0 : search.earliest_possible(*proven, kToiBudget);
       return result;
     }
     return search.full_search();

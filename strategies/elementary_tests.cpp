@@ -1,0 +1,82 @@
+#include "strategies/elementary_tests.hpp"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+namespace ccd::strategies {
+namespace {
+
+struct Local {
+  CollisionSet collisions;
+  std::size_t tests = 0;
+  TestedPairs tested;
+};
+
+bool corner_of(VertexId v, const Face& f) { return v == f[0] || v == f[1] || v == f[2]; }
+
+}  // namespace
+
+ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks,
+                                  std::span<const bvh::TrianglePair> candidates, const StepView& step,
+                                  const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit) {
+  const auto& x0 = step.x0;
+  const auto& x1 = step.x1;
+  tbb::enumerable_thread_specific<Local> locals;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
+    Local& local = locals.local();
+    auto vertex_against_face = [&](VertexId v, FaceId f) {
+      const Face& face = topology.face(f);
+      if (corner_of(v, face)) return;
+      ++local.tests;
+      const VertexFacePair pair{v, f};
+      if (audit) local.tested.vertex_face.push_back(pair);
+      const narrowphase::NarrowPhaseResult r = narrow_phase.vertex_face(
+          {x0[v], x0[face[0]], x0[face[1]], x0[face[2]], x1[v], x1[face[0]], x1[face[1]], x1[face[2]]}, thickness);
+      if (r.collides) local.collisions.add(pair, r.toi);
+    };
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      const auto [a, b] = candidates[i];
+      for (const auto [owner, other] : {std::pair{a, b}, std::pair{b, a}}) {
+        for (int k = 0; k < 3; ++k) {
+          if (masks[owner] & owns_vertex_bit(k)) vertex_against_face(topology.face(owner)[k], other);
+        }
+      }
+      for (int i_edge = 0; i_edge < 3; ++i_edge) {
+        if (!(masks[a] & owns_edge_bit(i_edge))) continue;
+        const Edge ea = topology.edge(topology.face_edges(a)[i_edge]);
+        for (int j_edge = 0; j_edge < 3; ++j_edge) {
+          if (!(masks[b] & owns_edge_bit(j_edge))) continue;
+          const Edge eb = topology.edge(topology.face_edges(b)[j_edge]);
+          if (ea.v0 == eb.v0 || ea.v0 == eb.v1 || ea.v1 == eb.v0 || ea.v1 == eb.v1) continue;
+          ++local.tests;
+          const EdgeEdgePair pair = make_edge_edge_pair(ea, eb);
+          if (audit) local.tested.edge_edge.push_back(pair);
+          const narrowphase::NarrowPhaseResult r = narrow_phase.edge_edge(
+              {x0[pair.a.v0], x0[pair.a.v1], x0[pair.b.v0], x0[pair.b.v1], x1[pair.a.v0], x1[pair.a.v1],
+               x1[pair.b.v0], x1[pair.b.v1]},
+              thickness);
+          if (r.collides) local.collisions.add(pair, r.toi);
+        }
+      }
+    }
+  });
+  ElementaryOutcome outcome;
+  if (audit) outcome.tested.emplace();
+  for (Local& local : locals) {
+    outcome.collisions.append(local.collisions);
+    outcome.tests += local.tests;
+    if (audit) {
+      outcome.tested->vertex_face.insert(outcome.tested->vertex_face.end(), local.tested.vertex_face.begin(), local.tested.vertex_face.end());
+      outcome.tested->edge_edge.insert(outcome.tested->edge_edge.end(), local.tested.edge_edge.begin(), local.tested.edge_edge.end());
+    }
+  }
+  outcome.collisions.normalize();
+  if (audit) {
+    tbb::parallel_sort(outcome.tested->vertex_face.begin(), outcome.tested->vertex_face.end());
+    tbb::parallel_sort(outcome.tested->edge_edge.begin(), outcome.tested->edge_edge.end());
+  }
+  return outcome;
+}
+
+}  // namespace ccd::strategies

@@ -1,0 +1,30 @@
+#pragma once
+/// @file
+/// From candidate triangle pairs to tested elementary pairs, by the primitive-assignment masks (DESIGN.md §1):
+/// for (A, B), A != B, the vertices A owns against face B, those B owns against face A, and the edges A owns
+/// against those B owns, skipping pairs that share a vertex. Every elementary pair comes from exactly one
+/// triangle pair, and adjacent triangles still yield the pairs of theirs that share no vertex.
+
+#include "core/assignment.hpp"
+#include "core/scene.hpp"
+#include "strategies/bvh/bvh.hpp"
+#include "strategies/narrowphase/narrow_phase.hpp"
+#include "strategies/strategy.hpp"
+
+#include <span>
+
+namespace ccd::strategies {
+
+struct ElementaryOutcome {
+  CollisionSet collisions;
+  std::size_t tests = 0;
+  std::optional<TestedPairs> tested;
+};
+
+/// Tests every elementary pair of `candidates` with `narrow_phase` at `thickness`, in parallel. Results are sorted
+/// and do not depend on the thread count.
+ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks,
+                                  std::span<const bvh::TrianglePair> candidates, const StepView& step,
+                                  const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit);
+
+}  // namespace ccd::strategies

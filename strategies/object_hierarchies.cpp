@@ -1,0 +1,49 @@
+#include "strategies/object_hierarchies.hpp"
+
+#include <algorithm>
+
+namespace ccd::strategies {
+
+void ObjectHierarchies::build(const Scene& scene, std::span<const Vec3> first_frame, double inflation) {
+  scene_ = &scene;
+  trees_.assign(scene.objects().size(), {});
+  for (ObjectId id = 0; id < scene.objects().size(); ++id) {
+    const SceneObject& object = scene.object(id);
+    trees_[id].build(scene.topology(), object.first_face, object.num_faces, first_frame);
+    if (object.kind == ObjectKind::static_object) trees_[id].refit(scene.topology(), first_frame, first_frame, inflation);
+  }
+}
+
+void ObjectHierarchies::refit(const StepView& step, double inflation) {
+  for (ObjectId id = 0; id < trees_.size(); ++id) {
+    if (!is_static(id)) trees_[id].refit(scene_->topology(), step.x0, step.x1, inflation);
+  }
+}
+
+void ObjectHierarchies::refit(ObjectId object, const StepView& step, std::span<const double> inflation) {
+  trees_[object].refit(scene_->topology(), step.x0, step.x1, inflation);
+}
+
+std::vector<bvh::TrianglePair> ObjectHierarchies::candidates() const {
+  std::vector<bvh::TrianglePair> all;
+  for (ObjectId a = 0; a < trees_.size(); ++a) {
+    if (scene_->object(a).self_collision) {
+      const auto pairs = bvh::self_overlaps(trees_[a]);
+      all.insert(all.end(), pairs.begin(), pairs.end());
+    }
+  }
+  for (const auto& [a, b] : scene_->collidable_pairs()) {
+    const auto pairs = bvh::pair_overlaps(trees_[a], trees_[b]);
+    all.insert(all.end(), pairs.begin(), pairs.end());
+  }
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+std::size_t ObjectHierarchies::bytes() const {
+  std::size_t total = 0;
+  for (const auto& tree : trees_) total += tree.bytes();
+  return total;
+}
+
+}  // namespace ccd::strategies

@@ -1,0 +1,48 @@
+#include "strategies/strategy.hpp"
+
+#include "strategies/full_traversal/full_traversal.hpp"
+
+#include <stdexcept>
+
+namespace ccd::strategies {
+
+StrategySpec parse_strategy_spec(const std::string& spec) {
+  StrategySpec parsed;
+  std::vector<std::string> parts;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t colon = spec.find(':', begin);
+    parts.push_back(spec.substr(begin, colon == std::string::npos ? std::string::npos : colon - begin));
+    if (colon == std::string::npos) break;
+    begin = colon + 1;
+  }
+  const std::string& head = parts[0];
+  const std::size_t plus = head.find('+');
+  parsed.name = head.substr(0, plus);
+  if (plus != std::string::npos) parsed.narrow_phase = head.substr(plus + 1);
+  if (parsed.name.empty() || parsed.narrow_phase.empty()) throw std::invalid_argument("malformed strategy spec '" + spec + "'");
+  for (std::size_t i = 1; i < parts.size(); ++i) {
+    const std::size_t equals = parts[i].find('=');
+    if (equals == std::string::npos || equals == 0) {
+      throw std::invalid_argument("'" + parts[i] + "' in strategy spec '" + spec + "' is not key=value");
+    }
+    parsed.parameters[parts[i].substr(0, equals)] = parts[i].substr(equals + 1);
+  }
+  return parsed;
+}
+
+std::vector<std::string> strategy_names() { return {"full", "brute"}; }
+
+std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
+  const StrategySpec parsed = parse_strategy_spec(spec);
+  // `full` and `brute` have no parameters of their own: every key is the narrow phase's.
+  if (parsed.name == "full" || parsed.name == "brute") {
+    auto narrow_phase = narrowphase::make_narrow_phase(parsed.narrow_phase, parsed.parameters);
+    return parsed.name == "full" ? make_full_traversal(std::move(narrow_phase)) : make_brute_force(std::move(narrow_phase));
+  }
+  std::string known;
+  for (const std::string& name : strategy_names()) known += (known.empty() ? "" : ", ") + name;
+  throw std::invalid_argument("unknown strategy '" + parsed.name + "' (known: " + known + ")");
+}
+
+}  // namespace ccd::strategies

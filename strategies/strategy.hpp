@@ -1,0 +1,67 @@
+#pragma once
+/// @file
+/// What the harness compares (DESIGN.md §3): a strategy is built once per scene and fed steps in order.
+
+#include "core/collision_set.hpp"
+#include "core/stage_timer.hpp"
+#include "core/step.hpp"
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace ccd::strategies {
+
+/// Counts a strategy reports per step (beyond its stage times).
+struct StepCounters {
+  std::size_t candidate_triangle_pairs = 0;
+  std::size_t elementary_tests = 0;
+  /// Memory kept from step to step (history, hash tables, hierarchies), in bytes.
+  std::size_t history_bytes = 0;
+  /// Strategy-specific counts, e.g. apccd's dangling vertices.
+  std::vector<std::pair<std::string, double>> extra;
+};
+
+/// The elementary pairs a step tested (audit mode), sorted: a miss not among them was culled before testing.
+struct TestedPairs {
+  std::vector<VertexFacePair> vertex_face;
+  std::vector<EdgeEdgePair> edge_edge;
+};
+
+struct StepResult {
+  /// Normalized; TOIs from the narrow phase.
+  CollisionSet collisions;
+  StageTimes stages;
+  StepCounters counters;
+  /// Filled in audit mode only.
+  std::optional<TestedPairs> tested;
+};
+
+class Strategy {
+ public:
+  virtual ~Strategy() = default;
+  /// The resolved spec, every default filled in: the strategy's name in every result.
+  virtual std::string name() const = 0;
+  /// Prepares for `scene`; `first_frame` holds frame 0's global positions.
+  virtual void init(const Scene& scene, std::span<const Vec3> first_frame) = 0;
+  /// One step, in order. With `audit`, also returns the elementary pairs tested (outside the timed stages).
+  virtual StepResult step(const StepView& step, bool audit) = 0;
+};
+
+/// A spec `NAME[+NARROW][:key=value...]`, split. Keys the strategy does not know go to the narrow phase.
+struct StrategySpec {
+  std::string name;
+  std::string narrow_phase = "conservative";
+  std::map<std::string, std::string> parameters;
+};
+StrategySpec parse_strategy_spec(const std::string& spec);
+
+/// Makes a strategy from its spec (`full`, `full+cubic64`, `brute`, ...).
+/// @throws std::invalid_argument naming the known strategies, or the unknown parameter, or an unavailable backend.
+std::unique_ptr<Strategy> make_strategy(const std::string& spec);
+std::vector<std::string> strategy_names();
+
+}  // namespace ccd::strategies
