@@ -1,28 +1,12 @@
 #!/usr/bin/env bash
-# The main job: builds ccdbench (Release) and runs it on the public data with exact ground truth.
-# Extra arguments replace the default paths: scripts/run.sh path/to/scene.json
+# The main job: builds ccdbench (Release) and runs the default suite: built-in scenes at small resolution, every
+# step verified against the exact truth (computed once and cached). Ends with the table and the report's path.
+# Extra arguments go to `ccdbench run` (e.g. --strategy full,full+cubic64 or --fresh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/build.sh release
-ccdbench=build/release/bin/ccdbench
-
-if (($# > 0)); then
-  exec "$ccdbench" inspect "$@"
-fi
-
-data=${CCDBENCH_DATA_DIR:-}
-if [[ -z $data ]]; then
-  for candidate in ../shared/data data/external; do
-    if [[ -d $candidate ]]; then data=$candidate; break; fi
-  done
-fi
-if [[ -z $data ]]; then
-  echo "run: no public data found: set CCDBENCH_DATA_DIR or run scripts/fetch-data.sh" >&2
-  exit 1
-fi
-"$ccdbench" inspect "$data/sample-queries" "$data/scalable-ccd-sample/cloth-funnel" \
-  "$data/scalable-ccd-sample/rod-twist"
-echo
-"$ccdbench" queries "$data/sample-queries" "$data/scalable-ccd-sample" --method exact
-echo
-"$ccdbench" truth --sample "$data/scalable-ccd-sample/cloth-funnel"
+export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-$PWD/build/cache}
+report=reports/runs/$(date -u +%Y%m%d-%H%M%S)
+build/release/bin/ccdbench run --suite default --strategy full,full+cubic64 --out results/default --report "$report" "$@"
+/usr/bin/python3 scripts/plot_run.py "$report"
+echo "report: $report/README.md"

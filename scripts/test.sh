@@ -1,8 +1,13 @@
 #!/usr/bin/env bash
-# Builds ccdbench and runs every test. Usage: scripts/test.sh [release|debug|asan] (default: release).
+# Builds ccdbench and runs every test, then the `ci` suite and the CI gate on missed collisions.
+# Usage: scripts/test.sh [release|debug|asan] (default: release).
 # Set CCDBENCH_REQUIRE_DATA=1 to fail (not skip) the tests that need the public data (CI does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 preset=${1:-release}
 scripts/build.sh "$preset"
+export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-$PWD/build/cache}
 ctest --preset "$preset" -j "$(nproc)"
+out=build/$preset/ci-results
+"build/$preset/bin/ccdbench" run --suite ci --strategy full,full+cubic64 --out "$out" --json "$out/summary.json" --fresh
+"build/$preset/bin/ccdbench" check --baseline tests/baselines/ci.json "$out/summary.json"

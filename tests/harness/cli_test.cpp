@@ -195,5 +195,51 @@ TEST(Cli, StressPrintsFamiliesAndWritesTheSuiteAsQueries) {
   EXPECT_EQ(read_json(dir / "scores.json").back()["false_negatives"], 0);
 }
 
+TEST(Cli, RunVerifiesWritesResultsAndResumes) {
+  testing::TempDir dir;
+  ::setenv("CCDBENCH_CACHE_DIR", (dir / "cache").c_str(), 1);
+  const std::string base = "run --suite ci --strategy full --out '" + (dir / "out").string() + "' --json '" +
+                           (dir / "summary.json").string() + "'";
+  const CommandResult first = run_ccdbench(base);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const nlohmann::json summary = read_json(dir / "summary.json");
+  ASSERT_EQ(summary.size(), 3u);
+  for (const auto& s : summary) {
+    for (const char* field : {"scene", "strategy", "steps", "ms_per_step", "colliding", "reported", "missed",
+                              "missed_culled", "missed_tested", "false_alarms", "machine", "build_type", "threads", "git_revision"}) {
+      EXPECT_TRUE(s.contains(field)) << field;
+    }
+    EXPECT_EQ(s["missed"], 0) << s.dump();
+  }
+  std::ifstream lines(dir / "out/results.jsonl");
+  std::size_t records = 0;
+  for (std::string line; std::getline(lines, line);) {
+    EXPECT_NO_THROW(nlohmann::json::parse(line));
+    ++records;
+  }
+  EXPECT_EQ(records, 3 + 4 + 7 + 7u);  // a summary per cell, a record per step
+  const CommandResult again = run_ccdbench(base);
+  EXPECT_NE(again.output.find("(resumed)"), std::string::npos) << again.output;
+  EXPECT_EQ(run_ccdbench(base + " --fresh").output.find("(resumed)"), std::string::npos);
+  ::unsetenv("CCDBENCH_CACHE_DIR");
+}
+
+TEST(Cli, CheckFailsWhenABaselineIsExceeded) {
+  testing::TempDir dir;
+  testing::write_text(dir / "results.json",
+                      R"([{"scene": "s", "strategy": "full+cubic64", "missed": 3, "missed_culled": 1, "missed_tested": 2},
+                          {"scene": "s", "strategy": "full+conservative", "missed": 0, "missed_culled": 0, "missed_tested": 0}])");
+  testing::write_text(dir / "loose.json", R"([{"scene": "s", "strategy": "full+cubic64", "max_missed": 3}])");
+  testing::write_text(dir / "tight.json", R"([{"scene": "s", "strategy": "full+cubic64", "max_missed": 2}])");
+  const std::string results = " '" + (dir / "results.json").string() + "'";
+  EXPECT_EQ(run_ccdbench("check --baseline '" + (dir / "loose.json").string() + "'" + results).exit_code, 0);
+  const CommandResult tight = run_ccdbench("check --baseline '" + (dir / "tight.json").string() + "'" + results);
+  EXPECT_EQ(tight.exit_code, 1);
+  EXPECT_NE(tight.output.find("FAIL s / full+cubic64: missed 3"), std::string::npos) << tight.output;
+  // A result absent from the baseline is allowed no miss at all.
+  testing::write_text(dir / "empty.json", "[]");
+  EXPECT_EQ(run_ccdbench("check --baseline '" + (dir / "empty.json").string() + "'" + results).exit_code, 1);
+}
+
 }  // namespace
 }  // namespace ccd
