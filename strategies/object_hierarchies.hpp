@@ -21,6 +21,8 @@ class ObjectHierarchies {
   void refit(const StepView& step, double inflation);
   /// Refits object `object` with per-face widening (indexed by face - first face of the object).
   void refit(ObjectId object, const StepView& step, std::span<const double> inflation);
+  /// Grows face f's leaf box (and its ancestors) in its object's tree to hold `box`.
+  void enlarge_leaf(FaceId f, const Box3& box) { trees_[scene_->object_of_face(f)].enlarge_leaf(f, box); }
   /// All candidate triangle pairs the collision filter allows, sorted.
   std::vector<bvh::TrianglePair> candidates() const;
 

@@ -1,5 +1,6 @@
 #include "strategies/strategy.hpp"
 
+#include "strategies/apccd/cpu/apccd.hpp"
 #include "strategies/full_traversal/full_traversal.hpp"
 
 #include <stdexcept>
@@ -31,7 +32,7 @@ StrategySpec parse_strategy_spec(const std::string& spec) {
   return parsed;
 }
 
-std::vector<std::string> strategy_names() { return {"full", "brute"}; }
+std::vector<std::string> strategy_names() { return {"full", "apccd", "brute"}; }
 
 std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
   const StrategySpec parsed = parse_strategy_spec(spec);
@@ -39,6 +40,11 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
   if (parsed.name == "full" || parsed.name == "brute") {
     auto narrow_phase = narrowphase::make_narrow_phase(parsed.narrow_phase, parsed.parameters);
     return parsed.name == "full" ? make_full_traversal(std::move(narrow_phase)) : make_brute_force(std::move(narrow_phase));
+  }
+  if (parsed.name == "apccd") {
+    std::map<std::string, std::string> parameters = parsed.parameters;
+    const ApccdSettings settings = take_apccd_settings(parameters);
+    return make_apccd(settings, narrowphase::make_narrow_phase(parsed.narrow_phase, parameters));
   }
   std::string known;
   for (const std::string& name : strategy_names()) known += (known.empty() ? "" : ", ") + name;

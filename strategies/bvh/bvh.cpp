@@ -74,6 +74,19 @@ void TriangleBvh::build(const MeshTopology& topology, FaceId first_face, std::si
     tasks.push_back({left + 1, task.first + task.count / 2, task.count - task.count / 2});
   }
   bottom_up_.assign(top_down.rbegin(), top_down.rend());
+  parent_.assign(nodes_.size(), -1);
+  for (std::int32_t n : top_down) {
+    parent_[static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].left)] = n;
+    parent_[static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].right)] = n;
+  }
+}
+
+void TriangleBvh::enlarge_leaf(FaceId f, const Box3& box) {
+  for (std::int32_t n = leaf_of(f); n >= 0; n = parent_[static_cast<std::size_t>(n)]) {
+    Box3& node_box = nodes_[static_cast<std::size_t>(n)].box;
+    if (node_box.contains(box)) break;  // ancestors hold it already
+    node_box.extend(box);
+  }
 }
 
 template <class Inflation>

@@ -41,6 +41,10 @@ class TriangleBvh {
   void refit(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1,
              std::span<const double> inflation);
 
+  /// Grows the leaf box of global face f to also hold `box`, and its ancestors with it: the hierarchy stays valid
+  /// for a face that moved beyond the box it was fitted with.
+  void enlarge_leaf(FaceId f, const Box3& box);
+
   const std::vector<Node>& nodes() const { return nodes_; }
   FaceId first_face() const { return first_face_; }
   std::size_t face_count() const { return leaf_of_face_.size(); }
@@ -56,6 +60,7 @@ class TriangleBvh {
 
   std::vector<Node> nodes_;
   std::vector<std::int32_t> leaf_of_face_;
+  std::vector<std::int32_t> parent_;
   /// Internal nodes in an order where children come before parents (bottom-up refit order).
   std::vector<std::int32_t> bottom_up_;
   FaceId first_face_ = 0;

@@ -1,0 +1,350 @@
+#include "strategies/apccd/cpu/apccd.hpp"
+
+#include "core/assignment.hpp"
+#include "strategies/elementary_tests.hpp"
+#include "strategies/object_hierarchies.hpp"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace ccd::strategies {
+namespace {
+
+bool parse_switch(const std::string& key, const std::string& value) {
+  if (value == "on" || value == "true" || value == "1") return true;
+  if (value == "off" || value == "false" || value == "0") return false;
+  throw std::invalid_argument("apccd: " + key + "=" + value + " must be on or off");
+}
+
+double parse_number(const std::string& key, const std::string& value, double minimum) {
+  std::size_t used = 0;
+  double number = 0;
+  try {
+    number = std::stod(value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != value.size() || !std::isfinite(number) || number < minimum) {
+    throw std::invalid_argument("apccd: " + key + "=" + value + " must be a number >= " + std::to_string(minimum));
+  }
+  return number;
+}
+
+/// Whether a flip of orientation can be a crossing: the vertex projects into the face (VF), or the closest points
+/// of the two edges' lines lie on both segments (EE), at the end of the step, with a little slack.
+bool crossing_is_plausible(const MeshTopology& topology, std::span<const Vec3> x, const VertexFacePair& p) {
+  const Face& f = topology.face(p.f);
+  const Vec3 a = x[f[0]], b = x[f[1]], c = x[f[2]], q = x[p.v];
+  const Vec3 n = (b - a).cross(c - a);
+  const double area2 = n.squaredNorm();
+  if (!(area2 > 0)) return false;
+  constexpr double kSlack = 1e-6;
+  return (b - a).cross(q - a).dot(n) >= -kSlack * area2 && (c - b).cross(q - b).dot(n) >= -kSlack * area2 &&
+         (a - c).cross(q - c).dot(n) >= -kSlack * area2;
+}
+bool crossing_is_plausible(const MeshTopology&, std::span<const Vec3> x, const EdgeEdgePair& p) {
+  const Vec3 ea = x[p.a.v1] - x[p.a.v0], eb = x[p.b.v1] - x[p.b.v0], r = x[p.b.v0] - x[p.a.v0];
+  const Vec3 m = ea.cross(eb);
+  const double m2 = m.squaredNorm();
+  if (!(m2 > 0)) return false;
+  const double s = r.cross(eb).dot(m), u = r.cross(ea).dot(m);
+  constexpr double kSlack = 1e-6;
+  return s >= -kSlack * m2 && s <= (1 + kSlack) * m2 && u >= -kSlack * m2 && u <= (1 + kSlack) * m2;
+}
+
+/// Orientation of an elementary pair at the end of the step: which side of the face plane the vertex is on, or
+/// the sign of the edges' triple product (b0 - a0)·(ea × eb). 0 when exactly degenerate.
+int orientation(const MeshTopology& topology, std::span<const Vec3> x, const VertexFacePair& p) {
+  const Face& f = topology.face(p.f);
+  const double s = (x[f[1]] - x[f[0]]).cross(x[f[2]] - x[f[0]]).dot(x[p.v] - x[f[0]]);
+  return (s > 0) - (s < 0);
+}
+int orientation(const MeshTopology&, std::span<const Vec3> x, const EdgeEdgePair& p) {
+  const double s = (x[p.b.v0] - x[p.a.v0]).dot((x[p.a.v1] - x[p.a.v0]).cross(x[p.b.v1] - x[p.b.v0]));
+  return (s > 0) - (s < 0);
+}
+
+class Apccd final : public Strategy {
+ public:
+  Apccd(const ApccdSettings& settings, std::unique_ptr<narrowphase::NarrowPhase> narrow_phase)
+      : settings_(settings), narrow_phase_(std::move(narrow_phase)), nf_(settings.nf_max) {}
+
+  std::string name() const override {
+    std::ostringstream out;
+    out << "apccd+" << narrow_phase_->name() << ":skip=" << (settings_.skip ? "on" : "off") << ":nf_min=" << settings_.nf_min
+        << ":nf_max=" << settings_.nf_max << ":local=" << settings_.local << ":global=" << settings_.global
+        << ":dangling_max=" << settings_.dangling_max << ":heuristic=" << (settings_.heuristic ? "on" : "off")
+        << ":history=" << (settings_.history ? "on" : "off");
+    return out.str();
+  }
+
+  void init(const Scene& scene, std::span<const Vec3> first_frame) override {
+    scene_ = &scene;
+    masks_ = assign_primitives(scene.topology());
+    hierarchies_.build(scene, first_frame, scene.thickness() / 2);
+    session_frame_ = 0;
+    nf_ = settings_.skip ? settings_.nf_max : 1;
+    pending_.clear();
+    vertex_face_history_.clear();
+    edge_edge_history_.clear();
+  }
+
+  StepResult step(const StepView& step, bool audit) override {
+    StepResult result;
+    const MeshTopology& topology = scene_->topology();
+    const double half = scene_->thickness() / 2;
+    std::size_t dangling_vertices = 0, dangling_triangles = 0;
+    const bool session_start = session_frame_ == 0;
+    if (session_start) {
+      start_session(step, result);
+    } else {
+      // Dangling vertices: beyond their budget around the session's anchor.
+      std::vector<FaceId> dangling_faces;
+      {
+        ScopedStageTimer timer(result.stages, "dangling collection");
+        std::vector<char> dangling(topology.num_vertices(), 0);
+        tbb::parallel_for(std::size_t{0}, topology.num_vertices(), [&](std::size_t v) {
+          if (!hierarchies_.is_static(scene_->object_of_vertex(static_cast<VertexId>(v)))) {
+            dangling[v] = (step.x1[v] - anchor_[v]).cwiseAbs().maxCoeff() > budget_[v] ? 1 : 0;
+          }
+        });
+        std::vector<char> face_dangles(topology.num_faces(), 0);
+        for (std::size_t v = 0; v < dangling.size(); ++v) {
+          if (!dangling[v]) continue;
+          ++dangling_vertices;
+          for (FaceId f : topology.vertex_faces(static_cast<VertexId>(v))) face_dangles[f] = 1;
+        }
+        for (FaceId f = 0; f < topology.num_faces(); ++f) {
+          if (face_dangles[f]) dangling_faces.push_back(f);
+        }
+        dangling_triangles = dangling_faces.size();
+      }
+      {
+        ScopedStageTimer timer(result.stages, "partial traversal");
+        partial_traversal(step, dangling_faces, half);
+      }
+    }
+    std::vector<bvh::TrianglePair> admissible;
+    {
+      ScopedStageTimer timer(result.stages, "front end");
+      if (settings_.heuristic) {
+        // Admissible: the two triangles' fresh swept boxes, widened by δ/2, overlap this step. Each face's box is
+        // computed once per step; pending pairs then only compare two boxes.
+        std::vector<Box3> face_boxes(topology.num_faces());
+        tbb::parallel_for(std::size_t{0}, topology.num_faces(), [&](std::size_t f) {
+          face_boxes[f] = bvh::swept_face_box(topology.face(static_cast<FaceId>(f)), step.x0, step.x1, half);
+        });
+        std::vector<char> keep(pending_.size(), 0);
+        tbb::parallel_for(std::size_t{0}, pending_.size(), [&](std::size_t i) {
+          keep[i] = face_boxes[pending_[i].first].intersects(face_boxes[pending_[i].second]) ? 1 : 0;
+        });
+        for (std::size_t i = 0; i < pending_.size(); ++i) {
+          if (keep[i]) admissible.push_back(pending_[i]);
+        }
+      } else {
+        admissible = pending_;
+      }
+    }
+    ElementaryOutcome outcome;
+    std::size_t history_catches = 0;
+    {
+      ScopedStageTimer timer(result.stages, "back end");
+      outcome = test_candidates(topology, masks_, admissible, step, *narrow_phase_, scene_->thickness(),
+                                audit || settings_.history);
+      if (settings_.history) history_catches = apply_history(step, *outcome.tested, outcome.collisions);
+    }
+    result.collisions = std::move(outcome.collisions);
+    if (audit) result.tested = std::move(outcome.tested);
+    result.counters.candidate_triangle_pairs = admissible.size();
+    result.counters.elementary_tests = outcome.tests;
+    result.counters.history_bytes = history_bytes() + pending_.capacity() * sizeof(bvh::TrianglePair) + hierarchies_.bytes();
+    result.counters.extra = {{"session_start", session_start ? 1.0 : 0.0},
+                             {"nf", static_cast<double>(nf_)},
+                             {"pending_pairs", static_cast<double>(pending_.size())},
+                             {"dangling_vertices", static_cast<double>(dangling_vertices)},
+                             {"dangling_triangles", static_cast<double>(dangling_triangles)},
+                             {"history_pairs", static_cast<double>(vertex_face_history_.size() + edge_edge_history_.size())},
+                             {"history_catches", static_cast<double>(history_catches)}};
+    advance_session(dangling_vertices);
+    return result;
+  }
+
+ private:
+  /// First frame of a session: budgets, inflated refit, full traversal into the pending list.
+  void start_session(const StepView& step, StepResult& result) {
+    const MeshTopology& topology = scene_->topology();
+    const double half = scene_->thickness() / 2;
+    const double frames_left = static_cast<double>(nf_ - 1);
+    {
+      ScopedStageTimer timer(result.stages, "update");
+      anchor_.assign(step.x1.begin(), step.x1.end());
+      budget_.assign(topology.num_vertices(), 0.0);
+      for (ObjectId id = 0; id < scene_->objects().size(); ++id) {
+        const SceneObject& object = scene_->object(id);
+        if (object.kind == ObjectKind::static_object) continue;
+        double mean_speed = 0;
+        for (std::size_t i = 0; i < object.num_vertices; ++i) {
+          const std::size_t v = object.first_vertex + i;
+          mean_speed += (step.x1[v] - step.x0[v]).norm();
+        }
+        mean_speed /= static_cast<double>(std::max<std::size_t>(object.num_vertices, 1));
+        tbb::parallel_for(std::size_t{0}, object.num_vertices, [&](std::size_t i) {
+          const std::size_t v = object.first_vertex + i;
+          budget_[v] = frames_left * (settings_.local * (step.x1[v] - step.x0[v]).norm() + settings_.global * mean_speed);
+        });
+        std::vector<double> inflation(object.num_faces);
+        tbb::parallel_for(std::size_t{0}, object.num_faces, [&](std::size_t i) {
+          const Face& face = topology.face(static_cast<FaceId>(object.first_face + i));
+          inflation[i] = half + std::max({budget_[face[0]], budget_[face[1]], budget_[face[2]]});
+        });
+        hierarchies_.refit(id, step, inflation);
+      }
+    }
+    {
+      ScopedStageTimer timer(result.stages, "traversal");
+      pending_ = hierarchies_.candidates();
+    }
+  }
+
+  /// Enlarges the dangling triangles' leaves to their fresh boxes, then finds every face whose box overlaps one of
+  /// them, within what the collision filter allows; new pairs join the pending list.
+  void partial_traversal(const StepView& step, const std::vector<FaceId>& dangling_faces, double half) {
+    if (dangling_faces.empty()) return;
+    const MeshTopology& topology = scene_->topology();
+    std::vector<Box3> fresh(dangling_faces.size());
+    tbb::parallel_for(std::size_t{0}, dangling_faces.size(), [&](std::size_t i) {
+      fresh[i] = bvh::swept_face_box(topology.face(dangling_faces[i]), step.x0, step.x1, half);
+    });
+    for (std::size_t i = 0; i < dangling_faces.size(); ++i) hierarchies_.enlarge_leaf(dangling_faces[i], fresh[i]);
+    std::vector<bvh::TrianglePair> found;
+    for (ObjectId a = 0; a < scene_->objects().size(); ++a) {
+      std::vector<FaceId> subset;
+      std::vector<Box3> boxes;
+      for (std::size_t i = 0; i < dangling_faces.size(); ++i) {
+        if (scene_->object_of_face(dangling_faces[i]) == a) {
+          subset.push_back(dangling_faces[i]);
+          boxes.push_back(fresh[i]);
+        }
+      }
+      if (subset.empty()) continue;
+      for (ObjectId b = 0; b < scene_->objects().size(); ++b) {
+        if (!scene_->may_collide(a, b)) continue;
+        const auto pairs = bvh::subset_overlaps(subset, boxes, hierarchies_.tree(b));
+        found.insert(found.end(), pairs.begin(), pairs.end());
+      }
+    }
+    if (found.empty()) return;
+    // The pending list is a sorted vector rather than a hash table: merging sorted runs keeps it duplicate-free,
+    // deterministic and compact, and the front end reads it sequentially.
+    tbb::parallel_sort(found.begin(), found.end());
+    std::vector<bvh::TrianglePair> merged;
+    merged.reserve(pending_.size() + found.size());
+    std::set_union(pending_.begin(), pending_.end(), found.begin(), found.end(), std::back_inserter(merged));
+    pending_.swap(merged);
+  }
+
+  /// Reports tested pairs in close proximity whose orientation flipped since they were last seen, when the
+  /// elementary test did not; returns how many it added.
+  std::size_t apply_history(const StepView& step, const TestedPairs& tested, CollisionSet& collisions) {
+    const MeshTopology& topology = scene_->topology();
+    std::size_t catches = 0;
+    auto track = [&](const auto& pairs, auto& table) {
+      using Table = std::remove_reference_t<decltype(table)>;
+      Table next;
+      next.reserve(pairs.size());
+      for (const auto& pair : pairs) {
+        const int now = orientation(topology, step.x1, pair);
+        const auto it = table.find(pair);
+        if (it != table.end() && now != 0 && it->second != 0 && now != it->second && !collisions.contains(pair) &&
+            crossing_is_plausible(topology, step.x1, pair)) {
+          collisions.add(pair);
+          ++catches;
+        }
+        next.emplace(pair, static_cast<std::int8_t>(now));
+      }
+      table.swap(next);
+    };
+    track(tested.vertex_face, vertex_face_history_);
+    track(tested.edge_edge, edge_edge_history_);
+    if (catches > 0) collisions.normalize();
+    return catches;
+  }
+
+  /// Bytes of the history tables: buckets plus one node per entry (key, value, next pointer, cached hash).
+  std::size_t history_bytes() const {
+    auto table_bytes = [](const auto& table) {
+      using Entry = typename std::remove_reference_t<decltype(table)>::value_type;
+      return table.bucket_count() * sizeof(void*) + table.size() * (sizeof(Entry) + 2 * sizeof(void*));
+    };
+    return table_bytes(vertex_face_history_) + table_bytes(edge_edge_history_);
+  }
+
+  /// Ends the session after nf frames, or early when too many vertices dangle; adapts nf for the next one.
+  void advance_session(std::size_t dangling_vertices) {
+    if (!settings_.skip) {
+      session_frame_ = 0;
+      return;
+    }
+    const double fraction = static_cast<double>(dangling_vertices) / static_cast<double>(std::max<std::size_t>(1, scene_->topology().num_vertices()));
+    worst_dangling_ = std::max(worst_dangling_, fraction);
+    ++session_frame_;
+    if (fraction > settings_.dangling_max) {
+      nf_ = std::max(settings_.nf_min, nf_ / 2);
+      session_frame_ = 0;
+      worst_dangling_ = 0;
+    } else if (session_frame_ >= nf_) {
+      if (worst_dangling_ < settings_.dangling_max / 4) nf_ = std::min(settings_.nf_max, nf_ * 2);
+      session_frame_ = 0;
+      worst_dangling_ = 0;
+    }
+  }
+
+  ApccdSettings settings_;
+  std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
+  const Scene* scene_ = nullptr;
+  std::vector<AssignmentMask> masks_;
+  ObjectHierarchies hierarchies_;
+  int nf_;
+  int session_frame_ = 0;
+  double worst_dangling_ = 0;
+  std::vector<Vec3> anchor_;
+  std::vector<double> budget_;
+  std::vector<bvh::TrianglePair> pending_;
+  std::unordered_map<VertexFacePair, std::int8_t> vertex_face_history_;
+  std::unordered_map<EdgeEdgePair, std::int8_t> edge_edge_history_;
+};
+
+}  // namespace
+
+ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters) {
+  ApccdSettings settings;
+  auto take = [&](const char* key, auto apply) {
+    const auto it = parameters.find(key);
+    if (it == parameters.end()) return;
+    apply(it->second);
+    parameters.erase(it);
+  };
+  take("skip", [&](const std::string& v) { settings.skip = parse_switch("skip", v); });
+  take("heuristic", [&](const std::string& v) { settings.heuristic = parse_switch("heuristic", v); });
+  take("history", [&](const std::string& v) { settings.history = parse_switch("history", v); });
+  take("nf_min", [&](const std::string& v) { settings.nf_min = static_cast<int>(parse_number("nf_min", v, 1)); });
+  take("nf_max", [&](const std::string& v) { settings.nf_max = static_cast<int>(parse_number("nf_max", v, 1)); });
+  take("local", [&](const std::string& v) { settings.local = parse_number("local", v, 0); });
+  take("global", [&](const std::string& v) { settings.global = parse_number("global", v, 0); });
+  take("dangling_max", [&](const std::string& v) { settings.dangling_max = parse_number("dangling_max", v, 0); });
+  if (settings.nf_min > settings.nf_max) throw std::invalid_argument("apccd: nf_min must not exceed nf_max");
+  return settings;
+}
+
+std::unique_ptr<Strategy> make_apccd(const ApccdSettings& settings, std::unique_ptr<narrowphase::NarrowPhase> narrow_phase) {
+  return std::make_unique<Apccd>(settings, std::move(narrow_phase));
+}
+
+}  // namespace ccd::strategies
