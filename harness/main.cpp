@@ -116,9 +116,13 @@ int main(int argc, char** argv) {
       "scene and strategy: ms per step (median; stage breakdown), speed-up over `full` (cells of this run only),\n"
       "candidate triangle pairs, elementary tests, colliding pairs, missed (culled: never tested / tested: the\n"
       "elementary test said no) and false alarms. Strategies: NAME[+NARROW][:key=value...], comma-separated:\n"
-      "full (BVH refit + full traversal every step), brute (every triangle pair; small scenes); NARROW is\n"
-      "conservative (default), cubic64, cubic32 or advancement. Truth is cached on disk by content. Finished\n"
-      "cells are kept in --out and reused by the next run unless --fresh.");
+      "full (BVH refit + full traversal every step), apccd (skipping-frame sessions, Wong 2009), brute (every\n"
+      "triangle pair; small scenes); NARROW is conservative (default), cubic64, cubic32 or advancement.\n"
+      "apccd knobs (defaults): skip=on, nf_min=2, nf_max=8 (session length bounds), local=1.0 and global=0.25\n"
+      "(inflation by a vertex's own speed and by its object's mean speed, per frame left in the session),\n"
+      "dangling_max=0.05 (fraction of dangling vertices that ends a session), heuristic=on (front end),\n"
+      "history=on. Narrow-phase keys go after the strategy's: apccd+cubic64:nf_max=4:eta=1e-5.\n"
+      "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
   run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper");
   run->add_option("--scene", run_scene, "a scene file (or folder with scene.json)");
   run->add_option("--frames", run_frames, "mesh files: one deformable self-colliding object, one step per pair")

@@ -20,11 +20,20 @@ void ObjectHierarchies::refit(const StepView& step, double inflation) {
   }
 }
 
-void ObjectHierarchies::refit(ObjectId object, const StepView& step, std::span<const double> inflation) {
-  trees_[object].refit(scene_->topology(), step.x0, step.x1, inflation);
+void ObjectHierarchies::refit(ObjectId object, std::span<const Vec3> x0, std::span<const Vec3> x1,
+                              std::span<const double> inflation) {
+  trees_[object].refit(scene_->topology(), x0, x1, inflation);
 }
 
 std::vector<bvh::TrianglePair> ObjectHierarchies::candidates() const {
+  std::vector<bvh::TrianglePair> all = self_candidates();
+  const auto across = pair_candidates([](ObjectId, ObjectId) { return Box3(Vec3::Zero(), Vec3::Zero()); });
+  all.insert(all.end(), across.begin(), across.end());
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+std::vector<bvh::TrianglePair> ObjectHierarchies::self_candidates() const {
   std::vector<bvh::TrianglePair> all;
   for (ObjectId a = 0; a < trees_.size(); ++a) {
     if (scene_->object(a).self_collision) {
@@ -32,8 +41,14 @@ std::vector<bvh::TrianglePair> ObjectHierarchies::candidates() const {
       all.insert(all.end(), pairs.begin(), pairs.end());
     }
   }
+  return all;  // each object's pairs are sorted and object ranges ascend, so the whole is sorted
+}
+
+std::vector<bvh::TrianglePair> ObjectHierarchies::pair_candidates(
+    const std::function<Box3(ObjectId, ObjectId)>& offset) const {
+  std::vector<bvh::TrianglePair> all;
   for (const auto& [a, b] : scene_->collidable_pairs()) {
-    const auto pairs = bvh::pair_overlaps(trees_[a], trees_[b]);
+    const auto pairs = bvh::pair_overlaps(trees_[a], trees_[b], offset(a, b));
     all.insert(all.end(), pairs.begin(), pairs.end());
   }
   std::sort(all.begin(), all.end());

@@ -8,6 +8,7 @@
 #include "core/step.hpp"
 #include "strategies/bvh/bvh.hpp"
 
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -19,12 +20,18 @@ class ObjectHierarchies {
   void build(const Scene& scene, std::span<const Vec3> first_frame, double inflation);
   /// Refits every non-static object's tree over the step (uniform widening).
   void refit(const StepView& step, double inflation);
-  /// Refits object `object` with per-face widening (indexed by face - first face of the object).
-  void refit(ObjectId object, const StepView& step, std::span<const double> inflation);
+  /// Refits object `object` over positions x0 -> x1 (its own frame) with per-face widening (indexed by face -
+  /// first face of the object).
+  void refit(ObjectId object, std::span<const Vec3> x0, std::span<const Vec3> x1, std::span<const double> inflation);
   /// Grows face f's leaf box (and its ancestors) in its object's tree to hold `box`.
   void enlarge_leaf(FaceId f, const Box3& box) { trees_[scene_->object_of_face(f)].enlarge_leaf(f, box); }
   /// All candidate triangle pairs the collision filter allows, sorted.
   std::vector<bvh::TrianglePair> candidates() const;
+  /// Only the self pairs of objects with self-collision, sorted.
+  std::vector<bvh::TrianglePair> self_candidates() const;
+  /// Only the pairs across collidable objects; `offset(a, b)` sweeps b's tree relative to a's (trees kept in
+  /// moving frames). Sorted.
+  std::vector<bvh::TrianglePair> pair_candidates(const std::function<Box3(ObjectId, ObjectId)>& offset) const;
 
   const bvh::TriangleBvh& tree(ObjectId object) const { return trees_[object]; }
   bool is_static(ObjectId object) const { return scene_->object(object).kind == ObjectKind::static_object; }

@@ -126,6 +126,10 @@ struct Task {
 struct Traversal {
   const TriangleBvh& ta;
   const TriangleBvh& tb;
+  /// Translations swept over b's boxes (zero for self traversal).
+  Box3 b_offset{Vec3::Zero(), Vec3::Zero()};
+
+  Box3 shifted(const Box3& box) const { return {box.min() + b_offset.min(), box.max() + b_offset.max()}; }
 
   const TriangleBvh::Node& node_a(std::int32_t i) const { return ta.nodes()[static_cast<std::size_t>(i)]; }
   const TriangleBvh::Node& node_b(std::int32_t i) const { return tb.nodes()[static_cast<std::size_t>(i)]; }
@@ -142,7 +146,7 @@ struct Traversal {
     }
     const auto& na = node_a(task.a);
     const auto& nb = task_is_same_tree_ ? node_a(task.b) : node_b(task.b);
-    if (!na.box.intersects(nb.box)) return true;
+    if (!na.box.intersects(task_is_same_tree_ ? nb.box : shifted(nb.box))) return true;
     if (na.is_leaf() && nb.is_leaf()) return false;
     const bool descend_a = !na.is_leaf() && (nb.is_leaf() || na.box.volume() >= nb.box.volume());
     if (descend_a) {
@@ -206,9 +210,9 @@ std::vector<TrianglePair> self_overlaps(const TriangleBvh& tree) {
   return traverse(traversal, {true, 0, 0});
 }
 
-std::vector<TrianglePair> pair_overlaps(const TriangleBvh& a, const TriangleBvh& b) {
+std::vector<TrianglePair> pair_overlaps(const TriangleBvh& a, const TriangleBvh& b, const Box3& b_offset) {
   if (a.empty() || b.empty()) return {};
-  return traverse(Traversal{a, b}, {false, 0, 0});
+  return traverse(Traversal{a, b, b_offset}, {false, 0, 0});
 }
 
 std::vector<TrianglePair> subset_overlaps(std::span<const FaceId> subset, std::span<const Box3> subset_boxes,

@@ -72,8 +72,10 @@ using TrianglePair = std::pair<FaceId, FaceId>;
 /// Every pair of distinct faces of `tree` whose boxes overlap, each once, sorted. Parallel; the result does not
 /// depend on the thread count.
 std::vector<TrianglePair> self_overlaps(const TriangleBvh& tree);
-/// Every pair (face of a, face of b) whose boxes overlap, as (smaller id, larger id), sorted.
-std::vector<TrianglePair> pair_overlaps(const TriangleBvh& a, const TriangleBvh& b);
+/// Every pair (face of a, face of b) whose boxes overlap, as (smaller id, larger id), sorted. With `b_offset`,
+/// b's boxes are first swept by that box of translations (b's frame moved relative to a's).
+std::vector<TrianglePair> pair_overlaps(const TriangleBvh& a, const TriangleBvh& b,
+                                        const Box3& b_offset = Box3(Vec3::Zero(), Vec3::Zero()));
 
 /// Pairs (f, g), f in `subset` with box `subset_boxes[i]`, g a face of `tree` whose leaf box overlaps it, f != g:
 /// the partial traversal of a strategy that re-checks only some faces. (smaller, larger), sorted, no duplicates.

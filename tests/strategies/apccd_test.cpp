@@ -19,20 +19,24 @@ double extra(const StepResult& result, const std::string& name) {
   return -1;
 }
 
-// A sheet barely moving (so the session goes on) and a probe triangle drifting slowly far above it; in step 3,
-// inside a session, the probe jumps through the sheet. Its vertices are dangling and only the partial traversal
-// can bring the new pairs into the pending list.
+// One self-colliding object made of two layers: a sheet barely moving (so the session goes on) and a second
+// sheet 1 above it. In step 3, inside a session, one vertex of the upper layer jumps down through the lower one.
+// It moves far relative to its object, so it is dangling, and only the partial traversal can bring the new
+// pairs into the pending list (they are self pairs: no object-pair traversal sees them).
 TEST(Apccd, PartialTraversalFindsThePairOfAVertexThatJumpsFarDuringASession) {
   const std::size_t n = 5;
-  std::vector<Face> probe_faces{{0, 1, 2}};
-  const Scene scene({{"sheet", ObjectKind::deformable, true, n * n, testing::grid_faces(n)},
-                     {"probe", ObjectKind::deformable, false, 3, probe_faces}},
-                    {{0, 1}}, 0.0);
+  std::vector<Face> faces = testing::grid_faces(n);
+  for (const Face& f : testing::grid_faces(n)) {
+    faces.push_back({f[0] + static_cast<VertexId>(n * n), f[1] + static_cast<VertexId>(n * n), f[2] + static_cast<VertexId>(n * n)});
+  }
+  const Scene scene({{"layers", ObjectKind::deformable, true, 2 * n * n, faces}}, {}, 0.0);
+  const std::size_t jumper = n * n + 2 * n + 2;  // the middle vertex of the upper layer
   std::vector<std::vector<Vec3>> frames;
   for (int k = 0; k < 8; ++k) {
     std::vector<Vec3> x = testing::grid_positions(n, 1e-4 * k);
-    const double height = k <= 3 ? 2.0 - 0.01 * k : -0.5;  // the jump: step 3 goes from frame 3 to frame 4
-    for (const Vec3& p : {Vec3(1.3, 1.3, height), Vec3(2.3, 1.4, height), Vec3(1.4, 2.3, height)}) x.push_back(p);
+    const std::vector<Vec3> upper = testing::grid_positions(n, 1.0);
+    x.insert(x.end(), upper.begin(), upper.end());
+    if (k >= 4) x[jumper].z() = -0.5;  // the jump: step 3 goes from frame 3 to frame 4
     frames.push_back(x);
   }
   auto strategy = make_strategy("apccd:nf_min=8:nf_max=8:history=off");

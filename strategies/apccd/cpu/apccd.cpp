@@ -102,18 +102,20 @@ class Apccd final : public Strategy {
     const double half = scene_->thickness() / 2;
     std::size_t dangling_vertices = 0, dangling_triangles = 0;
     const bool session_start = session_frame_ == 0;
+    {
+      ScopedStageTimer timer(result.stages, "update");
+      to_object_frames(step);
+    }
     if (session_start) {
       start_session(step, result);
     } else {
-      // Dangling vertices: beyond their budget around the session's anchor.
+      // Dangling vertices: beyond their budget around the session's anchor, in their object's frame.
       std::vector<FaceId> dangling_faces;
       {
         ScopedStageTimer timer(result.stages, "dangling collection");
         std::vector<char> dangling(topology.num_vertices(), 0);
         tbb::parallel_for(std::size_t{0}, topology.num_vertices(), [&](std::size_t v) {
-          if (!hierarchies_.is_static(scene_->object_of_vertex(static_cast<VertexId>(v)))) {
-            dangling[v] = (step.x1[v] - anchor_[v]).cwiseAbs().maxCoeff() > budget_[v] ? 1 : 0;
-          }
+          dangling[v] = (relative1_[v] - anchor_[v]).cwiseAbs().maxCoeff() > budget_[v] ? 1 : 0;
         });
         std::vector<char> face_dangles(topology.num_faces(), 0);
         for (std::size_t v = 0; v < dangling.size(); ++v) {
@@ -128,28 +130,41 @@ class Apccd final : public Strategy {
       }
       {
         ScopedStageTimer timer(result.stages, "partial traversal");
-        partial_traversal(step, dangling_faces, half);
+        partial_traversal(dangling_faces, half);
       }
+    }
+    std::vector<bvh::TrianglePair> across;
+    {
+      // Pairs across objects, every step: each tree holds its object's relative positions, so it is swept by the
+      // range its object's centroid covers during this step (centroids move linearly, as vertices do).
+      ScopedStageTimer timer(result.stages, "object pairs");
+      across = hierarchies_.pair_candidates([&](ObjectId a, ObjectId b) {
+        const Box3 ca = centroid_range(a), cb = centroid_range(b);
+        return Box3(cb.min() - ca.max(), cb.max() - ca.min());
+      });
     }
     std::vector<bvh::TrianglePair> admissible;
     {
       ScopedStageTimer timer(result.stages, "front end");
+      std::vector<bvh::TrianglePair> candidates;
+      candidates.reserve(pending_.size() + across.size());
+      std::merge(pending_.begin(), pending_.end(), across.begin(), across.end(), std::back_inserter(candidates));
       if (settings_.heuristic) {
         // Admissible: the two triangles' fresh swept boxes, widened by δ/2, overlap this step. Each face's box is
-        // computed once per step; pending pairs then only compare two boxes.
+        // computed once per step; candidate pairs then only compare two boxes.
         std::vector<Box3> face_boxes(topology.num_faces());
         tbb::parallel_for(std::size_t{0}, topology.num_faces(), [&](std::size_t f) {
           face_boxes[f] = bvh::swept_face_box(topology.face(static_cast<FaceId>(f)), step.x0, step.x1, half);
         });
-        std::vector<char> keep(pending_.size(), 0);
-        tbb::parallel_for(std::size_t{0}, pending_.size(), [&](std::size_t i) {
-          keep[i] = face_boxes[pending_[i].first].intersects(face_boxes[pending_[i].second]) ? 1 : 0;
+        std::vector<char> keep(candidates.size(), 0);
+        tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t i) {
+          keep[i] = face_boxes[candidates[i].first].intersects(face_boxes[candidates[i].second]) ? 1 : 0;
         });
-        for (std::size_t i = 0; i < pending_.size(); ++i) {
-          if (keep[i]) admissible.push_back(pending_[i]);
+        for (std::size_t i = 0; i < candidates.size(); ++i) {
+          if (keep[i]) admissible.push_back(candidates[i]);
         }
       } else {
-        admissible = pending_;
+        admissible = std::move(candidates);
       }
     }
     ElementaryOutcome outcome;
@@ -177,68 +192,99 @@ class Apccd final : public Strategy {
   }
 
  private:
-  /// First frame of a session: budgets, inflated refit, full traversal into the pending list.
-  void start_session(const StepView& step, StepResult& result) {
+  /// Each object's frame: positions relative to its centroid (static objects stay in world coordinates). Self
+  /// contact does not change when an object moves as a whole, so budgets and self traversal live in this frame.
+  void to_object_frames(const StepView& step) {
+    const std::size_t objects = scene_->objects().size();
+    centroid0_.assign(objects, Vec3::Zero());
+    centroid1_.assign(objects, Vec3::Zero());
+    relative0_.resize(step.x0.size());
+    relative1_.resize(step.x1.size());
+    for (ObjectId id = 0; id < objects; ++id) {
+      const SceneObject& object = scene_->object(id);
+      if (object.kind != ObjectKind::static_object && object.num_vertices > 0) {
+        for (std::size_t i = 0; i < object.num_vertices; ++i) {
+          centroid0_[id] += step.x0[object.first_vertex + i];
+          centroid1_[id] += step.x1[object.first_vertex + i];
+        }
+        centroid0_[id] /= static_cast<double>(object.num_vertices);
+        centroid1_[id] /= static_cast<double>(object.num_vertices);
+      }
+      tbb::parallel_for(std::size_t{0}, object.num_vertices, [&](std::size_t i) {
+        const std::size_t v = object.first_vertex + i;
+        relative0_[v] = step.x0[v] - centroid0_[id];
+        relative1_[v] = step.x1[v] - centroid1_[id];
+      });
+    }
+  }
+
+  Box3 centroid_range(ObjectId object) const {
+    Box3 range(centroid0_[object]);
+    range.extend(centroid1_[object]);
+    return range;
+  }
+
+  /// First frame of a session: budgets, inflated refit, full self traversal into the pending list.
+  void start_session(const StepView&, StepResult& result) {
     const MeshTopology& topology = scene_->topology();
     const double half = scene_->thickness() / 2;
     const double frames_left = static_cast<double>(nf_ - 1);
     {
       ScopedStageTimer timer(result.stages, "update");
-      anchor_.assign(step.x1.begin(), step.x1.end());
+      anchor_ = relative1_;
       budget_.assign(topology.num_vertices(), 0.0);
       for (ObjectId id = 0; id < scene_->objects().size(); ++id) {
         const SceneObject& object = scene_->object(id);
         if (object.kind == ObjectKind::static_object) continue;
-        double mean_speed = 0;
+        double mean_motion = 0;
         for (std::size_t i = 0; i < object.num_vertices; ++i) {
           const std::size_t v = object.first_vertex + i;
-          mean_speed += (step.x1[v] - step.x0[v]).norm();
+          mean_motion += (relative1_[v] - relative0_[v]).norm();
         }
-        mean_speed /= static_cast<double>(std::max<std::size_t>(object.num_vertices, 1));
+        mean_motion /= static_cast<double>(std::max<std::size_t>(object.num_vertices, 1));
         tbb::parallel_for(std::size_t{0}, object.num_vertices, [&](std::size_t i) {
           const std::size_t v = object.first_vertex + i;
-          budget_[v] = frames_left * (settings_.local * (step.x1[v] - step.x0[v]).norm() + settings_.global * mean_speed);
+          budget_[v] = frames_left * (settings_.local * (relative1_[v] - relative0_[v]).norm() + settings_.global * mean_motion);
         });
         std::vector<double> inflation(object.num_faces);
         tbb::parallel_for(std::size_t{0}, object.num_faces, [&](std::size_t i) {
           const Face& face = topology.face(static_cast<FaceId>(object.first_face + i));
           inflation[i] = half + std::max({budget_[face[0]], budget_[face[1]], budget_[face[2]]});
         });
-        hierarchies_.refit(id, step, inflation);
+        hierarchies_.refit(id, relative0_, relative1_, inflation);
       }
     }
     {
       ScopedStageTimer timer(result.stages, "traversal");
-      pending_ = hierarchies_.candidates();
+      pending_ = hierarchies_.self_candidates();
     }
   }
 
   /// Enlarges the dangling triangles' leaves to their fresh boxes, then finds every face whose box overlaps one of
   /// them, within what the collision filter allows; new pairs join the pending list.
-  void partial_traversal(const StepView& step, const std::vector<FaceId>& dangling_faces, double half) {
+  void partial_traversal(const std::vector<FaceId>& dangling_faces, double half) {
     if (dangling_faces.empty()) return;
     const MeshTopology& topology = scene_->topology();
     std::vector<Box3> fresh(dangling_faces.size());
     tbb::parallel_for(std::size_t{0}, dangling_faces.size(), [&](std::size_t i) {
-      fresh[i] = bvh::swept_face_box(topology.face(dangling_faces[i]), step.x0, step.x1, half);
+      fresh[i] = bvh::swept_face_box(topology.face(dangling_faces[i]), relative0_, relative1_, half);
     });
+    // Enlarged leaves keep every tree valid; object pairs then see them through the per-step pair traversal.
     for (std::size_t i = 0; i < dangling_faces.size(); ++i) hierarchies_.enlarge_leaf(dangling_faces[i], fresh[i]);
     std::vector<bvh::TrianglePair> found;
-    for (ObjectId a = 0; a < scene_->objects().size(); ++a) {
-      std::vector<FaceId> subset;
-      std::vector<Box3> boxes;
-      for (std::size_t i = 0; i < dangling_faces.size(); ++i) {
-        if (scene_->object_of_face(dangling_faces[i]) == a) {
-          subset.push_back(dangling_faces[i]);
-          boxes.push_back(fresh[i]);
-        }
-      }
-      if (subset.empty()) continue;
-      for (ObjectId b = 0; b < scene_->objects().size(); ++b) {
-        if (!scene_->may_collide(a, b)) continue;
-        const auto pairs = bvh::subset_overlaps(subset, boxes, hierarchies_.tree(b));
+    std::size_t begin = 0;
+    while (begin < dangling_faces.size()) {
+      // dangling_faces is sorted, so each object's faces form one run.
+      const ObjectId object = scene_->object_of_face(dangling_faces[begin]);
+      std::size_t end = begin;
+      while (end < dangling_faces.size() && scene_->object_of_face(dangling_faces[end]) == object) ++end;
+      if (scene_->object(object).self_collision) {
+        const auto pairs = bvh::subset_overlaps(std::span(dangling_faces).subspan(begin, end - begin),
+                                                std::span<const Box3>(fresh).subspan(begin, end - begin),
+                                                hierarchies_.tree(object));
         found.insert(found.end(), pairs.begin(), pairs.end());
       }
+      begin = end;
     }
     if (found.empty()) return;
     // The pending list is a sorted vector rather than a hash table: merging sorted runs keeps it duplicate-free,
@@ -314,6 +360,9 @@ class Apccd final : public Strategy {
   int nf_;
   int session_frame_ = 0;
   double worst_dangling_ = 0;
+  /// Positions in each object's frame at the step's ends, and the centroids that define those frames.
+  std::vector<Vec3> relative0_, relative1_;
+  std::vector<Vec3> centroid0_, centroid1_;
   std::vector<Vec3> anchor_;
   std::vector<double> budget_;
   std::vector<bvh::TrianglePair> pending_;

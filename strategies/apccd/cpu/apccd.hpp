@@ -2,19 +2,25 @@
 /// @file
 /// `apccd`: the adaptive pipeline with a skipping-frame session (Wong, NCS 2009, Algorithm 1) on the CPU with TBB.
 ///
+/// Hierarchies live in each object's own frame (positions relative to its centroid): self contact does not change
+/// when an object moves as a whole, so a falling or carried cloth needs no inflation for its translation.
 /// A session lasts nf frames, nf adapted between nf_min and nf_max. Its first frame refits every non-static
-/// hierarchy with boxes inflated by each vertex's movement budget for the session (local: its own speed; global:
-/// its object's mean speed; times the frames left) and traverses fully: the candidates form the pending list.
-/// The following frames skip refit and traversal: vertices that left their budget are dangling, their triangles'
-/// leaf boxes are enlarged to hold their fresh swept boxes and only those triangles are traversed (partial
-/// traversal). The front end admits the pending pairs whose fresh swept boxes overlap; the back end runs the
-/// elementary tests on them. History keeps, for tested pairs in close proximity, the side of the face a vertex
-/// is on and how two edges cross, and reports a pair whose orientation flipped unless the test already did.
+/// hierarchy with boxes inflated by each vertex's movement budget for the session (local: its own relative
+/// motion; global: its object's mean relative motion; times the frames left) and traverses every self-colliding
+/// object fully: the candidates form the pending list. The following frames skip refit and self traversal:
+/// vertices that left their budget are dangling, their triangles' leaf boxes are enlarged to hold their fresh
+/// boxes and only those triangles are traversed (partial traversal). Pairs across objects come from a traversal
+/// of the two trees every step, one swept by the range of the centroids' offset during the step. The front end
+/// admits the candidates whose fresh swept boxes overlap; the back end runs the elementary tests on them. History
+/// keeps, for tested pairs in close proximity, the side of the face a vertex is on and how two edges cross, and
+/// reports a pair whose orientation flipped (where that can be a crossing) unless the test already did.
 ///
-/// Why it never loses a candidate: a pair that comes within δ has overlapping fresh (δ/2-widened) swept boxes;
-/// every fresh box lies inside its triangle's box in the hierarchy (within budget by construction, enlarged when
-/// dangling), so the pair was found by the session's full traversal or by a partial traversal, and the front end
-/// admits it. With a conservative narrow phase it misses nothing.
+/// Why it never loses a candidate: a pair that comes within δ at time t has relative positions within δ (same
+/// object) or world positions within δ (two objects, each its relative position plus its centroid at t); every
+/// relative position of the step lies in its triangle's leaf box (within budget by construction, enlarged when
+/// dangling) and every centroid in the step's centroid range. So the pair is found by the session's traversal, a
+/// partial traversal or the pair traversal, and the front end admits it. With a conservative narrow phase it
+/// misses nothing.
 ///
 /// Knobs (spec keys, all recorded in the resolved name): skip (on/off), nf_min, nf_max, local, global,
 /// dangling_max (fraction of dangling vertices that ends a session), heuristic (front end on/off), history.
