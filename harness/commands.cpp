@@ -36,6 +36,9 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
   for (const std::string& method : methods) make_query_method(method);  // unknown names fail before work
   std::vector<datasets::QueryFile> files;
   for (const auto& path : datasets::discover_query_files(options.paths)) files.push_back(datasets::read_query_file(path));
+  if (options.extremes) {
+    for (datasets::QueryFile& file : extremes_query_files(datasets::extremes_suite())) files.push_back(std::move(file));
+  }
   if (files.empty()) throw InputError({}, {}, "no query files found under the given paths");
   Progress progress("queries: files", files.size());
   const std::vector<QueryScore> scores = score_query_files(

@@ -24,6 +24,8 @@ struct QueriesOptions {
   std::optional<std::filesystem::path> json;
   /// Vary each narrow phase's accuracy parameter (see sweep_methods).
   bool sweep = false;
+  /// Also score the extremes suite (labelled by the reference at zero thickness) as one more data set.
+  bool extremes = false;
   /// Write README.md and scores.json into this folder, with `command_line` above the table.
   std::optional<std::filesystem::path> report;
   std::string command_line;

@@ -72,6 +72,8 @@ int main(int argc, char** argv) {
   queries->add_option("--json", queries_options.json, "also write the scores as a JSON array to this file");
   queries->add_flag("--sweep", queries_options.sweep,
                     "vary each narrow phase's accuracy: conservative tolerance 1e-2..1e-7, eta 0..1e-2 of the others");
+  queries->add_flag("--extremes", queries_options.extremes,
+                    "also score the extremes suite (see `ccdbench stress`), labelled by the reference");
   queries->add_option("--report", queries_options.report,
                       "write README.md (the table under the command that made it) and scores.json to this folder");
 

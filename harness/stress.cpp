@@ -85,8 +85,12 @@ void print_stress(const std::vector<StressRow>& rows, std::ostream& out) {
   }
 }
 
-void write_extremes_queries(const std::vector<datasets::ExtremeQuery>& suite, const std::filesystem::path& directory) {
-  std::vector<datasets::Query> vertex_face, edge_edge;
+std::vector<datasets::QueryFile> extremes_query_files(const std::vector<datasets::ExtremeQuery>& suite) {
+  std::vector<datasets::QueryFile> files(2);
+  files[0].path = "extremes-suite/vertex-face";
+  files[0].kind = datasets::QueryKind::vertex_face;
+  files[1].path = "extremes-suite/edge-edge";
+  files[1].kind = datasets::QueryKind::edge_edge;
   for (const datasets::ExtremeQuery& extreme : suite) {
     datasets::Query query;
     for (int r = 0; r < 8; ++r) {
@@ -94,10 +98,15 @@ void write_extremes_queries(const std::vector<datasets::ExtremeQuery>& suite, co
     }
     query.rounded = extreme.rows;
     query.truth = reference::decide(pair_kind(extreme.kind), extreme.rows, 0.0).collides;
-    (extreme.kind == datasets::QueryKind::vertex_face ? vertex_face : edge_edge).push_back(std::move(query));
+    files[extreme.kind == datasets::QueryKind::vertex_face ? 0 : 1].queries.push_back(std::move(query));
   }
-  datasets::write_query_file(directory / "vertex-face" / "extremes.csv", vertex_face);
-  datasets::write_query_file(directory / "edge-edge" / "extremes.csv", edge_edge);
+  return files;
+}
+
+void write_extremes_queries(const std::vector<datasets::ExtremeQuery>& suite, const std::filesystem::path& directory) {
+  const std::vector<datasets::QueryFile> files = extremes_query_files(suite);
+  datasets::write_query_file(directory / "vertex-face" / "extremes.csv", files[0].queries);
+  datasets::write_query_file(directory / "edge-edge" / "extremes.csv", files[1].queries);
 }
 
 }  // namespace ccd::harness

@@ -35,6 +35,10 @@ std::vector<StressRow> run_stress(const std::vector<datasets::ExtremeQuery>& sui
 
 void print_stress(const std::vector<StressRow>& rows, std::ostream& out);
 
+/// The suite as two in-memory query files ("extremes-suite/vertex-face", ".../edge-edge") with the reference's
+/// zero-thickness truth.
+std::vector<datasets::QueryFile> extremes_query_files(const std::vector<datasets::ExtremeQuery>& suite);
+
 /// Writes the suite as rational query files (DIR/vertex-face/extremes.csv, DIR/edge-edge/extremes.csv) with the
 /// zero-thickness truth of the reference in column 7, so any tool can be scored on it.
 void write_extremes_queries(const std::vector<datasets::ExtremeQuery>& suite, const std::filesystem::path& directory);

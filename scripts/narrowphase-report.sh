@@ -8,8 +8,8 @@ data=${CCDBENCH_DATA_DIR:-../shared/data}
 [[ -d $data ]] || data=data/external
 out=reports/narrowphase
 mkdir -p "$out"
-build/release/bin/ccdbench stress --write-queries build/extremes-queries --json "$out/stress.json" > "$out/stress.txt"
-build/release/bin/ccdbench queries "$data/sample-queries" "$data/scalable-ccd-sample" build/extremes-queries \
+build/release/bin/ccdbench stress --json "$out/stress.json" > "$out/stress.txt"
+build/release/bin/ccdbench queries "$data/sample-queries" "$data/scalable-ccd-sample" --extremes \
   --method cubic32,cubic64,conservative,advancement,exact --sweep --repeat 3 --report "$out"
 /usr/bin/python3 scripts/plot_narrowphase.py "$out/scores.json" "$out/tradeoff.png"
 echo "narrowphase report: $out/README.md"
