@@ -120,9 +120,10 @@ int main(int argc, char** argv) {
       "elementary test said no) and false alarms. Strategies: NAME[+NARROW][:key=value...], comma-separated:\n"
       "full (BVH refit + full traversal every step), apccd (skipping-frame sessions, Wong 2009), brute (every\n"
       "triangle pair; small scenes); NARROW is conservative (default), cubic64, cubic32 or advancement.\n"
-      "apccd knobs (defaults): skip=on, nf_min=2, nf_max=8 (session length bounds), local=1.0 and global=0.25\n"
+      "apccd knobs (defaults): skip=on, nf_min=1, nf_max=8 (session length bounds), local=1.0 and global=0.25\n"
       "(inflation by a vertex's own speed and by its object's mean speed, per frame left in the session),\n"
-      "dangling_max=0.05 (fraction of dangling vertices that ends a session), heuristic=on (front end),\n"
+      "dangling_max=0.05 (fraction of dangling vertices that ends a session), pending_max=4 (pending pairs per\n"
+      "admissible pair that ends a session), heuristic=on (front end),\n"
       "history=on. Narrow-phase keys go after the strategy's: apccd+cubic64:nf_max=4:eta=1e-5.\n"
       "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
   run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper");

@@ -80,7 +80,8 @@ class Apccd final : public Strategy {
     std::ostringstream out;
     out << "apccd+" << narrow_phase_->name() << ":skip=" << (settings_.skip ? "on" : "off") << ":nf_min=" << settings_.nf_min
         << ":nf_max=" << settings_.nf_max << ":local=" << settings_.local << ":global=" << settings_.global
-        << ":dangling_max=" << settings_.dangling_max << ":heuristic=" << (settings_.heuristic ? "on" : "off")
+        << ":dangling_max=" << settings_.dangling_max << ":pending_max=" << settings_.pending_max
+        << ":heuristic=" << (settings_.heuristic ? "on" : "off")
         << ":history=" << (settings_.history ? "on" : "off");
     return out.str();
   }
@@ -187,7 +188,7 @@ class Apccd final : public Strategy {
                              {"dangling_triangles", static_cast<double>(dangling_triangles)},
                              {"history_pairs", static_cast<double>(vertex_face_history_.size() + edge_edge_history_.size())},
                              {"history_catches", static_cast<double>(history_catches)}};
-    advance_session(dangling_vertices);
+    advance_session(dangling_vertices, admissible.size());
     return result;
   }
 
@@ -332,8 +333,9 @@ class Apccd final : public Strategy {
     return table_bytes(vertex_face_history_) + table_bytes(edge_edge_history_);
   }
 
-  /// Ends the session after nf frames, or early when too many vertices dangle; adapts nf for the next one.
-  void advance_session(std::size_t dangling_vertices) {
+  /// Ends the session after nf frames, or early when too many vertices dangle or the pending list costs more than
+  /// it saves; adapts nf for the next one (nf = 1 is a refit and full traversal every frame).
+  void advance_session(std::size_t dangling_vertices, std::size_t admissible) {
     if (!settings_.skip) {
       session_frame_ = 0;
       return;
@@ -341,7 +343,8 @@ class Apccd final : public Strategy {
     const double fraction = static_cast<double>(dangling_vertices) / static_cast<double>(std::max<std::size_t>(1, scene_->topology().num_vertices()));
     worst_dangling_ = std::max(worst_dangling_, fraction);
     ++session_frame_;
-    if (fraction > settings_.dangling_max) {
+    const bool too_costly = static_cast<double>(pending_.size()) > settings_.pending_max * static_cast<double>(std::max<std::size_t>(admissible, 1));
+    if (fraction > settings_.dangling_max || too_costly) {
       nf_ = std::max(settings_.nf_min, nf_ / 2);
       session_frame_ = 0;
       worst_dangling_ = 0;
@@ -388,6 +391,7 @@ ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters
   take("local", [&](const std::string& v) { settings.local = parse_number("local", v, 0); });
   take("global", [&](const std::string& v) { settings.global = parse_number("global", v, 0); });
   take("dangling_max", [&](const std::string& v) { settings.dangling_max = parse_number("dangling_max", v, 0); });
+  take("pending_max", [&](const std::string& v) { settings.pending_max = parse_number("pending_max", v, 1); });
   if (settings.nf_min > settings.nf_max) throw std::invalid_argument("apccd: nf_min must not exceed nf_max");
   return settings;
 }

@@ -23,7 +23,8 @@
 /// misses nothing.
 ///
 /// Knobs (spec keys, all recorded in the resolved name): skip (on/off), nf_min, nf_max, local, global,
-/// dangling_max (fraction of dangling vertices that ends a session), heuristic (front end on/off), history.
+/// dangling_max (fraction of dangling vertices that ends a session), pending_max (pending pairs per admissible
+/// pair that ends a session), heuristic (front end on/off), history.
 
 #include "strategies/narrowphase/narrow_phase.hpp"
 #include "strategies/strategy.hpp"
@@ -34,11 +35,14 @@ namespace ccd::strategies {
 
 struct ApccdSettings {
   bool skip = true;
-  int nf_min = 2;
+  int nf_min = 1;
   int nf_max = 8;
   double local = 1.0;
   double global = 0.25;
   double dangling_max = 0.05;
+  /// A session whose pending list outgrows `pending_max` times the pairs the front end admits is too costly: it
+  /// ends, and nf halves.
+  double pending_max = 4.0;
   bool heuristic = true;
   bool history = true;
 };
