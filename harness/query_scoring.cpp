@@ -2,6 +2,7 @@
 
 #include "datasets/atomic_file.hpp"
 #include "harness/json_output.hpp"
+#include "harness/statistics.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 
@@ -44,12 +45,6 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
  private:
   std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
 };
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2;
-}
 
 }  // namespace
 

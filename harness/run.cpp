@@ -6,6 +6,7 @@
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/scene_file.hpp"
 #include "harness/json_output.hpp"
+#include "harness/statistics.hpp"
 #include "harness/truth_cache.hpp"
 #include "strategies/strategy.hpp"
 
@@ -70,13 +71,6 @@ json environment() {
   json env = cached;
   env["threads"] = tbb::this_task_arena::max_concurrency();
   return env;
-}
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2;
 }
 
 std::string sanitized(const std::string& text) {

@@ -1,5 +1,7 @@
 #include "strategies/strategy.hpp"
 
+#include "strategies/narrowphase/narrow_phase.hpp"
+
 #include "strategies/apccd/cpu/apccd.hpp"
 #include "strategies/full_traversal/full_traversal.hpp"
 
@@ -9,26 +11,12 @@ namespace ccd::strategies {
 
 StrategySpec parse_strategy_spec(const std::string& spec) {
   StrategySpec parsed;
-  std::vector<std::string> parts;
-  std::size_t begin = 0;
-  while (true) {
-    const std::size_t colon = spec.find(':', begin);
-    parts.push_back(spec.substr(begin, colon == std::string::npos ? std::string::npos : colon - begin));
-    if (colon == std::string::npos) break;
-    begin = colon + 1;
-  }
-  const std::string& head = parts[0];
+  const auto [head, parameters] = narrowphase::split_spec(spec);
   const std::size_t plus = head.find('+');
   parsed.name = head.substr(0, plus);
   if (plus != std::string::npos) parsed.narrow_phase = head.substr(plus + 1);
   if (parsed.name.empty() || parsed.narrow_phase.empty()) throw std::invalid_argument("malformed strategy spec '" + spec + "'");
-  for (std::size_t i = 1; i < parts.size(); ++i) {
-    const std::size_t equals = parts[i].find('=');
-    if (equals == std::string::npos || equals == 0) {
-      throw std::invalid_argument("'" + parts[i] + "' in strategy spec '" + spec + "' is not key=value");
-    }
-    parsed.parameters[parts[i].substr(0, equals)] = parts[i].substr(equals + 1);
-  }
+  parsed.parameters = parameters;
   return parsed;
 }
 

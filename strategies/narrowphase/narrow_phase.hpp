@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ccd::narrowphase {
@@ -48,6 +49,9 @@ using NarrowPhaseParameters = std::map<std::string, std::string>;
 /// @throws std::invalid_argument naming the variants (or the variant's parameters) for an unknown name or key,
 ///         and for a value out of range.
 std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const NarrowPhaseParameters& parameters = {});
+
+/// Splits `HEAD[:key=value...]` into HEAD and its parameters. @throws std::invalid_argument for a malformed key.
+std::pair<std::string, NarrowPhaseParameters> split_spec(const std::string& spec);
 
 /// Parses `NAME[:key=value...]` and makes the variant.
 std::unique_ptr<NarrowPhase> make_narrow_phase_from_spec(const std::string& spec);

@@ -74,7 +74,7 @@ std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const Na
   throw std::invalid_argument("unknown narrow phase '" + name + "' (known: " + known + ")");
 }
 
-std::unique_ptr<NarrowPhase> make_narrow_phase_from_spec(const std::string& spec) {
+std::pair<std::string, NarrowPhaseParameters> split_spec(const std::string& spec) {
   std::vector<std::string> parts;
   std::size_t begin = 0;
   while (true) {
@@ -89,7 +89,12 @@ std::unique_ptr<NarrowPhase> make_narrow_phase_from_spec(const std::string& spec
     if (equals == std::string::npos || equals == 0) throw std::invalid_argument("'" + parts[i] + "' in '" + spec + "' is not key=value");
     parameters[parts[i].substr(0, equals)] = parts[i].substr(equals + 1);
   }
-  return make_narrow_phase(parts[0], parameters);
+  return {parts[0], parameters};
+}
+
+std::unique_ptr<NarrowPhase> make_narrow_phase_from_spec(const std::string& spec) {
+  const auto [name, parameters] = split_spec(spec);
+  return make_narrow_phase(name, parameters);
 }
 
 }  // namespace ccd::narrowphase

@@ -4,6 +4,7 @@
 #include "datasets/scene_file.hpp"
 #include "reference/step_truth.hpp"
 #include "strategies/strategy.hpp"
+#include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -53,16 +54,6 @@ TEST(Apccd, PartialTraversalFindsThePairOfAVertexThatJumpsFarDuringASession) {
   }
 }
 
-std::vector<CollisionSet> run_all(const std::string& spec, const Scene& scene, const std::vector<std::vector<Vec3>>& frames,
-                                  std::size_t threads) {
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-  auto strategy = make_strategy(spec);
-  strategy->init(scene, frames[0]);
-  std::vector<CollisionSet> sets;
-  for (std::size_t k = 0; k + 1 < frames.size(); ++k) sets.push_back(strategy->step({&scene, k, frames[k], frames[k + 1]}, false).collisions);
-  return sets;
-}
-
 TEST(Apccd, MissesNothingOnEveryBuiltInSceneUnderEveryKnobAndThreadCount) {
   for (const auto& info : datasets::procedural_scenes()) {
     testing::TempDir dir;
@@ -82,8 +73,8 @@ TEST(Apccd, MissesNothingOnEveryBuiltInSceneUnderEveryKnobAndThreadCount) {
       // Defaults; no skipping and no front end; no inflation at all (every motion dangles).
       for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off", "apccd:local=0:global=0:history=off"}) {
         SCOPED_TRACE(info.name + ", δ = " + std::to_string(thickness) + ", " + spec);
-        const auto one = run_all(spec, scene, frames, 1);
-        const auto two = run_all(spec, scene, frames, 2);
+        const auto one = testing::run_all_steps(spec, scene, frames, 1);
+        const auto two = testing::run_all_steps(spec, scene, frames, 2);
         for (std::size_t k = 0; k < truth.size(); ++k) {
           ASSERT_TRUE(set_difference(truth[k], one[k]).empty()) << "step " << k << " missed " << set_difference(truth[k], one[k]).size();
           ASSERT_TRUE(one[k].same_pairs(two[k])) << "step " << k << ": 1 and 2 threads differ";

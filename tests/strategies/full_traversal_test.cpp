@@ -4,6 +4,7 @@
 #include "datasets/scene_file.hpp"
 #include "reference/step_truth.hpp"
 #include "strategies/strategy.hpp"
+#include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -11,16 +12,6 @@
 
 namespace ccd::strategies {
 namespace {
-
-std::vector<CollisionSet> run_all_steps(const std::string& spec, const Scene& scene, const std::vector<std::vector<Vec3>>& frames,
-                                        std::size_t threads) {
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-  auto strategy = make_strategy(spec);
-  strategy->init(scene, frames[0]);
-  std::vector<CollisionSet> sets;
-  for (std::size_t k = 0; k + 1 < frames.size(); ++k) sets.push_back(strategy->step({&scene, k, frames[k], frames[k + 1]}, false).collisions);
-  return sets;
-}
 
 struct LoadedScene {
   datasets::SceneSequence sequence;
@@ -49,9 +40,9 @@ TEST(FullTraversal, EqualsBruteForceOnEveryBuiltInSceneForAnyThreadCountAndMisse
     for (double thickness : {0.0, scene_thickness}) {
       SCOPED_TRACE(info.name + ", δ = " + std::to_string(thickness));
       const Scene scene = loaded.sequence.scene().with_thickness(thickness);
-      const auto brute = run_all_steps("brute", scene, loaded.frames, 2);
-      const auto full_one = run_all_steps("full", scene, loaded.frames, 1);
-      const auto full_two = run_all_steps("full", scene, loaded.frames, 2);
+      const auto brute = testing::run_all_steps("brute", scene, loaded.frames, 2);
+      const auto full_one = testing::run_all_steps("full", scene, loaded.frames, 1);
+      const auto full_two = testing::run_all_steps("full", scene, loaded.frames, 2);
       std::size_t colliding = 0;
       for (std::size_t k = 0; k < brute.size(); ++k) {
         ASSERT_TRUE(full_one[k].same_pairs(brute[k])) << "step " << k << ": full " << full_one[k].size() << ", brute " << brute[k].size();
