@@ -40,7 +40,7 @@ TEST(Apccd, PartialTraversalFindsThePairOfAVertexThatJumpsFarDuringASession) {
     if (k >= 4) x[jumper].z() = -0.5;  // the jump: step 3 goes from frame 3 to frame 4
     frames.push_back(x);
   }
-  auto strategy = make_strategy("apccd:nf_min=8:nf_max=8:history=off");
+  auto strategy = make_strategy("apccd:nf_min=8:nf_max=8");
   strategy->init(scene, frames[0]);
   for (std::size_t k = 0; k + 1 < frames.size(); ++k) {
     const StepResult result = strategy->step({&scene, k, frames[k], frames[k + 1]}, false);
@@ -71,7 +71,7 @@ TEST(Apccd, MissesNothingOnEveryBuiltInSceneUnderEveryKnobAndThreadCount) {
         truth.push_back(reference::compute_step_truth(scene, frames[k], frames[k + 1], {thickness, false, {}}).collisions);
       }
       // Defaults; no skipping and no front end; no inflation at all (every motion dangles).
-      for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off", "apccd:local=0:global=0:history=off"}) {
+      for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off:history=on", "apccd:local=0:global=0"}) {
         SCOPED_TRACE(info.name + ", δ = " + std::to_string(thickness) + ", " + spec);
         const auto one = testing::run_all_steps(spec, scene, frames, 1);
         const auto two = testing::run_all_steps(spec, scene, frames, 2);

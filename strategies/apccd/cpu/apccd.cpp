@@ -245,7 +245,9 @@ class Apccd final : public Strategy {
         mean_motion /= static_cast<double>(std::max<std::size_t>(object.num_vertices, 1));
         tbb::parallel_for(std::size_t{0}, object.num_vertices, [&](std::size_t i) {
           const std::size_t v = object.first_vertex + i;
-          budget_[v] = frames_left * (settings_.local * (relative1_[v] - relative0_[v]).norm() + settings_.global * mean_motion);
+          // At rest, motion proportional budgets are near zero and any jitter would dangle: at least δ a frame.
+          budget_[v] = frames_left * std::max(scene_->thickness(), settings_.local * (relative1_[v] - relative0_[v]).norm() +
+                                                                       settings_.global * mean_motion);
         });
         std::vector<double> inflation(object.num_faces);
         tbb::parallel_for(std::size_t{0}, object.num_faces, [&](std::size_t i) {
