@@ -23,12 +23,21 @@ std::optional<ObjectKind> parse_object_kind(std::string_view text) {
   return std::nullopt;
 }
 
-Scene::Scene(std::vector<ObjectDescription> objects, std::vector<std::pair<ObjectId, ObjectId>> collidable,
-             double thickness)
-    : thickness_(thickness) {
+namespace {
+
+/// δ must be finite and >= 0 (DESIGN.md §1).
+void check_thickness(double thickness) {
   if (!std::isfinite(thickness) || thickness < 0.0) {
     throw InputError({}, "thickness", "must be finite and >= 0, got " + std::to_string(thickness));
   }
+}
+
+}  // namespace
+
+Scene::Scene(std::vector<ObjectDescription> objects, std::vector<std::pair<ObjectId, ObjectId>> collidable,
+             double thickness)
+    : thickness_(thickness) {
+  check_thickness(thickness);
   std::vector<Face> global_faces;
   std::size_t num_vertices = 0;
   for (ObjectDescription& object : objects) {
@@ -86,9 +95,7 @@ ObjectId Scene::object_of_face(FaceId f) const {
 }
 
 Scene Scene::with_thickness(double thickness) const {
-  if (!std::isfinite(thickness) || thickness < 0.0) {
-    throw InputError({}, "thickness", "must be finite and >= 0, got " + std::to_string(thickness));
-  }
+  check_thickness(thickness);
   Scene copy = *this;
   copy.thickness_ = thickness;
   return copy;

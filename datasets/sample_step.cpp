@@ -10,6 +10,15 @@
 namespace ccd::datasets {
 namespace {
 
+void expect_same_count(const std::filesystem::path& candidates, std::size_t candidate_count, const QueryFile& queries) {
+  if (candidate_count != queries.queries.size()) {
+    throw InputError(candidates, {}, "has " + std::to_string(candidate_count) + " pairs but " + queries.path.string() +
+                                         " has " + std::to_string(queries.queries.size()) + " queries");
+  }
+}
+
+}  // namespace
+
 std::vector<std::pair<std::uint32_t, std::uint32_t>> read_candidate_pairs(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path, {}, "cannot open candidate file");
@@ -31,15 +40,6 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> read_candidate_pairs(const 
   }
   return pairs;
 }
-
-void expect_same_count(const std::filesystem::path& candidates, std::size_t candidate_count, const QueryFile& queries) {
-  if (candidate_count != queries.queries.size()) {
-    throw InputError(candidates, {}, "has " + std::to_string(candidate_count) + " pairs but " + queries.path.string() +
-                                         " has " + std::to_string(queries.queries.size()) + " queries");
-  }
-}
-
-}  // namespace
 
 bool is_sample_step_directory(const std::filesystem::path& directory) {
   return std::filesystem::is_directory(directory / "frames") && std::filesystem::is_directory(directory / "queries");

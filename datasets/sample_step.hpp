@@ -30,6 +30,10 @@ struct SampleStep {
   QueryFile edge_edge_queries;
 };
 
+/// A candidate file (boxes/*.json): a JSON array of [id_a, id_b] pairs of non-negative integers.
+/// @throws InputError when malformed.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> read_candidate_pairs(const std::filesystem::path& path);
+
 /// Whether `directory` has the layout (a frames/ and a queries/ folder).
 bool is_sample_step_directory(const std::filesystem::path& directory);
 

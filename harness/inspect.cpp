@@ -161,9 +161,7 @@ json inspect_path(const fs::path& path) {
               {"positives", static_cast<std::size_t>(std::count(truth.begin(), truth.end(), true))}};
     }
     if (path.parent_path().filename() == "boxes") {
-      std::ifstream in(path);
-      const json pairs = json::parse(in, nullptr, false);
-      if (pairs.is_discarded() || !pairs.is_array()) throw InputError(path, {}, "a candidate file must be a JSON array");
+      const auto pairs = datasets::read_candidate_pairs(path);
       const bool vertex_face = name.ends_with("vf.json");
       return {{"path", text},
               {"type", "candidates"},

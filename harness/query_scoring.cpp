@@ -24,8 +24,7 @@ class ExactQueryMethod final : public QueryMethod {
   std::string name() const override { return "exact"; }
   bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
     reference::ExactPair pair;
-    pair.kind = kind == datasets::QueryKind::vertex_face ? reference::PairKind::vertex_face
-                                                         : reference::PairKind::edge_edge;
+    pair.kind = reference_kind(kind);
     pair.rows = query.exact;
     return reference::decide(pair, mpq_class(thickness)).collides;
   }
@@ -47,6 +46,10 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
 };
 
 }  // namespace
+
+reference::PairKind reference_kind(datasets::QueryKind kind) {
+  return kind == datasets::QueryKind::vertex_face ? reference::PairKind::vertex_face : reference::PairKind::edge_edge;
+}
 
 std::unique_ptr<QueryMethod> make_query_method(const std::string& spec) {
   if (spec == "exact") return std::make_unique<ExactQueryMethod>();

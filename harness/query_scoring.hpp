@@ -3,6 +3,7 @@
 /// Scoring methods on query files (`ccdbench queries`): the same queries, every method, one run.
 
 #include "datasets/query_file.hpp"
+#include "reference/elementary_pair.hpp"
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -13,6 +14,9 @@
 #include <vector>
 
 namespace ccd::harness {
+
+/// The reference's name for a query file's kind.
+reference::PairKind reference_kind(datasets::QueryKind kind);
 
 /// A way of answering "do these primitives come within δ during the step?" for one query.
 class QueryMethod {

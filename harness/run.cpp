@@ -373,11 +373,9 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     }
     if (pending.empty()) continue;
     if (options.verify) {
-      std::size_t computed_count = 0;
       for (std::size_t k = 0; k < steps; ++k) {
         bool computed = false;
         data.truth.push_back(truth_cache.truth(scene, data.frames[k], data.frames[k + 1], computed));
-        computed_count += computed ? 1 : 0;
         std::cerr << "run: " << source.label << ": truth of step " << k + 1 << "/" << steps << (computed ? " computed" : " cached") << "\n";
       }
     }

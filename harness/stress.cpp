@@ -1,5 +1,6 @@
 #include "harness/stress.hpp"
 
+#include "harness/query_scoring.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 
@@ -10,14 +11,6 @@
 #include <ostream>
 
 namespace ccd::harness {
-namespace {
-
-reference::PairKind pair_kind(datasets::QueryKind kind) {
-  return kind == datasets::QueryKind::vertex_face ? reference::PairKind::vertex_face : reference::PairKind::edge_edge;
-}
-
-}  // namespace
-
 nlohmann::json to_json(const StressRow& row) {
   return {{"family", row.family},
           {"method", row.method},
@@ -38,7 +31,7 @@ std::vector<StressRow> run_stress(const std::vector<datasets::ExtremeQuery>& sui
     std::map<std::string, StressRow> totals;
     for (const datasets::ExtremeQuery& query : suite) {
       const double thickness = std::string(pass) == "zero" ? 0.0 : query.positive_thickness;
-      const bool truth = reference::decide(pair_kind(query.kind), query.rows, thickness).collides;
+      const bool truth = reference::decide(reference_kind(query.kind), query.rows, thickness).collides;
       for (const auto& variant : variants) {
         const narrowphase::NarrowPhaseResult answer = query.kind == datasets::QueryKind::vertex_face
                                                           ? variant->vertex_face(query.rows, thickness)
@@ -97,7 +90,7 @@ std::vector<datasets::QueryFile> extremes_query_files(const std::vector<datasets
       for (int k = 0; k < 3; ++k) query.exact[r][k] = mpq_class(extreme.rows[r][k]);
     }
     query.rounded = extreme.rows;
-    query.truth = reference::decide(pair_kind(extreme.kind), extreme.rows, 0.0).collides;
+    query.truth = reference::decide(reference_kind(extreme.kind), extreme.rows, 0.0).collides;
     files[extreme.kind == datasets::QueryKind::vertex_face ? 0 : 1].queries.push_back(std::move(query));
   }
   return files;

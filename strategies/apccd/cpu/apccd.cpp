@@ -108,7 +108,7 @@ class Apccd final : public Strategy {
       to_object_frames(step);
     }
     if (session_start) {
-      start_session(step, result);
+      start_session(result);
     } else {
       // Dangling vertices: beyond their budget around the session's anchor, in their object's frame.
       std::vector<FaceId> dangling_faces;
@@ -226,7 +226,7 @@ class Apccd final : public Strategy {
   }
 
   /// First frame of a session: budgets, inflated refit, full self traversal into the pending list.
-  void start_session(const StepView&, StepResult& result) {
+  void start_session(StepResult& result) {
     const MeshTopology& topology = scene_->topology();
     const double half = scene_->thickness() / 2;
     const double frames_left = static_cast<double>(nf_ - 1);
