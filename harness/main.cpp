@@ -119,7 +119,9 @@ int main(int argc, char** argv) {
       "candidate triangle pairs, elementary tests, colliding pairs, missed (culled: never tested / tested: the\n"
       "elementary test said no) and false alarms. Strategies: NAME[+NARROW][:key=value...], comma-separated:\n"
       "full (BVH refit + full traversal every step), apccd (skipping-frame sessions, Wong 2009), brute (every\n"
-      "triangle pair; small scenes); NARROW is conservative (default), cubic64, cubic32 or advancement.\n"
+      "triangle pair; small scenes), fcl (FCL's BVH and its own continuous tests; judged by triangle pairs) and\n"
+      "fcl-bvh (FCL's BVH as the broad phase, then NARROW); both take bv=aabb|obbrss|kdop24 (default obbrss) and\n"
+      "run at δ = 0 only (--thickness 0). NARROW is conservative (default), cubic64, cubic32 or advancement.\n"
       "apccd knobs (defaults): skip=on, nf_min=1, nf_max=8 (session length bounds), local=1.0 and global=0.25\n"
       "(inflation by a vertex's own speed and by its object's mean speed, per frame left in the session),\n"
       "dangling_max=0.05 (fraction of dangling vertices that ends a session), pending_max=4 (pending pairs per\n"
@@ -142,6 +144,10 @@ int main(int argc, char** argv) {
   run->add_option("--report", run_options.report, "write a Markdown page (table, steps.json for the plots) here");
   run->add_option("--max-steps", run_options.max_steps, "only the first N steps of each scene");
   run->add_flag("--fresh", run_options.fresh, "rerun cells kept from an earlier run");
+  run->add_option("--misses", run_options.misses,
+                  "write each cell's missed pairs here as rational query files by cause (DIR/SCENE/CELL/{vertex-face,"
+                  "edge-edge}/CAUSE.csv; cause culled or tested, or for fcl why FCL's test said no), to replay with "
+                  "`ccdbench queries`");
 
   std::string baseline_file, results_file;
   CLI::App* check = app.add_subcommand(

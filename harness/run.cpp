@@ -8,6 +8,11 @@
 #include "harness/json_output.hpp"
 #include "harness/statistics.hpp"
 #include "harness/truth_cache.hpp"
+#include "datasets/query_file.hpp"
+#include "strategies/elementary_tests.hpp"
+#if CCDBENCH_WITH_FCL
+#include "strategies/fcl/fcl_elementary.hpp"
+#endif
 #include "strategies/strategy.hpp"
 
 #include <tbb/task_arena.h>
@@ -99,16 +104,41 @@ bool in_sorted(const std::vector<Pair>& pairs, const Pair& p) {
   return std::binary_search(pairs.begin(), pairs.end(), p);
 }
 
-Verdict judge(const CollisionSet& truth, const CollisionSet& reported, const strategies::TestedPairs* tested) {
+/// A reported triangle pair is a false alarm when none of its elementary pairs is in the truth.
+std::size_t triangle_pair_false_alarms(const Scene& scene, const CollisionSet& truth,
+                                       const std::vector<bvh::TrianglePair>& triangle_pairs) {
+  std::size_t false_alarms = 0;
+  for (const auto& [a, b] : triangle_pairs) {
+    strategies::TestedPairs contained;
+    strategies::append_all_elementary_pairs(scene.topology(), a, b, contained);
+    const bool any = std::any_of(contained.vertex_face.begin(), contained.vertex_face.end(), [&](const auto& p) { return truth.contains(p); }) ||
+                     std::any_of(contained.edge_edge.begin(), contained.edge_edge.end(), [&](const auto& p) { return truth.contains(p); });
+    false_alarms += any ? 0 : 1;
+  }
+  return false_alarms;
+}
+
+/// Judges one step (DESIGN.md §1, §3). A strategy judged by triangle pairs reports in `collisions` every
+/// elementary pair its triangle pairs contain, so misses are computed alike; its false alarms are triangle pairs.
+Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::StepResult& result,
+              strategies::Judging judging, const strategies::TestedPairs* tested) {
   Verdict verdict;
+  const CollisionSet& reported = result.collisions;
   const CollisionSet missed = set_difference(truth, reported);
   verdict.missed = missed.size();
-  verdict.false_alarms = set_difference(reported, truth).size();
+  verdict.false_alarms = judging == strategies::Judging::triangle_pairs
+                             ? triangle_pair_false_alarms(scene, truth, result.triangle_pairs)
+                             : set_difference(reported, truth).size();
   if (tested) {
     for (const auto& c : missed.vertex_face()) (in_sorted(tested->vertex_face, c.pair) ? verdict.tested : verdict.culled) += 1;
     for (const auto& c : missed.edge_edge()) (in_sorted(tested->edge_edge, c.pair) ? verdict.tested : verdict.culled) += 1;
   }
   return verdict;
+}
+
+/// What a step reported, in the unit it is judged by.
+std::size_t reported_count(const strategies::StepResult& result, strategies::Judging judging) {
+  return judging == strategies::Judging::triangle_pairs ? result.triangle_pairs.size() : result.collisions.size();
 }
 
 struct SceneData {
@@ -118,6 +148,72 @@ struct SceneData {
   std::vector<CollisionSet> truth;  // per step, when verifying
 };
 
+/// Rows of an elementary pair in the query files' order (datasets/query_file.hpp).
+std::array<Vec3, 8> pair_rows(const VertexFacePair& p, const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1) {
+  const Face& f = scene.topology().face(p.f);
+  return {x0[p.v], x0[f[0]], x0[f[1]], x0[f[2]], x1[p.v], x1[f[0]], x1[f[1]], x1[f[2]]};
+}
+std::array<Vec3, 8> pair_rows(const EdgeEdgePair& p, const Scene&, std::span<const Vec3> x0, std::span<const Vec3> x1) {
+  return {x0[p.a.v0], x0[p.a.v1], x0[p.b.v0], x0[p.b.v1], x1[p.a.v0], x1[p.a.v1], x1[p.b.v0], x1[p.b.v1]};
+}
+
+datasets::Query as_query(const std::array<Vec3, 8>& rows) {
+  datasets::Query query;
+  for (int i = 0; i < 8; ++i) {
+    for (int k = 0; k < 3; ++k) query.exact[i][k] = mpq_class(rows[i][k]);
+  }
+  query.rounded = rows;
+  query.truth = true;
+  return query;
+}
+
+/// Why a missed pair was missed: "culled" or "tested" (audit), or for FCL's own tests the cause of its "no"
+/// (strategies/fcl/fcl_elementary.hpp).
+template <class Pair>
+std::string miss_cause(const Pair& pair, bool fcl, const strategies::TestedPairs* tested, const std::array<Vec3, 8>& rows) {
+#if CCDBENCH_WITH_FCL
+  if (fcl) return std::string(to_string(strategies::explain_fcl_answer(rows, std::is_same_v<Pair, VertexFacePair>)));
+#else
+  (void)fcl;
+  (void)rows;
+#endif
+  if (!tested) return "missed";
+  const auto& list = [&]() -> const auto& {
+    if constexpr (std::is_same_v<Pair, VertexFacePair>) return tested->vertex_face; else return tested->edge_edge;
+  }();
+  return in_sorted(list, pair) ? "tested" : "culled";
+}
+
+/// Counts each step's misses by cause and, with `directory`, writes them as query files (truth 1) under
+/// DIRECTORY/vertex-face/CAUSE.csv and DIRECTORY/edge-edge/CAUSE.csv (at most kMaxPerFile each), so a miss can be
+/// replayed with `ccdbench queries` and kept in a regression library.
+json record_misses(const Scene& scene, const std::vector<std::vector<Vec3>>& frames, const std::vector<CollisionSet>& truth,
+                   const std::vector<strategies::StepResult>& results, const std::vector<strategies::TestedPairs>& tested,
+                   bool fcl, const std::optional<std::filesystem::path>& directory) {
+  constexpr std::size_t kMaxPerFile = 100;
+  std::map<std::string, std::vector<datasets::Query>> vf, ee;
+  std::map<std::string, std::size_t> counts;
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    const CollisionSet missed = set_difference(truth[k], results[k].collisions);
+    const strategies::TestedPairs* audit = k < tested.size() ? &tested[k] : nullptr;
+    auto note = [&](const auto& pair, auto& by_cause) {
+      const auto rows = pair_rows(pair, scene, frames[k], frames[k + 1]);
+      const std::string cause = miss_cause(pair, fcl, audit, rows);
+      ++counts[cause];
+      if (by_cause[cause].size() < kMaxPerFile) by_cause[cause].push_back(as_query(rows));
+    };
+    for (const auto& c : missed.vertex_face()) note(c.pair, vf);
+    for (const auto& c : missed.edge_edge()) note(c.pair, ee);
+  }
+  if (directory) {
+    for (const auto& [cause, queries] : vf) datasets::write_query_file(*directory / "vertex-face" / (cause + ".csv"), queries);
+    for (const auto& [cause, queries] : ee) datasets::write_query_file(*directory / "edge-edge" / (cause + ".csv"), queries);
+  }
+  json causes = json::object();
+  for (const auto& [cause, count] : counts) causes[cause] = count;
+  return causes;
+}
+
 /// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.
 json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps) {
   const Scene& scene = data.sequence.scene();
@@ -125,9 +221,11 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   std::map<std::string, std::vector<double>> stage_ms;
   std::vector<strategies::StepResult> first_pass;
   std::string resolved;
+  strategies::Judging judging = strategies::Judging::elementary_pairs;
   for (int repeat = 0; repeat < std::max(1, options.repeats); ++repeat) {
     auto strategy = strategies::make_strategy(spec);
     resolved = strategy->name();
+    judging = strategy->judging();
     strategy->init(scene, data.frames[0]);
     for (std::size_t k = 0; k < steps; ++k) {
       const StepView view{&scene, k, data.frames[k], data.frames[k + 1]};
@@ -141,10 +239,11 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   }
   std::vector<Verdict> verdicts(steps);
   std::vector<strategies::TestedPairs> audited;
+  json miss_causes = json::object();
   if (options.verify) {
     bool any_missed = false;
     for (std::size_t k = 0; k < steps; ++k) {
-      verdicts[k] = judge(data.truth[k], first_pass[k].collisions, nullptr);
+      verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, nullptr);
       any_missed = any_missed || verdicts[k].missed > 0;
     }
     if (any_missed) {
@@ -157,8 +256,13 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
           throw std::runtime_error(resolved + " gave different answers on two runs of step " + std::to_string(k) +
                                    " of " + data.label + ": the strategy is not deterministic");
         }
-        verdicts[k] = judge(data.truth[k], first_pass[k].collisions, &*audit.tested);
+        verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, &*audit.tested);
+        audited.push_back(std::move(*audit.tested));
       }
+      const bool fcl = resolved.rfind("fcl:", 0) == 0;
+      std::optional<std::filesystem::path> directory;
+      if (options.misses) directory = *options.misses / data.label / std::filesystem::path(cell_file_name(data.label, resolved, scene.thickness(), true)).stem();
+      miss_causes = record_misses(scene, data.frames, data.truth, first_pass, audited, fcl, directory);
     }
   }
   json step_records = json::array();
@@ -180,7 +284,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                    {"candidate_pairs", r.counters.candidate_triangle_pairs},
                    {"elementary_tests", r.counters.elementary_tests},
                    {"history_bytes", r.counters.history_bytes},
-                   {"reported", r.collisions.size()}};
+                   {"reported", reported_count(r, judging)}};
     for (const auto& [name, value] : r.counters.extra) record[name] = value;
     if (options.verify) {
       record["colliding"] = data.truth[k].size();
@@ -190,7 +294,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
       record["false_alarms"] = verdicts[k].false_alarms;
       colliding += data.truth[k].size();
     }
-    reported += r.collisions.size();
+    reported += reported_count(r, judging);
     missed += verdicts[k].missed;
     culled += verdicts[k].culled;
     tested += verdicts[k].tested;
@@ -215,6 +319,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                   {"elementary_tests", tests / static_cast<double>(std::max<std::size_t>(steps, 1))},
                   {"history_bytes", history},
                   {"reported", reported},
+                  {"judged_by", judging == strategies::Judging::triangle_pairs ? "triangle pairs" : "elementary pairs"},
                   {"verified", options.verify},
                   {"repeats", options.repeats}};
   if (options.verify) {
@@ -222,7 +327,8 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                         {"missed", missed},
                         {"missed_culled", culled},
                         {"missed_tested", tested},
-                        {"false_alarms", false_alarms}});
+                        {"false_alarms", false_alarms},
+                        {"miss_causes", miss_causes}});
   }
   summary.update(environment());
   return {{"summary", summary}, {"steps", step_records}};
@@ -232,6 +338,17 @@ std::string format(double value, int precision) {
   std::ostringstream out;
   out << std::fixed << std::setprecision(precision) << value;
   return out.str();
+}
+
+constexpr const char* kTrianglePairMark = " (†)";
+constexpr const char* kTrianglePairNote =
+    "(†) judged by triangle pairs at δ = 0 (DESIGN.md §3): a truth pair counts as found when a reported triangle pair "
+    "contains both its primitives; false alarms are reported triangle pairs that contain no colliding pair.\n";
+
+/// The footnotes the rows need.
+std::string table_notes(const std::vector<std::vector<std::string>>& rows) {
+  const bool any = std::any_of(rows.begin(), rows.end(), [](const auto& row) { return row[3].find(kTrianglePairMark) != std::string::npos; });
+  return any ? kTrianglePairNote : "";
 }
 
 /// The table rows, speed-ups only between cells of this invocation (DESIGN.md §5).
@@ -251,8 +368,9 @@ std::vector<std::vector<std::string>> table_rows(const std::vector<json>& summar
       const json* full = nullptr;
       for (const json& other : summaries) {
         const std::string name = other["strategy"];
-        if (other["scene"] == s["scene"] && !other.value("resumed", false) && name.rfind("full+", 0) == 0 &&
-            narrow_token(name) == narrow_token(strategy) && !full) {
+        // A strategy without a narrow phase of ours (fcl) is compared with the first `full` cell.
+        const bool same_narrow = narrow_token(strategy).empty() || narrow_token(name) == narrow_token(strategy);
+        if (other["scene"] == s["scene"] && !other.value("resumed", false) && name.rfind("full+", 0) == 0 && same_narrow && !full) {
           full = &other;
         }
       }
@@ -265,7 +383,8 @@ std::vector<std::vector<std::string>> table_rows(const std::vector<json>& summar
     const bool verified = s.value("verified", false);
     rows.push_back({s["scene"].get<std::string>() + (s.value("resumed", false) ? " (resumed)" : ""),
                     std::to_string(s["triangles"].get<std::size_t>()), std::to_string(s["steps"].get<std::size_t>()),
-                    strategy, format(s["ms_per_step"].get<double>(), 3), stages, speedup,
+                    strategy + (s.value("judged_by", "") == "triangle pairs" ? std::string(kTrianglePairMark) : ""),
+                    format(s["ms_per_step"].get<double>(), 3), stages, speedup,
                     format(s["candidate_pairs"].get<double>(), 0), format(s["elementary_tests"].get<double>(), 0),
                     verified ? std::to_string(s["colliding"].get<std::size_t>()) : "-",
                     verified ? std::to_string(s["missed"].get<std::size_t>()) + " (" + std::to_string(s["missed_culled"].get<std::size_t>()) +
@@ -285,6 +404,7 @@ void print_table(const std::vector<std::vector<std::string>>& rows, std::ostream
     for (std::size_t c = 0; c < row.size(); ++c) out << std::left << std::setw(static_cast<int>(widths[c]) + 2) << row[c];
     out << '\n';
   }
+  out << table_notes(rows);
 }
 
 void write_report(const std::filesystem::path& directory, const std::vector<std::vector<std::string>>& rows,
@@ -308,6 +428,7 @@ void write_report(const std::filesystem::path& directory, const std::vector<std:
     for (const auto& cell : rows[r]) out << ' ' << cell << " |";
     out << '\n';
   }
+  out << '\n' << table_notes(rows);
   const json env = environment();
   out << "\nMachine: " << env["machine"].get<std::string>() << "; build " << env["build_type"].get<std::string>()
       << ", " << env["threads"] << " threads, revision " << env["git_revision"].get<std::string>() << ".\n\n"
@@ -372,6 +493,8 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
       }
     }
     if (pending.empty()) continue;
+    // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
+    for (const std::string& spec : pending) strategies::make_strategy(spec)->init(scene, data.frames[0]);
     if (options.verify) {
       for (std::size_t k = 0; k < steps; ++k) {
         bool computed = false;

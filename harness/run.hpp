@@ -39,6 +39,8 @@ struct RunOptions {
   std::optional<std::filesystem::path> json;
   std::optional<std::filesystem::path> report;
   bool fresh = false;
+  /// Write every cell's missed pairs here as query files, by cause (`--misses`).
+  std::optional<std::filesystem::path> misses;
   /// Only the first N steps of each scene (0: all).
   std::size_t max_steps = 0;
   std::string command_line;

@@ -94,4 +94,20 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   return outcome;
 }
 
+void append_all_elementary_pairs(const MeshTopology& topology, FaceId a, FaceId b, TestedPairs& out) {
+  for (const auto& [from, to] : {std::pair{a, b}, std::pair{b, a}}) {
+    for (VertexId v : topology.face(from)) {
+      if (!corner_of(v, topology.face(to))) out.vertex_face.push_back({v, to});
+    }
+  }
+  for (EdgeId i : topology.face_edges(a)) {
+    const Edge ea = topology.edge(i);
+    for (EdgeId j : topology.face_edges(b)) {
+      const Edge eb = topology.edge(j);
+      if (ea.v0 == eb.v0 || ea.v0 == eb.v1 || ea.v1 == eb.v0 || ea.v1 == eb.v1) continue;
+      out.edge_edge.push_back(make_edge_edge_pair(ea, eb));
+    }
+  }
+}
+
 }  // namespace ccd::strategies

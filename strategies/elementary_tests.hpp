@@ -29,4 +29,9 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
                                   std::span<const bvh::TrianglePair> candidates, const StepView& step,
                                   const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit);
 
+/// Appends every elementary pair of triangles a and b, not only those the masks give: their six vertices against
+/// the other face and their nine edge pairs, skipping pairs that share a vertex (unsorted; may repeat across calls).
+/// What a triangle pair "contains" when a strategy answers with triangle pairs.
+void append_all_elementary_pairs(const MeshTopology& topology, FaceId a, FaceId b, TestedPairs& out);
+
 }  // namespace ccd::strategies

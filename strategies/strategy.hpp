@@ -5,6 +5,7 @@
 #include "core/collision_set.hpp"
 #include "core/stage_timer.hpp"
 #include "core/step.hpp"
+#include "strategies/bvh/bvh.hpp"
 
 #include <map>
 #include <memory>
@@ -38,7 +39,14 @@ struct StepResult {
   StepCounters counters;
   /// Filled in audit mode only.
   std::optional<TestedPairs> tested;
+  /// Strategies judged by triangle pairs only: the triangle pairs reported (a < b, sorted). `collisions` then
+  /// holds every elementary pair of them (all_elementary_pairs).
+  std::vector<bvh::TrianglePair> triangle_pairs;
 };
+
+/// How answers are judged (DESIGN.md §3). By triangle pairs: a truth pair counts as found when a reported triangle
+/// pair contains both its primitives, and a false alarm is a reported triangle pair containing no truth pair.
+enum class Judging { elementary_pairs, triangle_pairs };
 
 class Strategy {
  public:
@@ -49,6 +57,7 @@ class Strategy {
   virtual void init(const Scene& scene, std::span<const Vec3> first_frame) = 0;
   /// One step, in order. With `audit`, also returns the elementary pairs tested (outside the timed stages).
   virtual StepResult step(const StepView& step, bool audit) = 0;
+  virtual Judging judging() const { return Judging::elementary_pairs; }
 };
 
 /// A spec `NAME[+NARROW][:key=value...]`, split. Keys the strategy does not know go to the narrow phase.
