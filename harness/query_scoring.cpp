@@ -6,6 +6,11 @@
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 
+#include "ccd/config.hpp"
+#if CCDBENCH_WITH_FCL
+#include "strategies/fcl/fcl_elementary.hpp"
+#endif
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -45,6 +50,19 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
   std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
 };
 
+#if CCDBENCH_WITH_FCL
+/// FCL's own continuous tests (what the `fcl` strategy runs), δ = 0 only.
+class FclQueryMethod final : public QueryMethod {
+ public:
+  std::string name() const override { return "fcl"; }
+  bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
+    if (thickness > 0) throw std::invalid_argument("method fcl has no thickness: run it with --thickness 0");
+    return kind == datasets::QueryKind::vertex_face ? strategies::fcl_vertex_face(query.rounded)
+                                                    : strategies::fcl_edge_edge(query.rounded);
+  }
+};
+#endif
+
 }  // namespace
 
 reference::PairKind reference_kind(datasets::QueryKind kind) {
@@ -53,6 +71,9 @@ reference::PairKind reference_kind(datasets::QueryKind kind) {
 
 std::unique_ptr<QueryMethod> make_query_method(const std::string& spec) {
   if (spec == "exact") return std::make_unique<ExactQueryMethod>();
+#if CCDBENCH_WITH_FCL
+  if (spec == "fcl") return std::make_unique<FclQueryMethod>();
+#endif
   const std::string name = spec.substr(0, spec.find(':'));
   const auto names = narrowphase::narrow_phase_names();
   if (std::find(names.begin(), names.end(), name) == names.end()) {
@@ -66,6 +87,7 @@ std::unique_ptr<QueryMethod> make_query_method(const std::string& spec) {
 std::vector<std::string> query_method_names() {
   std::vector<std::string> names = narrowphase::narrow_phase_names();
   names.push_back("exact");
+  if (CCDBENCH_WITH_FCL) names.push_back("fcl");
   return names;
 }
 

@@ -5,6 +5,11 @@
 #include "strategies/apccd/cpu/apccd.hpp"
 #include "strategies/full_traversal/full_traversal.hpp"
 
+#include "ccd/config.hpp"
+#if CCDBENCH_WITH_FCL
+#include "strategies/fcl/fcl_strategies.hpp"
+#endif
+
 #include <stdexcept>
 
 namespace ccd::strategies {
@@ -20,7 +25,11 @@ StrategySpec parse_strategy_spec(const std::string& spec) {
   return parsed;
 }
 
-std::vector<std::string> strategy_names() { return {"full", "apccd", "brute"}; }
+std::vector<std::string> strategy_names() {
+  std::vector<std::string> names{"full", "apccd", "brute"};
+  if (CCDBENCH_WITH_FCL) names.insert(names.end(), {"fcl", "fcl-bvh"});
+  return names;
+}
 
 std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
   const StrategySpec parsed = parse_strategy_spec(spec);
@@ -33,6 +42,21 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
     std::map<std::string, std::string> parameters = parsed.parameters;
     const ApccdSettings settings = take_apccd_settings(parameters);
     return make_apccd(settings, narrowphase::make_narrow_phase(parsed.narrow_phase, parameters));
+  }
+  if (parsed.name == "fcl" || parsed.name == "fcl-bvh") {
+#if CCDBENCH_WITH_FCL
+    if (parsed.name == "fcl") {
+      if (spec.find('+') != std::string::npos) {
+        throw std::invalid_argument("fcl uses FCL's own elementary tests and takes no narrow phase ('" + spec +
+                                    "'); for FCL's broad phase with a narrow phase of this project use fcl-bvh+NARROW");
+      }
+      return make_fcl(parsed.parameters);
+    }
+    return make_fcl_bvh(parsed.parameters, parsed.narrow_phase);
+#else
+    throw std::invalid_argument(parsed.name + " is not available: this build has CCDBENCH_WITH_FCL=OFF (install libfcl-dev "
+                                "libccd-dev, which scripts/setup.sh does, and reconfigure)");
+#endif
   }
   std::string known;
   for (const std::string& name : strategy_names()) known += (known.empty() ? "" : ", ") + name;

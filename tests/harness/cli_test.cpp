@@ -1,5 +1,6 @@
 // End-to-end tests of the ccdbench executable: what a user types, what a script reads.
 
+#include "ccd/config.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -239,6 +240,33 @@ TEST(Cli, CheckFailsWhenABaselineIsExceeded) {
   // A result absent from the baseline is allowed no miss at all.
   testing::write_text(dir / "empty.json", "[]");
   EXPECT_EQ(run_ccdbench("check --baseline '" + (dir / "empty.json").string() + "'" + results).exit_code, 1);
+}
+
+TEST(Cli, RunJudgesFclByTrianglePairsAndRefusesItAtPositiveThickness) {
+  if (!CCDBENCH_WITH_FCL) GTEST_SKIP() << "built without FCL (CCDBENCH_WITH_FCL=OFF)";
+  testing::TempDir dir;
+  ::setenv("CCDBENCH_CACHE_DIR", (dir / "cache").c_str(), 1);
+  const std::string out = " --out '" + (dir / "out").string() + "'";
+  // The ci suite's scenes have δ > 0: refused before any truth or timing, nothing written.
+  const CommandResult refused = run_ccdbench("run --suite ci --strategy full,fcl" + out);
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.output.find("run with --thickness 0"), std::string::npos) << refused.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "results.jsonl"));
+  const CommandResult run = run_ccdbench("run --suite ci --thickness 0 --max-steps 3 --strategy full,fcl:bv=aabb,fcl-bvh" + out +
+                                         " --json '" + (dir / "s.json").string() + "'");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("fcl:bv=aabb (†)"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("judged by triangle pairs"), std::string::npos) << run.output;
+  std::ifstream in(dir / "s.json");
+  const nlohmann::json summaries = nlohmann::json::parse(in);
+  for (const auto& s : summaries) {
+    const bool fcl = s["strategy"].get<std::string>().rfind("fcl:", 0) == 0;
+    EXPECT_EQ(s["judged_by"], fcl ? "triangle pairs" : "elementary pairs") << s["strategy"];
+    if (s["strategy"].get<std::string>().rfind("fcl-bvh", 0) == 0) {
+      EXPECT_EQ(s["missed"], 0) << s["scene"];
+    }
+  }
+  ::unsetenv("CCDBENCH_CACHE_DIR");
 }
 
 }  // namespace

@@ -1,7 +1,6 @@
 // `full` against `brute` (the independent check of culling) and against the exact truth.
 
 #include "datasets/procedural_scenes.hpp"
-#include "datasets/scene_file.hpp"
 #include "reference/step_truth.hpp"
 #include "strategies/strategy.hpp"
 #include "tests/support/strategy_runs.hpp"
@@ -13,29 +12,10 @@
 namespace ccd::strategies {
 namespace {
 
-struct LoadedScene {
-  datasets::SceneSequence sequence;
-  std::vector<std::vector<Vec3>> frames;
-};
-
-LoadedScene small_scene(const std::string& name, const testing::TempDir& dir) {
-  datasets::SceneParameters parameters{{"resolution", 8}, {"frames", 12}};
-  if (name == "pile") parameters["count"] = 2;
-  if (name == "twist") {
-    // The clamps need time, and a finer mat, to wind it into contact with itself.
-    parameters["resolution"] = 10;
-    parameters["frames"] = 24;
-  }
-  const auto generated = datasets::generate_procedural_scene({name, parameters, dir.path(), {}, {}});
-  LoadedScene loaded{datasets::load_scene_file(generated.scene_file), {}};
-  for (std::size_t k = 0; k < loaded.sequence.num_frames(); ++k) loaded.frames.push_back(loaded.sequence.frame(k));
-  return loaded;
-}
-
 TEST(FullTraversal, EqualsBruteForceOnEveryBuiltInSceneForAnyThreadCountAndMissesNothing) {
   for (const auto& info : datasets::procedural_scenes()) {
     testing::TempDir dir;
-    LoadedScene loaded = small_scene(info.name, dir);
+    testing::LoadedScene loaded = testing::small_scene(info.name, dir);
     const double scene_thickness = loaded.sequence.scene().thickness();
     for (double thickness : {0.0, scene_thickness}) {
       SCOPED_TRACE(info.name + ", δ = " + std::to_string(thickness));

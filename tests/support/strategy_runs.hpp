@@ -2,7 +2,10 @@
 /// @file
 /// Runs a strategy over every step of a frame sequence: what the strategy tests compare.
 
+#include "datasets/procedural_scenes.hpp"
+#include "datasets/scene_file.hpp"
 #include "strategies/strategy.hpp"
+#include "tests/support/test_support.hpp"
 
 #include <tbb/global_control.h>
 
@@ -22,6 +25,26 @@ inline std::vector<CollisionSet> run_all_steps(const std::string& spec, const Sc
     sets.push_back(strategy->step({&scene, k, frames[k], frames[k + 1]}, false).collisions);
   }
   return sets;
+}
+
+struct LoadedScene {
+  datasets::SceneSequence sequence;
+  std::vector<std::vector<Vec3>> frames;
+};
+
+/// A built-in scene, small enough to run every strategy and the truth on every step in seconds.
+inline LoadedScene small_scene(const std::string& name, const TempDir& dir) {
+  datasets::SceneParameters parameters{{"resolution", 8}, {"frames", 12}};
+  if (name == "pile") parameters["count"] = 2;
+  if (name == "twist") {
+    // The clamps need time, and a finer mat, to wind it into contact with itself.
+    parameters["resolution"] = 10;
+    parameters["frames"] = 24;
+  }
+  const auto generated = datasets::generate_procedural_scene({name, parameters, dir.path(), {}, {}});
+  LoadedScene loaded{datasets::load_scene_file(generated.scene_file), {}};
+  for (std::size_t k = 0; k < loaded.sequence.num_frames(); ++k) loaded.frames.push_back(loaded.sequence.frame(k));
+  return loaded;
 }
 
 }  // namespace ccd::testing

@@ -38,6 +38,18 @@ std::vector<Vec3> grid_positions(std::size_t n, double z = 0.0);
 /// A closed tetrahedron (4 vertices, 4 faces, 6 edges).
 std::vector<Face> tetrahedron_faces();
 
+/// The message of the `Exception` that `call` throws; fails the test (and returns "") when it throws none.
+template <class Exception, class Call>
+std::string error_message(Call&& call) {
+  try {
+    call();
+  } catch (const Exception& error) {
+    return error.what();
+  }
+  ADD_FAILURE() << "expected an exception";
+  return "";
+}
+
 /// The external data folder, when present with the expected content; otherwise nullopt and the reason.
 std::optional<std::filesystem::path> external_data_or_reason(std::string& reason);
 

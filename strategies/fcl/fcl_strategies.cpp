@@ -1,0 +1,329 @@
+#include "strategies/fcl/fcl_strategies.hpp"
+
+#include "core/assignment.hpp"
+#include "strategies/elementary_tests.hpp"
+
+// utility.h declares fcl::fit, which BVH_model-inl.h uses without including it.
+#include <fcl/math/bv/utility.h>
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/math/bv/AABB.h>
+#include <fcl/math/bv/OBBRSS.h>
+#include <fcl/math/bv/kDOP.h>
+#include <fcl/narrowphase/detail/traversal/collision/mesh_continuous_collision_traversal_node.h>
+#include <fcl/narrowphase/detail/traversal/collision_node.h>
+
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+#include <variant>
+
+namespace ccd::strategies {
+namespace {
+
+using FclVector = fcl::Vector3<double>;
+
+// ---------------------------------------------------------------------------------------------------------------
+// One FCL model per object, in the object's local vertex and face numbering.
+
+template <class BV>
+class FclModels {
+ public:
+  void build(const Scene& scene, std::span<const Vec3> first_frame) {
+    scene_ = &scene;
+    models_.clear();
+    for (ObjectId id = 0; id < scene.objects().size(); ++id) {
+      const SceneObject& object = scene.object(id);
+      auto model = std::make_unique<fcl::BVHModel<BV>>();
+      std::vector<fcl::Triangle> triangles;
+      triangles.reserve(object.num_faces);
+      for (FaceId f = object.first_face; f < object.first_face + object.num_faces; ++f) {
+        const Face& face = scene.topology().face(f);
+        triangles.emplace_back(face[0] - object.first_vertex, face[1] - object.first_vertex, face[2] - object.first_vertex);
+      }
+      const auto points = local_points(object, first_frame);
+      check(model->beginModel(static_cast<int>(triangles.size()), static_cast<int>(points.size())), "beginModel");
+      check(model->addSubModel(points, triangles), "addSubModel");
+      check(model->endModel(), "endModel");
+      // The continuous tests read the previous positions, which exist only after an update: a static object is
+      // updated to where it is, once.
+      update_to(*model, points);
+      models_.push_back(std::move(model));
+    }
+  }
+
+  /// Brings every non-static model to prev = x0, current = x1 (one update when the last step ended at x0).
+  void update(const StepView& step) {
+    for (ObjectId id = 0; id < models_.size(); ++id) {
+      const SceneObject& object = scene_->object(id);
+      if (object.kind == ObjectKind::static_object) continue;
+      fcl::BVHModel<BV>& model = *models_[id];
+      const auto before = local_points(object, step.x0);
+      if (!std::equal(before.begin(), before.end(), model.vertices)) update_to(model, before);
+      update_to(model, local_points(object, step.x1));
+    }
+  }
+
+  const fcl::BVHModel<BV>& model(ObjectId id) const { return *models_[id]; }
+
+  std::size_t bytes() const {
+    std::size_t total = 0;
+    for (const auto& model : models_) {
+      // memUsage(false) counts BVs, triangles and current vertices; the previous positions are the same size again.
+      total += static_cast<std::size_t>(model->memUsage(false)) + sizeof(FclVector) * static_cast<std::size_t>(model->num_vertices);
+    }
+    return total;
+  }
+
+ private:
+  static void check(int code, const char* call) {
+    if (code != fcl::BVH_OK) throw std::runtime_error(std::string("FCL ") + call + " failed with code " + std::to_string(code));
+  }
+
+  static std::vector<FclVector> local_points(const SceneObject& object, std::span<const Vec3> positions) {
+    std::vector<FclVector> points(object.num_vertices);
+    for (std::size_t i = 0; i < object.num_vertices; ++i) points[i] = positions[object.first_vertex + i];
+    return points;
+  }
+
+  static void update_to(fcl::BVHModel<BV>& model, const std::vector<FclVector>& points) {
+    check(model.beginUpdateModel(), "beginUpdateModel");
+    check(model.updateSubModel(points), "updateSubModel");
+    check(model.endUpdateModel(/*refit=*/true, /*bottomup=*/true), "endUpdateModel");
+  }
+
+  const Scene* scene_ = nullptr;
+  std::vector<std::unique_ptr<fcl::BVHModel<BV>>> models_;
+};
+
+/// Runs `visit(node)` over every traversal the scene asks for: self for objects with self-collision, and each
+/// collidable pair; `offset_a`/`offset_b` map FCL's primitive ids back to global face ids.
+template <class BV, class Node, class MakeNode, class Visit>
+void for_each_traversal(const Scene& scene, const FclModels<BV>& models, MakeNode make_node, Visit visit) {
+  for (ObjectId a = 0; a < scene.objects().size(); ++a) {
+    if (!scene.object(a).self_collision) continue;
+    Node node = make_node(models.model(a), models.model(a));
+    fcl::detail::selfCollide(&node);
+    visit(node, scene.object(a).first_face, scene.object(a).first_face);
+  }
+  for (const auto& [a, b] : scene.collidable_pairs()) {
+    Node node = make_node(models.model(a), models.model(b));
+    fcl::detail::collide(&node);
+    visit(node, scene.object(a).first_face, scene.object(b).first_face);
+  }
+}
+
+bvh::TrianglePair global_pair(FaceId first_a, int a, FaceId first_b, int b) {
+  const FaceId fa = first_a + static_cast<FaceId>(a);
+  const FaceId fb = first_b + static_cast<FaceId>(b);
+  return {std::min(fa, fb), std::max(fa, fb)};
+}
+
+void refuse_thickness(const Scene& scene, const std::string& name) {
+  if (scene.thickness() > 0) {
+    throw std::invalid_argument(name + " works at δ = 0 only: FCL has no thickness and its volumes are not inflated, "
+                                "but this scene's δ is " + std::to_string(scene.thickness()) + " (run with --thickness 0)");
+  }
+}
+
+void sort_unique(std::vector<bvh::TrianglePair>& pairs) {
+  tbb::parallel_sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// `fcl`: FCL's continuous traversal and its elementary tests.
+
+/// FCL's node, which also lists the triangle pairs that reached its leaf test (audit mode).
+template <class BV>
+class AuditedContinuousNode : public fcl::detail::MeshContinuousCollisionTraversalNode<BV> {
+ public:
+  void leafTesting(int b1, int b2) const override {
+    if (leaves) leaves->emplace_back(this->model1->getBV(b1).primitiveId(), this->model2->getBV(b2).primitiveId());
+    fcl::detail::MeshContinuousCollisionTraversalNode<BV>::leafTesting(b1, b2);
+  }
+  std::vector<std::pair<int, int>>* leaves = nullptr;
+};
+
+template <class BV>
+class FclContinuous final : public Strategy {
+ public:
+  explicit FclContinuous(std::string bv_name) : bv_name_(std::move(bv_name)) {}
+
+  std::string name() const override { return "fcl:bv=" + bv_name_; }
+  Judging judging() const override { return Judging::triangle_pairs; }
+
+  void init(const Scene& scene, std::span<const Vec3> first_frame) override {
+    refuse_thickness(scene, "fcl");
+    scene_ = &scene;
+    models_.build(scene, first_frame);
+  }
+
+  StepResult step(const StepView& step, bool audit) override {
+    StepResult result;
+    {
+      ScopedStageTimer timer(result.stages, "refit");
+      models_.update(step);
+    }
+    std::vector<bvh::TrianglePair> leaves;
+    std::size_t leaf_tests = 0, tests = 0;
+    {
+      ScopedStageTimer timer(result.stages, "traversal and tests");
+      fcl::CollisionRequest<double> request;
+      // canStop() ends the traversal once this many triangle pairs collide: never, here.
+      request.num_max_contacts = std::numeric_limits<std::size_t>::max();
+      std::vector<std::pair<int, int>> leaf_ids;
+      auto make_node = [&](const fcl::BVHModel<BV>& a, const fcl::BVHModel<BV>& b) {
+        AuditedContinuousNode<BV> node;
+        fcl::detail::initialize(node, a, fcl::Transform3<double>::Identity(), b, fcl::Transform3<double>::Identity(), request);
+        node.leaves = audit ? &leaf_ids : nullptr;
+        node.enable_statistics = true;  // counters only
+        return node;
+      };
+      auto visit = [&](const AuditedContinuousNode<BV>& node, FaceId first_a, FaceId first_b) {
+        for (const auto& pair : node.pairs) result.triangle_pairs.push_back(global_pair(first_a, pair.id1, first_b, pair.id2));
+        leaf_tests += static_cast<std::size_t>(node.num_leaf_tests);
+        tests += static_cast<std::size_t>(node.num_vf_tests + node.num_ee_tests);
+        for (const auto& [a, b] : leaf_ids) leaves.push_back(global_pair(first_a, a, first_b, b));
+        leaf_ids.clear();
+      };
+      for_each_traversal<BV, AuditedContinuousNode<BV>>(*scene_, models_, make_node, visit);
+      sort_unique(result.triangle_pairs);
+    }
+    // Outside the timed stages: the elementary pairs the reported triangle pairs contain, for judging.
+    TestedPairs contained;
+    for (const auto& [a, b] : result.triangle_pairs) append_all_elementary_pairs(scene_->topology(), a, b, contained);
+    for (const VertexFacePair& pair : contained.vertex_face) result.collisions.add(pair);
+    for (const EdgeEdgePair& pair : contained.edge_edge) result.collisions.add(pair);
+    result.collisions.normalize();
+    if (audit) {
+      sort_unique(leaves);
+      TestedPairs tested;
+      for (const auto& [a, b] : leaves) append_all_elementary_pairs(scene_->topology(), a, b, tested);
+      sort_unique_pairs(tested.vertex_face);
+      sort_unique_pairs(tested.edge_edge);
+      result.tested = std::move(tested);
+    }
+    result.counters.candidate_triangle_pairs = leaf_tests;
+    result.counters.elementary_tests = tests;
+    result.counters.history_bytes = models_.bytes();
+    return result;
+  }
+
+ private:
+  template <class Pair>
+  static void sort_unique_pairs(std::vector<Pair>& pairs) {
+    tbb::parallel_sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  }
+
+  std::string bv_name_;
+  const Scene* scene_ = nullptr;
+  FclModels<BV> models_;
+};
+
+// ---------------------------------------------------------------------------------------------------------------
+// `fcl-bvh`: FCL's hierarchy and traversal as the broad phase only.
+
+template <class BV>
+class OverlapNode : public fcl::detail::BVHCollisionTraversalNode<BV> {
+ public:
+  void leafTesting(int b1, int b2) const override {
+    pairs.emplace_back(this->model1->getBV(b1).primitiveId(), this->model2->getBV(b2).primitiveId());
+  }
+  mutable std::vector<std::pair<int, int>> pairs;
+};
+
+template <class BV>
+class FclBroadPhase final : public Strategy {
+ public:
+  FclBroadPhase(std::string bv_name, std::unique_ptr<narrowphase::NarrowPhase> narrow_phase)
+      : bv_name_(std::move(bv_name)), narrow_phase_(std::move(narrow_phase)) {}
+
+  std::string name() const override { return "fcl-bvh+" + narrow_phase_->name() + ":bv=" + bv_name_; }
+
+  void init(const Scene& scene, std::span<const Vec3> first_frame) override {
+    refuse_thickness(scene, "fcl-bvh");
+    scene_ = &scene;
+    masks_ = assign_primitives(scene.topology());
+    models_.build(scene, first_frame);
+  }
+
+  StepResult step(const StepView& step, bool audit) override {
+    StepResult result;
+    {
+      ScopedStageTimer timer(result.stages, "refit");
+      models_.update(step);
+    }
+    std::vector<bvh::TrianglePair> candidates;
+    {
+      ScopedStageTimer timer(result.stages, "traversal");
+      auto make_node = [](const fcl::BVHModel<BV>& a, const fcl::BVHModel<BV>& b) {
+        OverlapNode<BV> node;
+        node.model1 = &a;
+        node.model2 = &b;
+        return node;
+      };
+      auto visit = [&](const OverlapNode<BV>& node, FaceId first_a, FaceId first_b) {
+        for (const auto& [a, b] : node.pairs) candidates.push_back(global_pair(first_a, a, first_b, b));
+      };
+      for_each_traversal<BV, OverlapNode<BV>>(*scene_, models_, make_node, visit);
+      sort_unique(candidates);
+    }
+    ElementaryOutcome outcome;
+    {
+      ScopedStageTimer timer(result.stages, "narrow phase");
+      outcome = test_candidates(scene_->topology(), masks_, candidates, step, *narrow_phase_, 0.0, audit);
+    }
+    result.collisions = std::move(outcome.collisions);
+    result.tested = std::move(outcome.tested);
+    result.counters.candidate_triangle_pairs = candidates.size();
+    result.counters.elementary_tests = outcome.tests;
+    result.counters.history_bytes = models_.bytes();
+    return result;
+  }
+
+ private:
+  std::string bv_name_;
+  std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
+  const Scene* scene_ = nullptr;
+  std::vector<AssignmentMask> masks_;
+  FclModels<BV> models_;
+};
+
+// ---------------------------------------------------------------------------------------------------------------
+
+template <template <class> class StrategyT, class... Args>
+std::unique_ptr<Strategy> with_bounding_volume(const std::string& bv, Args&&... args) {
+  if (bv == "aabb") return std::make_unique<StrategyT<fcl::AABB<double>>>(bv, std::forward<Args>(args)...);
+  if (bv == "obbrss") return std::make_unique<StrategyT<fcl::OBBRSS<double>>>(bv, std::forward<Args>(args)...);
+  if (bv == "kdop24") return std::make_unique<StrategyT<fcl::KDOP<double, 24>>>(bv, std::forward<Args>(args)...);
+  throw std::invalid_argument("unknown FCL bounding volume '" + bv + "' (known: aabb, obbrss, kdop24)");
+}
+
+std::string take_bounding_volume(std::map<std::string, std::string>& parameters) {
+  const auto it = parameters.find("bv");
+  if (it == parameters.end()) return "obbrss";
+  std::string bv = it->second;
+  parameters.erase(it);
+  return bv;
+}
+
+}  // namespace
+
+std::unique_ptr<Strategy> make_fcl(std::map<std::string, std::string> parameters) {
+  const std::string bv = take_bounding_volume(parameters);
+  if (!parameters.empty()) {
+    throw std::invalid_argument("fcl has no parameter '" + parameters.begin()->first +
+                                "' (its only key is bv; it uses FCL's own elementary tests, so it takes no narrow phase)");
+  }
+  return with_bounding_volume<FclContinuous>(bv);
+}
+
+std::unique_ptr<Strategy> make_fcl_bvh(std::map<std::string, std::string> parameters, const std::string& narrow_phase) {
+  const std::string bv = take_bounding_volume(parameters);
+  return with_bounding_volume<FclBroadPhase>(bv, narrowphase::make_narrow_phase(narrow_phase, parameters));
+}
+
+}  // namespace ccd::strategies
