@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
       "elementary test said no) and false alarms. Strategies: NAME[+NARROW][:key=value...], comma-separated:\n"
       "full (BVH refit + full traversal every step), apccd (skipping-frame sessions, Wong 2009), brute (every\n"
       "triangle pair; small scenes), fcl (FCL's BVH and its own continuous tests; judged by triangle pairs) and\n"
-      "fcl-bvh (FCL's BVH as the broad phase, then NARROW); both take bv=aabb|obbrss|kdop24 (default obbrss) and\n"
+      "fcl-bvh (FCL's BVH as the broad phase, then NARROW); both take bv=aabb|obbrss|kdop24 (default aabb) and\n"
       "run at δ = 0 only (--thickness 0). NARROW is conservative (default), cubic64, cubic32 or advancement.\n"
       "apccd knobs (defaults): skip=on, nf_min=1, nf_max=8 (session length bounds), local=1.0 and global=0.25\n"
       "(inflation by a vertex's own speed and by its object's mean speed, per frame left in the session),\n"

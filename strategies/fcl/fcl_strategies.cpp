@@ -304,7 +304,7 @@ std::unique_ptr<Strategy> with_bounding_volume(const std::string& bv, Args&&... 
 
 std::string take_bounding_volume(std::map<std::string, std::string>& parameters) {
   const auto it = parameters.find("bv");
-  if (it == parameters.end()) return "obbrss";
+  if (it == parameters.end()) return "aabb";
   std::string bv = it->second;
   parameters.erase(it);
   return bv;

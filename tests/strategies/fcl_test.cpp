@@ -91,7 +91,7 @@ TEST(Fcl, ThicknessUnknownVolumesAndNarrowPhasesAreClearErrors) {
   EXPECT_THROW(make_strategy("fcl-bvh:bv=obb"), std::invalid_argument);
   EXPECT_THROW(make_strategy("fcl+cubic64"), std::invalid_argument);
   EXPECT_THROW(make_strategy("fcl:tolerance=1"), std::invalid_argument);
-  EXPECT_EQ(make_strategy("fcl")->name(), "fcl:bv=obbrss");
+  EXPECT_EQ(make_strategy("fcl")->name(), "fcl:bv=aabb");
   EXPECT_EQ(make_strategy("fcl-bvh+cubic64:bv=kdop24")->name(), "fcl-bvh+cubic64:eta=1e-06:bv=kdop24");
 }
 
