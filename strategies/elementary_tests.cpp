@@ -1,5 +1,7 @@
 #include "strategies/elementary_tests.hpp"
 
+#include "strategies/separation_filter.hpp"
+
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -10,6 +12,7 @@ namespace {
 struct Local {
   CollisionSet collisions;
   std::size_t tests = 0;
+  std::size_t filtered = 0;
   TestedPairs tested;
 };
 
@@ -19,7 +22,8 @@ bool corner_of(VertexId v, const Face& f) { return v == f[0] || v == f[1] || v =
 
 ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks,
                                   std::span<const bvh::TrianglePair> candidates, const StepView& step,
-                                  const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit) {
+                                  const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit,
+                                  bool separation_filter) {
   const auto& x0 = step.x0;
   const auto& x1 = step.x1;
   // Swept vertex boxes widened by δ/2: a primitive pair whose boxes are apart cannot come within δ, so the cheap
@@ -42,11 +46,15 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     auto vertex_against_face = [&](VertexId v, FaceId f) {
       const Face& face = topology.face(f);
       if (corner_of(v, face) || !vertex_boxes[v].intersects(box_of({face[0], face[1], face[2]}))) return;
+      const narrowphase::PairRows rows{x0[v], x0[face[0]], x0[face[1]], x0[face[2]], x1[v], x1[face[0]], x1[face[1]], x1[face[2]]};
+      if (separation_filter && provably_apart(rows, true, thickness)) {
+        ++local.filtered;
+        return;
+      }
       ++local.tests;
       const VertexFacePair pair{v, f};
       if (audit) local.tested.vertex_face.push_back(pair);
-      const narrowphase::NarrowPhaseResult r = narrow_phase.vertex_face(
-          {x0[v], x0[face[0]], x0[face[1]], x0[face[2]], x1[v], x1[face[0]], x1[face[1]], x1[face[2]]}, thickness);
+      const narrowphase::NarrowPhaseResult r = narrow_phase.vertex_face(rows, thickness);
       if (r.collides) local.collisions.add(pair, r.toi);
     };
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -64,13 +72,16 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
           const Edge eb = topology.edge(topology.face_edges(b)[j_edge]);
           if (ea.v0 == eb.v0 || ea.v0 == eb.v1 || ea.v1 == eb.v0 || ea.v1 == eb.v1) continue;
           if (!box_of({ea.v0, ea.v1}).intersects(box_of({eb.v0, eb.v1}))) continue;
-          ++local.tests;
           const EdgeEdgePair pair = make_edge_edge_pair(ea, eb);
+          const narrowphase::PairRows rows{x0[pair.a.v0], x0[pair.a.v1], x0[pair.b.v0], x0[pair.b.v1],
+                                           x1[pair.a.v0], x1[pair.a.v1], x1[pair.b.v0], x1[pair.b.v1]};
+          if (separation_filter && provably_apart(rows, false, thickness)) {
+            ++local.filtered;
+            continue;
+          }
+          ++local.tests;
           if (audit) local.tested.edge_edge.push_back(pair);
-          const narrowphase::NarrowPhaseResult r = narrow_phase.edge_edge(
-              {x0[pair.a.v0], x0[pair.a.v1], x0[pair.b.v0], x0[pair.b.v1], x1[pair.a.v0], x1[pair.a.v1],
-               x1[pair.b.v0], x1[pair.b.v1]},
-              thickness);
+          const narrowphase::NarrowPhaseResult r = narrow_phase.edge_edge(rows, thickness);
           if (r.collides) local.collisions.add(pair, r.toi);
         }
       }
@@ -81,6 +92,7 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   for (Local& local : locals) {
     outcome.collisions.append(local.collisions);
     outcome.tests += local.tests;
+    outcome.filtered += local.filtered;
     if (audit) {
       outcome.tested->vertex_face.insert(outcome.tested->vertex_face.end(), local.tested.vertex_face.begin(), local.tested.vertex_face.end());
       outcome.tested->edge_edge.insert(outcome.tested->edge_edge.end(), local.tested.edge_edge.begin(), local.tested.edge_edge.end());

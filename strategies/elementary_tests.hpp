@@ -20,14 +20,18 @@ namespace ccd::strategies {
 struct ElementaryOutcome {
   CollisionSet collisions;
   std::size_t tests = 0;
+  /// Pairs the separation filter proved apart (not tested).
+  std::size_t filtered = 0;
   std::optional<TestedPairs> tested;
 };
 
 /// Tests every elementary pair of `candidates` with `narrow_phase` at `thickness`, in parallel. Results are sorted
-/// and do not depend on the thread count.
+/// and do not depend on the thread count. With `separation_filter`, pairs that provably_apart() rejects are culled
+/// before the narrow phase (counted in `filtered`, not tested).
 ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks,
                                   std::span<const bvh::TrianglePair> candidates, const StepView& step,
-                                  const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit);
+                                  const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit,
+                                  bool separation_filter = false);
 
 /// Appends every elementary pair of triangles a and b, not only those the masks give: their six vertices against
 /// the other face and their nine edge pairs, skipping pairs that share a vertex (unsorted; may repeat across calls).

@@ -172,8 +172,10 @@ class Apccd final : public Strategy {
     std::size_t history_catches = 0;
     {
       ScopedStageTimer timer(result.stages, "back end");
+      // The front end's distance heuristic at the elementary level: pairs provably farther apart than δ over the
+      // step never reach the narrow phase (separation_filter.hpp).
       outcome = test_candidates(topology, masks_, admissible, step, *narrow_phase_, scene_->thickness(),
-                                audit || settings_.history);
+                                audit || settings_.history, settings_.heuristic);
       if (settings_.history) history_catches = apply_history(step, *outcome.tested, outcome.collisions);
     }
     result.collisions = std::move(outcome.collisions);
@@ -187,7 +189,8 @@ class Apccd final : public Strategy {
                              {"dangling_vertices", static_cast<double>(dangling_vertices)},
                              {"dangling_triangles", static_cast<double>(dangling_triangles)},
                              {"history_pairs", static_cast<double>(vertex_face_history_.size() + edge_edge_history_.size())},
-                             {"history_catches", static_cast<double>(history_catches)}};
+                             {"history_catches", static_cast<double>(history_catches)},
+                             {"distance_filtered", static_cast<double>(outcome.filtered)}};
     advance_session(dangling_vertices, admissible.size());
     return result;
   }

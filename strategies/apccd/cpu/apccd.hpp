@@ -43,6 +43,8 @@ struct ApccdSettings {
   /// A session whose pending list outgrows `pending_max` times the pairs the front end admits is too costly: it
   /// ends, and nf halves.
   double pending_max = 4.0;
+  /// The front end: candidate triangle pairs whose fresh swept boxes overlap, then elementary pairs the distance
+  /// heuristic (separation_filter.hpp) cannot prove apart.
   bool heuristic = true;
   /// Off by default: with the default (conservative) narrow phase there is no missed crossing for history to
   /// catch, and on the drape scene it cost about 2 ms of a 5 ms step and added false alarms. It pays only with a

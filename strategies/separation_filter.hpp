@@ -1,0 +1,26 @@
+#pragma once
+/// @file
+/// A cheap, conservative "these two primitives stay farther apart than δ during the step" test: apccd's front-end
+/// distance heuristic at the level of elementary pairs (Wong 2009, front-end filtering).
+///
+/// For VF (p against face abc) let n(t) = (b-a)×(c-a) and f(t) = n(t)·(p-a); for EE n(t) = ea×eb and
+/// f(t) = n(t)·(b0-a0). |f|/|n| is the distance from p to the face's plane (VF) or between the edges' lines (EE),
+/// never more than the distance between the primitives. Over t in [0,1], f is a cubic and n a quadratic curve; by
+/// the convex hull property of the Bernstein form, f(t) >= min of f's Bernstein coefficients and
+/// |n(t)| <= max |n's Bernstein control points|. If f's coefficients all exceed δ·max|n| (or all lie below
+/// -δ·max|n|), the pair never comes within δ. The margin for rounding is 1e-9 of the size of the products involved,
+/// some 10^7 times the double rounding of these few operations, so a pair it rejects is apart in exact arithmetic.
+/// Before that, cheaper separating directions: the normals at t = 0 and t = 1 and, in the plane, the perpendiculars
+/// of the face's edges (VF) or of both edges (EE). Along a fixed direction every vertex's projection moves linearly,
+/// so the gap between the two groups is concave in t and it suffices to check both ends; this separates the
+/// in-plane neighbours of a flat cloth, which no plane distance can.
+/// It decides "apart" only; "maybe" goes to the narrow phase.
+
+#include "strategies/narrowphase/narrow_phase.hpp"
+
+namespace ccd::strategies {
+
+/// Rows as narrow_phase.hpp. @return true only when the pair provably stays farther apart than `thickness`.
+bool provably_apart(const narrowphase::PairRows& rows, bool vertex_face, double thickness);
+
+}  // namespace ccd::strategies
