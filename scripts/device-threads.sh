@@ -15,7 +15,7 @@ echo "machine: $(nproc) cores, $(uname -m)"
 for scene in spinning-ball drape; do
   printf '{"generator": {"name": "%s", "resolution": %d, "frames": %d}}\n' "$scene" "${RESOLUTION:-100}" "${FRAMES:-60}" > "$out/$scene.json"
   for t in ${threads[@]}; do
-    "$bin" --threads "$t" run --scene "$out/$scene.json" --strategy full,apccd --verify none --repeat 3 --fresh \
+    "$bin" --threads "$t" run --scene "$out/$scene.json" --strategy full,apccd --verify none --repeat 1 --fresh \
       --out "/tmp/threads-$scene-$t" --json "$out/$scene-t$t.json" 2>/dev/null |
       awk -v t="$t" -v s="$scene" 'NR > 1 && $4 ~ /^(full|apccd)/ {split($4, n, ":"); printf "%-14s threads %-3s %-20s %s ms/step\n", s, t, n[1], $5}'
   done

@@ -190,6 +190,7 @@ class Apccd final : public Strategy {
                              {"dangling_triangles", static_cast<double>(dangling_triangles)},
                              {"history_pairs", static_cast<double>(vertex_face_history_.size() + edge_edge_history_.size())},
                              {"history_catches", static_cast<double>(history_catches)},
+                             {"history_table_bytes", static_cast<double>(history_bytes())},
                              {"distance_filtered", static_cast<double>(outcome.filtered)}};
     advance_session(dangling_vertices, admissible.size());
     return result;
