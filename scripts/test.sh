@@ -9,5 +9,9 @@ scripts/build.sh "$preset"
 export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-$PWD/build/cache}
 ctest --preset "$preset" -j "$(nproc)"
 out=build/$preset/ci-results
-"build/$preset/bin/ccdbench" run --suite ci --strategy full,full+cubic64 --out "$out" --json "$out/summary.json" --fresh
+# At the scenes' δ and at δ = 0: apccd (conservative) is held to zero misses like full (absent from the baseline
+# means it may miss none).
+"build/$preset/bin/ccdbench" run --suite ci --strategy full,full+cubic64,apccd --out "$out" --json "$out/summary.json" --fresh
 "build/$preset/bin/ccdbench" check --baseline tests/baselines/ci.json "$out/summary.json"
+"build/$preset/bin/ccdbench" run --suite ci --thickness 0 --strategy full,apccd --out "$out-0" --json "$out-0/summary.json" --fresh
+"build/$preset/bin/ccdbench" check --baseline tests/baselines/ci.json "$out-0/summary.json"
