@@ -11,7 +11,8 @@
 /// vertices that left their budget are dangling, their triangles' leaf boxes are enlarged to hold their fresh
 /// boxes and only those triangles are traversed (partial traversal). Pairs across objects come from a traversal
 /// of the two trees every step, one swept by the range of the centroids' offset during the step. The front end
-/// admits the candidates whose fresh swept boxes overlap; the back end runs the elementary tests on them. History
+/// admits the candidates whose fresh swept boxes overlap, and its distance heuristic (separation_filter.hpp) drops
+/// their elementary pairs that provably stay farther apart than δ; the back end runs the elementary tests on the rest. History
 /// keeps, for tested pairs in close proximity, the side of the face a vertex is on and how two edges cross, and
 /// reports a pair whose orientation flipped (where that can be a crossing) unless the test already did.
 ///
