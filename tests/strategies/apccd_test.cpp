@@ -54,35 +54,34 @@ TEST(Apccd, PartialTraversalFindsThePairOfAVertexThatJumpsFarDuringASession) {
   }
 }
 
-TEST(Apccd, MissesNothingOnEveryBuiltInSceneUnderEveryKnobAndThreadCount) {
-  for (const auto& info : datasets::procedural_scenes()) {
-    testing::TempDir dir;
-    datasets::SceneParameters parameters{{"resolution", 8}, {"frames", 12}};
-    if (info.name == "twist") parameters["frames"] = 24;  // the clamps need time to wind the mat into itself
-    if (info.name == "pile") parameters["count"] = 2;
-    const auto generated = datasets::generate_procedural_scene({info.name, parameters, dir.path(), {}, {}});
-    const datasets::SceneSequence sequence = datasets::load_scene_file(generated.scene_file);
-    std::vector<std::vector<Vec3>> frames;
-    for (std::size_t k = 0; k < sequence.num_frames(); ++k) frames.push_back(sequence.frame(k));
-    for (double thickness : {0.0, sequence.scene().thickness()}) {
-      const Scene scene = sequence.scene().with_thickness(thickness);
-      std::vector<CollisionSet> truth;
-      for (std::size_t k = 0; k + 1 < frames.size(); ++k) {
-        truth.push_back(reference::compute_step_truth(scene, frames[k], frames[k + 1], {thickness, false, {}}).collisions);
-      }
-      // Defaults; no skipping and no front end; no inflation at all (every motion dangles).
-      for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off:history=on", "apccd:local=0:global=0"}) {
-        SCOPED_TRACE(info.name + ", δ = " + std::to_string(thickness) + ", " + spec);
-        const auto one = testing::run_all_steps(spec, scene, frames, 1);
-        const auto two = testing::run_all_steps(spec, scene, frames, 2);
-        for (std::size_t k = 0; k < truth.size(); ++k) {
-          ASSERT_TRUE(set_difference(truth[k], one[k]).empty()) << "step " << k << " missed " << set_difference(truth[k], one[k]).size();
-          ASSERT_TRUE(one[k].same_pairs(two[k])) << "step " << k << ": 1 and 2 threads differ";
-        }
+// One test per built-in scene, so that ctest spreads them over the cores.
+class ApccdOnScene : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ApccdOnScene, MissesNothingUnderEveryKnobAndThreadCount) {
+  testing::TempDir dir;
+  const testing::LoadedScene loaded = testing::small_scene(GetParam(), dir);
+  const auto& frames = loaded.frames;
+  for (double thickness : {0.0, loaded.sequence.scene().thickness()}) {
+    const Scene scene = loaded.sequence.scene().with_thickness(thickness);
+    std::vector<CollisionSet> truth;
+    for (std::size_t k = 0; k + 1 < frames.size(); ++k) {
+      truth.push_back(reference::compute_step_truth(scene, frames[k], frames[k + 1], {thickness, false, {}}).collisions);
+    }
+    // Defaults; no skipping and no front end; no inflation at all (every motion dangles).
+    for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off:history=on", "apccd:local=0:global=0"}) {
+      SCOPED_TRACE(GetParam() + ", δ = " + std::to_string(thickness) + ", " + spec);
+      const auto one = testing::run_all_steps(spec, scene, frames, 1);
+      const auto two = testing::run_all_steps(spec, scene, frames, 2);
+      for (std::size_t k = 0; k < truth.size(); ++k) {
+        ASSERT_TRUE(set_difference(truth[k], one[k]).empty()) << "step " << k << " missed " << set_difference(truth[k], one[k]).size();
+        ASSERT_TRUE(one[k].same_pairs(two[k])) << "step " << k << ": 1 and 2 threads differ";
       }
     }
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(BuiltInScenes, ApccdOnScene, ::testing::ValuesIn(testing::procedural_scene_names()),
+                         testing::param_name);
 
 TEST(Apccd, KnobsAreParsedRecordedAndChecked) {
   const std::string name = make_strategy("apccd+cubic64:skip=off:nf_max=4:eta=1e-05")->name();

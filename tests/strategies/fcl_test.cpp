@@ -23,39 +23,43 @@ bool contains_sorted(const std::vector<Pair>& pairs, const Pair& pair) {
   return std::binary_search(pairs.begin(), pairs.end(), pair);
 }
 
-TEST(FclBvh, CandidatesCoverEveryTruthPairAndNothingIsMissedOnEveryBuiltInScene) {
-  for (const auto& info : datasets::procedural_scenes()) {
-    testing::TempDir dir;
-    const testing::LoadedScene loaded = testing::small_scene(info.name, dir);
-    const Scene scene = loaded.sequence.scene().with_thickness(0.0);
-    std::size_t colliding = 0;
-    std::vector<CollisionSet> truth;
-    for (std::size_t k = 0; k + 1 < loaded.frames.size(); ++k) {
-      truth.push_back(reference::compute_step_truth(scene, loaded.frames[k], loaded.frames[k + 1], {0.0, false, {}}).collisions);
-      colliding += truth.back().size();
-    }
-    for (const char* bv : {"aabb", "obbrss", "kdop24"}) {
-      SCOPED_TRACE(info.name + " with " + bv);
-      auto strategy = make_strategy(std::string("fcl-bvh:bv=") + bv);
-      strategy->init(scene, loaded.frames[0]);
-      for (std::size_t k = 0; k < truth.size(); ++k) {
-        const StepResult result = strategy->step({&scene, k, loaded.frames[k], loaded.frames[k + 1]}, true);
-        // Tested pairs come from the candidate triangle pairs only, so a truth pair among them was not culled.
-        for (const auto& c : truth[k].vertex_face()) {
-          ASSERT_TRUE(contains_sorted(result.tested->vertex_face, c.pair)) << "step " << k << ": VF " << c.pair.v << "/" << c.pair.f << " culled";
-        }
-        for (const auto& c : truth[k].edge_edge()) {
-          ASSERT_TRUE(contains_sorted(result.tested->edge_edge, c.pair)) << "step " << k << ": an EE pair culled";
-        }
-        ASSERT_EQ(set_difference(truth[k], result.collisions).size(), 0u) << "step " << k;
+class FclBvhOnScene : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(FclBvhOnScene, CandidatesCoverEveryTruthPairAndNothingIsMissed) {
+  const std::string name = GetParam();
+  testing::TempDir dir;
+  const testing::LoadedScene loaded = testing::small_scene(name, dir);
+  const Scene scene = loaded.sequence.scene().with_thickness(0.0);
+  std::size_t colliding = 0;
+  std::vector<CollisionSet> truth;
+  for (std::size_t k = 0; k + 1 < loaded.frames.size(); ++k) {
+    truth.push_back(reference::compute_step_truth(scene, loaded.frames[k], loaded.frames[k + 1], {0.0, false, {}}).collisions);
+    colliding += truth.back().size();
+  }
+  for (const char* bv : {"aabb", "obbrss", "kdop24"}) {
+    SCOPED_TRACE(name + " with " + bv);
+    auto strategy = make_strategy(std::string("fcl-bvh:bv=") + bv);
+    strategy->init(scene, loaded.frames[0]);
+    for (std::size_t k = 0; k < truth.size(); ++k) {
+      const StepResult result = strategy->step({&scene, k, loaded.frames[k], loaded.frames[k + 1]}, true);
+      // Tested pairs come from the candidate triangle pairs only, so a truth pair among them was not culled.
+      for (const auto& c : truth[k].vertex_face()) {
+        ASSERT_TRUE(contains_sorted(result.tested->vertex_face, c.pair)) << "step " << k << ": VF " << c.pair.v << "/" << c.pair.f << " culled";
       }
-    }
-    // The flag never touches itself, and the small funnel comes within its δ of the wall but never touches it.
-    if (info.name != "flag" && info.name != "funnel") {
-      EXPECT_GT(colliding, 0u) << info.name << " must collide at δ = 0 to test this";
+      for (const auto& c : truth[k].edge_edge()) {
+        ASSERT_TRUE(contains_sorted(result.tested->edge_edge, c.pair)) << "step " << k << ": an EE pair culled";
+      }
+      ASSERT_EQ(set_difference(truth[k], result.collisions).size(), 0u) << "step " << k;
     }
   }
+  // The flag never touches itself, and the small funnel comes within its δ of the wall but never touches it.
+  if (name != "flag" && name != "funnel") {
+    EXPECT_GT(colliding, 0u) << name << " must collide at δ = 0 to test this";
+  }
 }
+
+INSTANTIATE_TEST_SUITE_P(BuiltInScenes, FclBvhOnScene, ::testing::ValuesIn(testing::procedural_scene_names()),
+                         testing::param_name);
 
 // The fold contact of two triangles sharing vertex 0 (as in full_traversal_test): FCL's own tests reject the pairs
 // that share the vertex (their cubic is identically zero) and find the others, so `fcl` reports the triangle pair.

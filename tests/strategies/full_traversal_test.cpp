@@ -12,32 +12,37 @@
 namespace ccd::strategies {
 namespace {
 
-TEST(FullTraversal, EqualsBruteForceOnEveryBuiltInSceneForAnyThreadCountAndMissesNothing) {
-  for (const auto& info : datasets::procedural_scenes()) {
-    testing::TempDir dir;
-    testing::LoadedScene loaded = testing::small_scene(info.name, dir);
-    const double scene_thickness = loaded.sequence.scene().thickness();
-    for (double thickness : {0.0, scene_thickness}) {
-      SCOPED_TRACE(info.name + ", δ = " + std::to_string(thickness));
-      const Scene scene = loaded.sequence.scene().with_thickness(thickness);
-      const auto brute = testing::run_all_steps("brute", scene, loaded.frames, 2);
-      const auto full_one = testing::run_all_steps("full", scene, loaded.frames, 1);
-      const auto full_two = testing::run_all_steps("full", scene, loaded.frames, 2);
-      std::size_t colliding = 0;
-      for (std::size_t k = 0; k < brute.size(); ++k) {
-        ASSERT_TRUE(full_one[k].same_pairs(brute[k])) << "step " << k << ": full " << full_one[k].size() << ", brute " << brute[k].size();
-        ASSERT_TRUE(full_one[k].same_pairs(full_two[k])) << "step " << k << ": 1 and 2 threads differ";
-        const auto truth = reference::compute_step_truth(scene, loaded.frames[k], loaded.frames[k + 1], {thickness, false, {}});
-        const CollisionSet missed = set_difference(truth.collisions, full_one[k]);
-        ASSERT_EQ(missed.size(), 0u) << "step " << k << ": full missed " << missed.size() << " of " << truth.collisions.size();
-        colliding += truth.collisions.size();
-      }
-      if (thickness > 0 && info.name != "flag") {
-        EXPECT_GT(colliding, 0u) << "the scene must collide somewhere to test this";
-      }
+// One test per built-in scene, so that ctest spreads them over the cores.
+class FullTraversalOnScene : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(FullTraversalOnScene, EqualsBruteForceForAnyThreadCountAndMissesNothing) {
+  const std::string name = GetParam();
+  testing::TempDir dir;
+  testing::LoadedScene loaded = testing::small_scene(name, dir);
+  const double scene_thickness = loaded.sequence.scene().thickness();
+  for (double thickness : {0.0, scene_thickness}) {
+    SCOPED_TRACE(name + ", δ = " + std::to_string(thickness));
+    const Scene scene = loaded.sequence.scene().with_thickness(thickness);
+    const auto brute = testing::run_all_steps("brute", scene, loaded.frames, 2);
+    const auto full_one = testing::run_all_steps("full", scene, loaded.frames, 1);
+    const auto full_two = testing::run_all_steps("full", scene, loaded.frames, 2);
+    std::size_t colliding = 0;
+    for (std::size_t k = 0; k < brute.size(); ++k) {
+      ASSERT_TRUE(full_one[k].same_pairs(brute[k])) << "step " << k << ": full " << full_one[k].size() << ", brute " << brute[k].size();
+      ASSERT_TRUE(full_one[k].same_pairs(full_two[k])) << "step " << k << ": 1 and 2 threads differ";
+      const auto truth = reference::compute_step_truth(scene, loaded.frames[k], loaded.frames[k + 1], {thickness, false, {}});
+      const CollisionSet missed = set_difference(truth.collisions, full_one[k]);
+      ASSERT_EQ(missed.size(), 0u) << "step " << k << ": full missed " << missed.size() << " of " << truth.collisions.size();
+      colliding += truth.collisions.size();
+    }
+    if (thickness > 0 && name != "flag") {
+      EXPECT_GT(colliding, 0u) << "the scene must collide somewhere to test this";
     }
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(BuiltInScenes, FullTraversalOnScene, ::testing::ValuesIn(testing::procedural_scene_names()),
+                         testing::param_name);
 
 // Two triangles sharing vertex 0 whose other corners meet: the classic fold contact. Culling them for being
 // adjacent would miss it (DESIGN.md §1); only A = B may be skipped.

@@ -34,10 +34,13 @@ void expect_no_miss(const NarrowPhase& variant, datasets::QueryKind kind, const 
                                                      << testing::rational_rows(rows, 1);
 }
 
-TEST(Conservative, NoMissOnTheSharedDataAtZeroAndPositiveThickness) {
+// One test per data folder, so that ctest spreads them over the cores.
+class ConservativeOnData : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ConservativeOnData, NoMissAtZeroAndPositiveThickness) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   const auto conservative = make_narrow_phase("conservative");
-  for (const auto& path : datasets::discover_query_files({data / "sample-queries", data / "scalable-ccd-sample"})) {
+  for (const auto& path : datasets::discover_query_files({data / GetParam()})) {
     const datasets::QueryFile file = datasets::read_query_file(path);
     for (std::size_t q = 0; q < file.queries.size(); ++q) {
       const datasets::Query& query = file.queries[q];
@@ -54,6 +57,10 @@ TEST(Conservative, NoMissOnTheSharedDataAtZeroAndPositiveThickness) {
     }
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(SharedData, ConservativeOnData,
+                         ::testing::Values("sample-queries", "scalable-ccd-sample/cloth-funnel", "scalable-ccd-sample/rod-twist"),
+                         testing::param_name);
 
 TEST(Conservative, NoMissOnTheWholeExtremesSuite) {
   const auto conservative = make_narrow_phase("conservative");

@@ -27,6 +27,13 @@ inline std::vector<CollisionSet> run_all_steps(const std::string& spec, const Sc
   return sets;
 }
 
+/// The built-in scenes' names, for tests parametrized over them.
+inline std::vector<std::string> procedural_scene_names() {
+  std::vector<std::string> names;
+  for (const auto& info : datasets::procedural_scenes()) names.push_back(info.name);
+  return names;
+}
+
 struct LoadedScene {
   datasets::SceneSequence sequence;
   std::vector<std::vector<Vec3>> frames;

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -48,6 +49,14 @@ std::string error_message(Call&& call) {
   }
   ADD_FAILURE() << "expected an exception";
   return "";
+}
+
+/// Names an instance of a test parametrized over strings by its parameter (test names allow letters, digits and
+/// '_' only: "spinning-ball" becomes spinning_ball).
+inline std::string param_name(const ::testing::TestParamInfo<std::string>& param) {
+  std::string name = param.param;
+  for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return name;
 }
 
 /// The external data folder, when present with the expected content; otherwise nullopt and the reason.

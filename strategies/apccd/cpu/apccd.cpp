@@ -147,9 +147,6 @@ class Apccd final : public Strategy {
     std::vector<bvh::TrianglePair> admissible;
     {
       ScopedStageTimer timer(result.stages, "front end");
-      std::vector<bvh::TrianglePair> candidates;
-      candidates.reserve(pending_.size() + across.size());
-      std::merge(pending_.begin(), pending_.end(), across.begin(), across.end(), std::back_inserter(candidates));
       if (settings_.heuristic) {
         // Admissible: the two triangles' fresh swept boxes, widened by δ/2, overlap this step. Each face's box is
         // computed once per step; candidate pairs then only compare two boxes.
@@ -157,15 +154,20 @@ class Apccd final : public Strategy {
         tbb::parallel_for(std::size_t{0}, topology.num_faces(), [&](std::size_t f) {
           face_boxes[f] = bvh::swept_face_box(topology.face(static_cast<FaceId>(f)), step.x0, step.x1, half);
         });
-        std::vector<char> keep(candidates.size(), 0);
-        tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t i) {
-          keep[i] = face_boxes[candidates[i].first].intersects(face_boxes[candidates[i].second]) ? 1 : 0;
-        });
-        for (std::size_t i = 0; i < candidates.size(); ++i) {
-          if (keep[i]) admissible.push_back(candidates[i]);
+        // The pending list and this step's object pairs are filtered in place of a merged copy: the back end's
+        // answer does not depend on the order of its candidates.
+        for (const auto* list : {&pending_, &across}) {
+          std::vector<char> keep(list->size(), 0);
+          tbb::parallel_for(std::size_t{0}, list->size(), [&](std::size_t i) {
+            keep[i] = face_boxes[(*list)[i].first].intersects(face_boxes[(*list)[i].second]) ? 1 : 0;
+          });
+          for (std::size_t i = 0; i < list->size(); ++i) {
+            if (keep[i]) admissible.push_back((*list)[i]);
+          }
         }
       } else {
-        admissible = std::move(candidates);
+        admissible = pending_;
+        admissible.insert(admissible.end(), across.begin(), across.end());
       }
     }
     ElementaryOutcome outcome;
