@@ -1,5 +1,7 @@
 #include "strategies/narrowphase/inclusion.hpp"
 
+#include "strategies/narrowphase/primitive_distance.hpp"
+
 #include "strategies/narrowphase/coplanarity.hpp"
 
 #include <algorithm>
@@ -353,6 +355,7 @@ class InclusionTest final : public NarrowPhase {
   /// lower bound of its TOI is searched, with a small budget. Stage 3: the full search (depth first to a contact
   /// or to proof of none, then earliest first for the TOI).
   NarrowPhaseResult test(const PairRows& rows, double thickness, bool vertex_face) const {
+    if (within_thickness_at_start(rows, thickness, vertex_face)) return {true, 0.0, false, 0.0};
     InclusionSearch search(rows, thickness, vertex_face, settings_);
     SubBox low, high;
     double achieved = 0;
@@ -366,6 +369,18 @@ class InclusionTest final : public NarrowPhase {
       return result;
     }
     return search.full_search();
+  }
+
+  /// Stage 0, for δ > 0: a pair already within δ at t = 0 (resting contact) collides, and 0 is its TOI. The
+  /// distance is to a point of each closed primitive, so rounding can only move it by a few ulps of the
+  /// coordinates; the margin of 1e-10 of their squared size is far beyond that. At δ = 0 it never fires.
+  static bool within_thickness_at_start(const PairRows& r, double thickness, bool vertex_face) {
+    if (!(thickness > 0)) return false;
+    double scale = 0;
+    for (int i = 0; i < 4; ++i) scale = std::max(scale, r[i].cwiseAbs().maxCoeff());
+    const double squared = vertex_face ? point_triangle_squared_distance<double>(r[0], r[1], r[2], r[3])
+                                       : segment_segment_squared_distance<double>(r[0], r[1], r[2], r[3]);
+    return squared <= thickness * thickness - 1e-10 * scale * scale;
   }
 
   /// Boxes spent bounding the TOI below once a contact is proven.
