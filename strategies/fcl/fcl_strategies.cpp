@@ -17,7 +17,6 @@
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
-#include <variant>
 
 namespace ccd::strategies {
 namespace {
