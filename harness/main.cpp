@@ -126,7 +126,8 @@ int main(int argc, char** argv) {
       "(inflation by a vertex's own speed and by its object's mean speed, per frame left in the session),\n"
       "dangling_max=0.05 (fraction of dangling vertices that ends a session), pending_max=4 (pending pairs per\n"
       "admissible pair that ends a session), heuristic=on (front end),\n"
-      "history=off. Narrow-phase keys go after the strategy's: apccd+cubic64:nf_max=4:eta=1e-5.\n"
+      "history=off, object_pairs=fresh (pairs across objects from tight trees refitted every step; session: from\n"
+      "the session's inflated trees). Narrow-phase keys go after the strategy's: apccd+cubic64:nf_max=4:eta=1e-5.\n"
       "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
   run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper");
   run->add_option("--scene", run_scene, "a scene file (or folder with scene.json)");
