@@ -125,7 +125,8 @@ int main(int argc, char** argv) {
       "apccd knobs (defaults): skip=on, nf_min=1, nf_max=8 (session length bounds), local=1.0 and global=0.25\n"
       "(inflation by a vertex's own speed and by its object's mean speed, per frame left in the session),\n"
       "dangling_max=0.05 (fraction of dangling vertices that ends a session), pending_max=4 (pending pairs per\n"
-      "admissible pair that ends a session), heuristic=on (front end),\n"
+      "admissible pair that ends a session), inflation_max=0.5 (a session is shortened so that the mean budget\n"
+      "stays within this fraction of the mean edge length), heuristic=on (front end),\n"
       "history=off, object_pairs=fresh (pairs across objects from tight trees refitted every step; session: from\n"
       "the session's inflated trees). Narrow-phase keys go after the strategy's: apccd+cubic64:nf_max=4:eta=1e-5.\n"
       "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");

@@ -15,8 +15,8 @@ def label(strategy):
     head, _, keys = strategy.partition(":")
     narrow = head.split("+")[1] if "+" in head else ""
     knobs = [k for k in keys.split(":") if k.split("=")[0] in
-             {"skip", "nf_min", "nf_max", "local", "global", "dangling_max", "pending_max", "heuristic", "history", "object_pairs"}]
-    defaults = {"skip=on", "nf_min=1", "nf_max=8", "local=1", "global=0.25", "dangling_max=0.05", "pending_max=4", "heuristic=on", "history=off", "object_pairs=fresh"}
+             {"skip", "nf_min", "nf_max", "local", "global", "dangling_max", "pending_max", "heuristic", "history", "object_pairs", "inflation_max"}]
+    defaults = {"skip=on", "nf_min=1", "nf_max=8", "local=1", "global=0.25", "dangling_max=0.05", "pending_max=4", "heuristic=on", "history=off", "object_pairs=fresh", "inflation_max=0.5"}
     changed = [k for k in knobs if k not in defaults]
     return f"{head.split('+')[0]}+{narrow}" + (" " + " ".join(changed) if changed else "")
 

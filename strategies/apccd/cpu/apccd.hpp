@@ -27,7 +27,8 @@
 ///
 /// Knobs (spec keys, all recorded in the resolved name): skip (on/off), nf_min, nf_max, local, global,
 /// dangling_max (fraction of dangling vertices that ends a session), pending_max (pending pairs per admissible
-/// pair that ends a session), heuristic (front end on/off), history, object_pairs (fresh/session).
+/// pair that ends a session), inflation_max (mean budget per mean edge length that shortens a session), heuristic
+/// (front end on/off), history, object_pairs (fresh/session).
 
 #include "strategies/narrowphase/narrow_phase.hpp"
 #include "strategies/strategy.hpp"
@@ -46,6 +47,9 @@ struct ApccdSettings {
   /// A session whose pending list outgrows `pending_max` times the pairs the front end admits is too costly: it
   /// ends, and nf halves.
   double pending_max = 4.0;
+  /// A session is shortened so that a self-colliding object's mean budget stays within this fraction of its mean
+  /// edge length (0: every frame is a session start).
+  double inflation_max = 0.5;
   /// The front end: candidate triangle pairs whose fresh swept boxes overlap, then elementary pairs the distance
   /// heuristic (separation_filter.hpp) cannot prove apart.
   bool heuristic = true;
