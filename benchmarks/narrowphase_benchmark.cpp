@@ -2,6 +2,7 @@
 // colliding), and the candidate pairs a broad phase hands over on a whole step (overlapping swept boxes of the
 // cloth-funnel sample step, mostly far apart). Needs the public data (CCDBENCH_DATA_DIR).
 
+#include "core/step.hpp"
 #include "datasets/data_dir.hpp"
 #include "datasets/query_file.hpp"
 #include "datasets/sample_step.hpp"
@@ -42,17 +43,15 @@ void broad_phase_pairs(const datasets::SampleStep& step, Pairs& vf, Pairs& ee, s
     for (FaceId f = 0; f < topology.num_faces() && vf.size() < limit; ++f) {
       const Face& face = topology.face(f);
       if (v == face[0] || v == face[1] || v == face[2] || !box.intersects(face_boxes[f])) continue;
-      vf.push_back({step.x0[v], step.x0[face[0]], step.x0[face[1]], step.x0[face[2]], step.x1[v], step.x1[face[0]],
-                    step.x1[face[1]], step.x1[face[2]]});
+      vf.push_back(pair_rows(topology, step.x0, step.x1, VertexFacePair{v, f}));
     }
   }
   for (EdgeId a = 0; a < topology.num_edges() && ee.size() < limit; a += 7) {
     const Edge ea = topology.edge(a);
     for (EdgeId b = a + 1; b < topology.num_edges() && ee.size() < limit; ++b) {
       const Edge eb = topology.edge(b);
-      if (ea.v0 == eb.v0 || ea.v0 == eb.v1 || ea.v1 == eb.v0 || ea.v1 == eb.v1 || !edge_boxes[a].intersects(edge_boxes[b])) continue;
-      ee.push_back({step.x0[ea.v0], step.x0[ea.v1], step.x0[eb.v0], step.x0[eb.v1], step.x1[ea.v0], step.x1[ea.v1],
-                    step.x1[eb.v0], step.x1[eb.v1]});
+      if (shares_vertex(ea, eb) || !edge_boxes[a].intersects(edge_boxes[b])) continue;
+      ee.push_back(pair_rows(topology, step.x0, step.x1, EdgeEdgePair{ea, eb}));
     }
   }
 }

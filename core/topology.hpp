@@ -25,6 +25,9 @@ struct Edge {
 /// The edge between two distinct vertices, in canonical (v0 < v1) order.
 inline Edge make_edge(VertexId a, VertexId b) { return a < b ? Edge{a, b} : Edge{b, a}; }
 
+/// Whether two edges have an endpoint in common (such edge pairs are adjacent, never elementary pairs).
+inline bool shares_vertex(const Edge& a, const Edge& b) { return a.v0 == b.v0 || a.v0 == b.v1 || a.v1 == b.v0 || a.v1 == b.v1; }
+
 /// Why a face list is not a valid triangle mesh: the first bad face and the reason.
 struct FaceListProblem {
   FaceId face;

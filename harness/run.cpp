@@ -148,15 +148,6 @@ struct SceneData {
   std::vector<CollisionSet> truth;  // per step, when verifying
 };
 
-/// Rows of an elementary pair in the query files' order (datasets/query_file.hpp).
-std::array<Vec3, 8> pair_rows(const VertexFacePair& p, const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1) {
-  const Face& f = scene.topology().face(p.f);
-  return {x0[p.v], x0[f[0]], x0[f[1]], x0[f[2]], x1[p.v], x1[f[0]], x1[f[1]], x1[f[2]]};
-}
-std::array<Vec3, 8> pair_rows(const EdgeEdgePair& p, const Scene&, std::span<const Vec3> x0, std::span<const Vec3> x1) {
-  return {x0[p.a.v0], x0[p.a.v1], x0[p.b.v0], x0[p.b.v1], x1[p.a.v0], x1[p.a.v1], x1[p.b.v0], x1[p.b.v1]};
-}
-
 datasets::Query as_query(const std::array<Vec3, 8>& rows) {
   datasets::Query query;
   for (int i = 0; i < 8; ++i) {
@@ -197,7 +188,7 @@ json record_misses(const Scene& scene, const std::vector<std::vector<Vec3>>& fra
     const CollisionSet missed = set_difference(truth[k], results[k].collisions);
     const strategies::TestedPairs* audit = k < tested.size() ? &tested[k] : nullptr;
     auto note = [&](const auto& pair, auto& by_cause) {
-      const auto rows = pair_rows(pair, scene, frames[k], frames[k + 1]);
+      const auto rows = pair_rows(scene.topology(), frames[k], frames[k + 1], pair);
       const std::string cause = miss_cause(pair, fcl, audit, rows);
       ++counts[cause];
       if (by_cause[cause].size() < kMaxPerFile) by_cause[cause].push_back(as_query(rows));

@@ -1,5 +1,7 @@
 #include "reference/step_truth.hpp"
 
+#include "core/step.hpp"
+
 #include "reference/elementary_pair.hpp"
 
 #include <tbb/blocked_range.h>
@@ -92,18 +94,6 @@ std::vector<Pair> sweep(std::vector<SweepEntry> entries, int axis, Emit emit) {
   return pairs;
 }
 
-bool shares_vertex(const Edge& a, const Edge& b) { return a.v0 == b.v0 || a.v0 == b.v1 || a.v1 == b.v0 || a.v1 == b.v1; }
-
-std::array<Vec3, 8> vertex_face_rows(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                                     const VertexFacePair& p) {
-  const Face& f = scene.topology().face(p.f);
-  return {x0[p.v], x0[f[0]], x0[f[1]], x0[f[2]], x1[p.v], x1[f[0]], x1[f[1]], x1[f[2]]};
-}
-
-std::array<Vec3, 8> edge_edge_rows(std::span<const Vec3> x0, std::span<const Vec3> x1, const EdgeEdgePair& p) {
-  return {x0[p.a.v0], x0[p.a.v1], x0[p.b.v0], x0[p.b.v1], x1[p.a.v0], x1[p.a.v1], x1[p.b.v0], x1[p.b.v1]};
-}
-
 double milliseconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -185,11 +175,11 @@ StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::
         if (i < vf_pairs.size()) {
           const VertexFacePair& pair = vf_pairs[i];
           record(local,
-                 decide(PairKind::vertex_face, vertex_face_rows(scene, x0, x1, pair), request.thickness, decision_request),
+                 decide(PairKind::vertex_face, pair_rows(scene.topology(), x0, x1, pair), request.thickness, decision_request),
                  pair);
         } else {
           const EdgeEdgePair& pair = ee_pairs[i - vf_pairs.size()];
-          record(local, decide(PairKind::edge_edge, edge_edge_rows(x0, x1, pair), request.thickness, decision_request),
+          record(local, decide(PairKind::edge_edge, pair_rows(scene.topology(), x0, x1, pair), request.thickness, decision_request),
                  pair);
         }
       }

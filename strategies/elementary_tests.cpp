@@ -46,13 +46,13 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     auto vertex_against_face = [&](VertexId v, FaceId f) {
       const Face& face = topology.face(f);
       if (corner_of(v, face) || !vertex_boxes[v].intersects(box_of({face[0], face[1], face[2]}))) return;
-      const narrowphase::PairRows rows{x0[v], x0[face[0]], x0[face[1]], x0[face[2]], x1[v], x1[face[0]], x1[face[1]], x1[face[2]]};
+      const VertexFacePair pair{v, f};
+      const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
       if (separation_filter && provably_apart(rows, true, thickness)) {
         ++local.filtered;
         return;
       }
       ++local.tests;
-      const VertexFacePair pair{v, f};
       if (audit) local.tested.vertex_face.push_back(pair);
       const narrowphase::NarrowPhaseResult r = narrow_phase.vertex_face(rows, thickness);
       if (r.collides) local.collisions.add(pair, r.toi);
@@ -70,11 +70,10 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
         for (int j_edge = 0; j_edge < 3; ++j_edge) {
           if (!(masks[b] & owns_edge_bit(j_edge))) continue;
           const Edge eb = topology.edge(topology.face_edges(b)[j_edge]);
-          if (ea.v0 == eb.v0 || ea.v0 == eb.v1 || ea.v1 == eb.v0 || ea.v1 == eb.v1) continue;
+          if (shares_vertex(ea, eb)) continue;
           if (!box_of({ea.v0, ea.v1}).intersects(box_of({eb.v0, eb.v1}))) continue;
           const EdgeEdgePair pair = make_edge_edge_pair(ea, eb);
-          const narrowphase::PairRows rows{x0[pair.a.v0], x0[pair.a.v1], x0[pair.b.v0], x0[pair.b.v1],
-                                           x1[pair.a.v0], x1[pair.a.v1], x1[pair.b.v0], x1[pair.b.v1]};
+          const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
           if (separation_filter && provably_apart(rows, false, thickness)) {
             ++local.filtered;
             continue;
@@ -116,7 +115,7 @@ void append_all_elementary_pairs(const MeshTopology& topology, FaceId a, FaceId 
     const Edge ea = topology.edge(i);
     for (EdgeId j : topology.face_edges(b)) {
       const Edge eb = topology.edge(j);
-      if (ea.v0 == eb.v0 || ea.v0 == eb.v1 || ea.v1 == eb.v0 || ea.v1 == eb.v1) continue;
+      if (shares_vertex(ea, eb)) continue;
       out.edge_edge.push_back(make_edge_edge_pair(ea, eb));
     }
   }

@@ -1,6 +1,7 @@
 // Whole-step truth on small hand-made scenes, checked against brute force over every elementary pair.
 
 #include "core/scene.hpp"
+#include "core/step.hpp"
 #include "reference/elementary_pair.hpp"
 #include "reference/step_truth.hpp"
 #include "tests/support/test_support.hpp"
@@ -23,18 +24,17 @@ CollisionSet brute_force_truth(const Scene& scene, std::span<const Vec3> x0, std
       const Face& face = topology.face(f);
       if (v == face[0] || v == face[1] || v == face[2]) continue;
       if (!scene.may_collide(scene.object_of_vertex(v), scene.object_of_face(f))) continue;
-      const std::array<Vec3, 8> rows = {x0[v], x0[face[0]], x0[face[1]], x0[face[2]],
-                                        x1[v], x1[face[0]], x1[face[1]], x1[face[2]]};
-      if (decide(PairKind::vertex_face, rows, delta).collides) truth.add(VertexFacePair{v, f});
+      if (decide(PairKind::vertex_face, pair_rows(topology, x0, x1, VertexFacePair{v, f}), delta).collides) truth.add(VertexFacePair{v, f});
     }
   }
   for (EdgeId i = 0; i < topology.num_edges(); ++i) {
     for (EdgeId j = i + 1; j < topology.num_edges(); ++j) {
       const Edge a = topology.edge(i), b = topology.edge(j);
-      if (a.v0 == b.v0 || a.v0 == b.v1 || a.v1 == b.v0 || a.v1 == b.v1) continue;
+      if (shares_vertex(a, b)) continue;
       if (!scene.may_collide(scene.object_of_vertex(a.v0), scene.object_of_vertex(b.v0))) continue;
-      const std::array<Vec3, 8> rows = {x0[a.v0], x0[a.v1], x0[b.v0], x0[b.v1], x1[a.v0], x1[a.v1], x1[b.v0], x1[b.v1]};
-      if (decide(PairKind::edge_edge, rows, delta).collides) truth.add(make_edge_edge_pair(a, b));
+      if (decide(PairKind::edge_edge, pair_rows(topology, x0, x1, EdgeEdgePair{a, b}), delta).collides) {
+        truth.add(make_edge_edge_pair(a, b));
+      }
     }
   }
   truth.normalize();
