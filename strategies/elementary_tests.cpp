@@ -105,6 +105,20 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   return outcome;
 }
 
+void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::span<const AssignmentMask> masks,
+                      std::span<const bvh::TrianglePair> candidates, const StepView& step,
+                      const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit) {
+  ElementaryOutcome outcome;
+  {
+    ScopedStageTimer timer(result.stages, "narrow phase");
+    outcome = test_candidates(topology, masks, candidates, step, narrow_phase, thickness, audit);
+  }
+  result.collisions = std::move(outcome.collisions);
+  result.tested = std::move(outcome.tested);
+  result.counters.candidate_triangle_pairs = candidates.size();
+  result.counters.elementary_tests = outcome.tests;
+}
+
 void append_all_elementary_pairs(const MeshTopology& topology, FaceId a, FaceId b, TestedPairs& out) {
   for (const auto& [from, to] : {std::pair{a, b}, std::pair{b, a}}) {
     for (VertexId v : topology.face(from)) {

@@ -33,6 +33,12 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
                                   const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit,
                                   bool separation_filter = false);
 
+/// The last stage of a strategy that hands its candidate triangle pairs to a narrow phase: test_candidates, timed as
+/// "narrow phase", with its collisions, tested pairs, candidate count and test count stored in `result`.
+void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::span<const AssignmentMask> masks,
+                      std::span<const bvh::TrianglePair> candidates, const StepView& step,
+                      const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit);
+
 /// Appends every elementary pair of triangles a and b, not only those the masks give: their six vertices against
 /// the other face and their nine edge pairs, skipping pairs that share a vertex (unsorted; may repeat across calls).
 /// What a triangle pair "contains" when a strategy answers with triangle pairs.

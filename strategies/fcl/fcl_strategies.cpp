@@ -58,8 +58,8 @@ class FclModels {
       const SceneObject& object = scene_->object(id);
       if (object.kind == ObjectKind::static_object) continue;
       fcl::BVHModel<BV>& model = *models_[id];
-      const auto before = local_points(object, step.x0);
-      if (!std::equal(before.begin(), before.end(), model.vertices)) update_to(model, before);
+      const auto before = step.x0.subspan(object.first_vertex, object.num_vertices);
+      if (!std::equal(before.begin(), before.end(), model.vertices)) update_to(model, local_points(object, step.x0));
       update_to(model, local_points(object, step.x1));
     }
   }
@@ -126,7 +126,8 @@ void refuse_thickness(const Scene& scene, const std::string& name) {
   }
 }
 
-void sort_unique(std::vector<bvh::TrianglePair>& pairs) {
+template <class Pair>
+void sort_unique(std::vector<Pair>& pairs) {
   tbb::parallel_sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }
@@ -200,8 +201,8 @@ class FclContinuous final : public Strategy {
       sort_unique(leaves);
       TestedPairs tested;
       for (const auto& [a, b] : leaves) append_all_elementary_pairs(scene_->topology(), a, b, tested);
-      sort_unique_pairs(tested.vertex_face);
-      sort_unique_pairs(tested.edge_edge);
+      sort_unique(tested.vertex_face);
+      sort_unique(tested.edge_edge);
       result.tested = std::move(tested);
     }
     result.counters.candidate_triangle_pairs = leaf_tests;
@@ -211,12 +212,6 @@ class FclContinuous final : public Strategy {
   }
 
  private:
-  template <class Pair>
-  static void sort_unique_pairs(std::vector<Pair>& pairs) {
-    tbb::parallel_sort(pairs.begin(), pairs.end());
-    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  }
-
   std::string bv_name_;
   const Scene* scene_ = nullptr;
   FclModels<BV> models_;
@@ -270,15 +265,7 @@ class FclBroadPhase final : public Strategy {
       for_each_traversal<BV, OverlapNode<BV>>(*scene_, models_, make_node, visit);
       sort_unique(candidates);
     }
-    ElementaryOutcome outcome;
-    {
-      ScopedStageTimer timer(result.stages, "narrow phase");
-      outcome = test_candidates(scene_->topology(), masks_, candidates, step, *narrow_phase_, 0.0, audit);
-    }
-    result.collisions = std::move(outcome.collisions);
-    result.tested = std::move(outcome.tested);
-    result.counters.candidate_triangle_pairs = candidates.size();
-    result.counters.elementary_tests = outcome.tests;
+    run_narrow_phase(result, scene_->topology(), masks_, candidates, step, *narrow_phase_, 0.0, audit);
     result.counters.history_bytes = models_.bytes();
     return result;
   }

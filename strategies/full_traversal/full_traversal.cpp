@@ -31,15 +31,7 @@ class FullTraversal final : public Strategy {
       ScopedStageTimer timer(result.stages, "traversal");
       candidates = hierarchies_.candidates();
     }
-    ElementaryOutcome outcome;
-    {
-      ScopedStageTimer timer(result.stages, "narrow phase");
-      outcome = test_candidates(scene_->topology(), masks_, candidates, step, *narrow_phase_, scene_->thickness(), audit);
-    }
-    result.collisions = std::move(outcome.collisions);
-    result.tested = std::move(outcome.tested);
-    result.counters.candidate_triangle_pairs = candidates.size();
-    result.counters.elementary_tests = outcome.tests;
+    run_narrow_phase(result, scene_->topology(), masks_, candidates, step, *narrow_phase_, scene_->thickness(), audit);
     result.counters.history_bytes = hierarchies_.bytes();
     return result;
   }
@@ -75,15 +67,7 @@ class BruteForce final : public Strategy {
 
   StepResult step(const StepView& step, bool audit) override {
     StepResult result;
-    ElementaryOutcome outcome;
-    {
-      ScopedStageTimer timer(result.stages, "narrow phase");
-      outcome = test_candidates(scene_->topology(), masks_, pairs_, step, *narrow_phase_, scene_->thickness(), audit);
-    }
-    result.collisions = std::move(outcome.collisions);
-    result.tested = std::move(outcome.tested);
-    result.counters.candidate_triangle_pairs = pairs_.size();
-    result.counters.elementary_tests = outcome.tests;
+    run_narrow_phase(result, scene_->topology(), masks_, pairs_, step, *narrow_phase_, scene_->thickness(), audit);
     return result;
   }
 
