@@ -13,19 +13,37 @@
 
 namespace ccd::narrowphase {
 
-/// Coefficients c0..c3 of (B × C)·P as a cubic in t, in the precision T, from positions at t = 0 (x0) and their
-/// change over the step (dx):
+/// The vectors of the coplanarity condition over the step, from positions at t = 0 (x0) and their change (dx):
 ///   VF (p, a, b, c): B = b - a, C = c - a, P = p - a.   EE (a0, a1, b0, b1): B = a1 - a0, C = b1 - b0, P = b0 - a0.
+/// Each moves linearly (B(t) = B0 + t·dB), so n(t) = B(t) × C(t) = n0 + n1 t + n2 t² and n(t)·P(t) is a cubic.
+template <class T>
+struct CoplanarityTerms {
+  using V = Eigen::Matrix<T, 3, 1>;
+  V B0, dB, C0, dC, P0, dP;
+  V n0, n1, n2;
+
+  CoplanarityTerms(const std::array<V, 4>& x0, const std::array<V, 4>& dx, bool vertex_face) {
+    auto difference = [&](int to, int from, V& start, V& change) {
+      start = x0[to] - x0[from];
+      change = dx[to] - dx[from];
+    };
+    difference(vertex_face ? 2 : 1, vertex_face ? 1 : 0, B0, dB);
+    difference(3, vertex_face ? 1 : 2, C0, dC);
+    difference(vertex_face ? 0 : 2, vertex_face ? 1 : 0, P0, dP);
+    n0 = B0.cross(C0);
+    n1 = B0.cross(dC) + dB.cross(C0);
+    n2 = dB.cross(dC);
+  }
+
+  /// Coefficients c0..c3 of n(t)·P(t).
+  std::array<T, 4> cubic() const { return {n0.dot(P0), n0.dot(dP) + n1.dot(P0), n1.dot(dP) + n2.dot(P0), n2.dot(dP)}; }
+};
+
+/// Coefficients c0..c3 of (B × C)·P as a cubic in t, in the precision T (CoplanarityTerms).
 template <class T>
 std::array<T, 4> coplanarity_cubic(const std::array<Eigen::Matrix<T, 3, 1>, 4>& x0,
                                    const std::array<Eigen::Matrix<T, 3, 1>, 4>& dx, bool vertex_face) {
-  using V = Eigen::Matrix<T, 3, 1>;
-  auto difference = [&](int to, int from) { return std::pair<V, V>(x0[to] - x0[from], dx[to] - dx[from]); };
-  const auto [B0, dB] = vertex_face ? difference(2, 1) : difference(1, 0);
-  const auto [C0, dC] = vertex_face ? difference(3, 1) : difference(3, 2);
-  const auto [P0, dP] = vertex_face ? difference(0, 1) : difference(2, 0);
-  const V n0 = B0.cross(C0), n1 = B0.cross(dC) + dB.cross(C0), n2 = dB.cross(dC);
-  return {n0.dot(P0), n0.dot(dP) + n1.dot(P0), n1.dot(dP) + n2.dot(P0), n2.dot(dP)};
+  return CoplanarityTerms<T>(x0, dx, vertex_face).cubic();
 }
 
 /// Candidate times, increasing: the cubic's sign-change roots in [0, 1], plus 0 and 1 (at most 5). [0, 1] is split
