@@ -262,30 +262,29 @@ class Apccd final : public Strategy {
       ScopedStageTimer timer(result.stages, "update");
       anchor_ = relative1_;
       budget_.assign(topology.num_vertices(), 0.0);
-      // Each vertex's budget per frame: its own relative motion (local) and its object's mean (global), at least δ
-      // (at rest, motion-proportional budgets are near zero and any jitter would dangle).
-      std::vector<double> mean_motion(scene_->objects().size(), 0.0);
+      // Each vertex's budget per frame first: its own relative motion (local) and its object's mean (global), at
+      // least δ (at rest, motion-proportional budgets are near zero and any jitter would dangle). The session's
+      // length follows from them, and then the budgets for the frames left.
       for (ObjectId id = 0; id < scene_->objects().size(); ++id) {
         const SceneObject& object = scene_->object(id);
         if (object.kind == ObjectKind::static_object) continue;
+        double mean_motion = 0;
         for (std::size_t i = 0; i < object.num_vertices; ++i) {
           const std::size_t v = object.first_vertex + i;
-          mean_motion[id] += (relative1_[v] - relative0_[v]).norm();
+          mean_motion += (relative1_[v] - relative0_[v]).norm();
         }
-        mean_motion[id] /= static_cast<double>(std::max<std::size_t>(object.num_vertices, 1));
+        mean_motion /= static_cast<double>(std::max<std::size_t>(object.num_vertices, 1));
+        tbb::parallel_for(std::size_t{0}, object.num_vertices, [&](std::size_t i) {
+          const std::size_t v = object.first_vertex + i;
+          budget_[v] = std::max(scene_->thickness(), settings_.local * (relative1_[v] - relative0_[v]).norm() + settings_.global * mean_motion);
+        });
       }
-      auto per_frame = [&](ObjectId id, std::size_t v) {
-        return std::max(scene_->thickness(), settings_.local * (relative1_[v] - relative0_[v]).norm() + settings_.global * mean_motion[id]);
-      };
-      limit_session_by_inflation(per_frame);
+      limit_session_by_inflation();
       const double frames_left = static_cast<double>(nf_ - 1);
       for (ObjectId id = 0; id < scene_->objects().size(); ++id) {
         const SceneObject& object = scene_->object(id);
         if (object.kind == ObjectKind::static_object) continue;
-        tbb::parallel_for(std::size_t{0}, object.num_vertices, [&](std::size_t i) {
-          const std::size_t v = object.first_vertex + i;
-          budget_[v] = frames_left * per_frame(id, v);
-        });
+        tbb::parallel_for(std::size_t{0}, object.num_vertices, [&](std::size_t i) { budget_[object.first_vertex + i] *= frames_left; });
         std::vector<double> inflation(object.num_faces);
         tbb::parallel_for(std::size_t{0}, object.num_faces, [&](std::size_t i) {
           const Face& face = topology.face(static_cast<FaceId>(object.first_face + i));
@@ -304,14 +303,14 @@ class Apccd final : public Strategy {
   /// edge length: beyond that, inflated leaves overlap their neighbours' neighbours and the session's traversal and
   /// pending list cost more than a fresh traversal each frame (measured at resolution 100, where cloth moves more
   /// than an edge per frame relative to itself: apccd ran at 0.65x full with unlimited sessions).
-  template <class PerFrame>
-  void limit_session_by_inflation(const PerFrame& per_frame) {
+  /// Reads the per-frame budgets in budget_.
+  void limit_session_by_inflation() {
     int allowed = settings_.nf_max;
     for (ObjectId id = 0; id < scene_->objects().size(); ++id) {
       const SceneObject& object = scene_->object(id);
       if (object.kind == ObjectKind::static_object || !object.self_collision || object.num_vertices == 0) continue;
       double mean_budget = 0;
-      for (std::size_t i = 0; i < object.num_vertices; ++i) mean_budget += per_frame(id, object.first_vertex + i);
+      for (std::size_t i = 0; i < object.num_vertices; ++i) mean_budget += budget_[object.first_vertex + i];
       mean_budget /= static_cast<double>(object.num_vertices);
       const double frames = settings_.inflation_max * mean_edge_[id] / std::max(mean_budget, 1e-300);
       allowed = std::min(allowed, 1 + static_cast<int>(std::min(frames, 1e6)));
