@@ -50,6 +50,10 @@ using NarrowPhaseParameters = std::map<std::string, std::string>;
 ///         and for a value out of range.
 std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const NarrowPhaseParameters& parameters = {});
 
+/// The value of spec key `key` of `owner` as a number >= minimum (the whole text must be a finite number).
+/// @throws std::invalid_argument "OWNER: KEY=VALUE must be a number >= MINIMUM" otherwise.
+double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, double minimum);
+
 /// Splits `HEAD[:key=value...]` into HEAD and its parameters. @throws std::invalid_argument for a malformed key.
 std::pair<std::string, NarrowPhaseParameters> split_spec(const std::string& spec);
 

@@ -19,16 +19,7 @@ class ParameterReader {
   double number(const std::string& key, double fallback, double minimum) {
     const auto it = parameters_.find(key);
     if (it == parameters_.end()) return fallback;
-    std::size_t used = 0;
-    double value = 0;
-    try {
-      value = std::stod(it->second, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != it->second.size() || !std::isfinite(value) || value < minimum) {
-      throw std::invalid_argument(variant_ + ": " + key + "=" + it->second + " must be a number >= " + std::to_string(minimum));
-    }
+    const double value = parse_spec_number(variant_, key, it->second, minimum);
     parameters_.erase(it);
     return value;
   }
@@ -44,6 +35,20 @@ class ParameterReader {
 };
 
 }  // namespace
+
+double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, double minimum) {
+  std::size_t used = 0;
+  double number = 0;
+  try {
+    number = std::stod(value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != value.size() || !std::isfinite(number) || number < minimum) {
+    throw std::invalid_argument(owner + ": " + key + "=" + value + " must be a number >= " + std::to_string(minimum));
+  }
+  return number;
+}
 
 std::vector<std::string> narrow_phase_names() { return {"cubic32", "cubic64", "conservative", "advancement"}; }
 

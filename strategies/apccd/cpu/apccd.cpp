@@ -24,17 +24,7 @@ bool parse_switch(const std::string& key, const std::string& value) {
 }
 
 double parse_number(const std::string& key, const std::string& value, double minimum) {
-  std::size_t used = 0;
-  double number = 0;
-  try {
-    number = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != value.size() || !std::isfinite(number) || number < minimum) {
-    throw std::invalid_argument("apccd: " + key + "=" + value + " must be a number >= " + std::to_string(minimum));
-  }
-  return number;
+  return narrowphase::parse_spec_number("apccd", key, value, minimum);
 }
 
 /// Whether a flip of orientation can be a crossing: the vertex projects into the face (VF), or the closest points
