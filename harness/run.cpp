@@ -485,7 +485,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     }
     if (pending.empty()) continue;
     // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
-    for (const std::string& spec : pending) strategies::make_strategy(spec)->init(scene, data.frames[0]);
+    for (const std::string& spec : pending) strategies::make_strategy(spec)->check_scene(scene);
     if (options.verify) {
       for (std::size_t k = 0; k < steps; ++k) {
         bool computed = false;

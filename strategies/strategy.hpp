@@ -53,6 +53,9 @@ class Strategy {
   virtual ~Strategy() = default;
   /// The resolved spec, every default filled in: the strategy's name in every result.
   virtual std::string name() const = 0;
+  /// Throws std::invalid_argument when the strategy cannot run `scene` (fcl at δ > 0), before any work; init
+  /// checks it too.
+  virtual void check_scene(const Scene&) const {}
   /// Prepares for `scene`; `first_frame` holds frame 0's global positions.
   virtual void init(const Scene& scene, std::span<const Vec3> first_frame) = 0;
   /// One step, in order. With `audit`, also returns the elementary pairs tested (outside the timed stages).

@@ -154,8 +154,10 @@ class FclContinuous final : public Strategy {
   std::string name() const override { return "fcl:bv=" + bv_name_; }
   Judging judging() const override { return Judging::triangle_pairs; }
 
+  void check_scene(const Scene& scene) const override { refuse_thickness(scene, "fcl"); }
+
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
-    refuse_thickness(scene, "fcl");
+    check_scene(scene);
     scene_ = &scene;
     models_.build(scene, first_frame);
   }
@@ -237,8 +239,10 @@ class FclBroadPhase final : public Strategy {
 
   std::string name() const override { return "fcl-bvh+" + narrow_phase_->name() + ":bv=" + bv_name_; }
 
+  void check_scene(const Scene& scene) const override { refuse_thickness(scene, "fcl-bvh"); }
+
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
-    refuse_thickness(scene, "fcl-bvh");
+    check_scene(scene);
     scene_ = &scene;
     masks_ = assign_primitives(scene.topology());
     models_.build(scene, first_frame);
