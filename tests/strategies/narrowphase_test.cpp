@@ -48,12 +48,7 @@ TEST_P(ConservativeOnData, NoMissAtZeroAndPositiveThickness) {
       const std::string where = path.string() + " query " + std::to_string(q) + " (line " + std::to_string(query.first_line) + ")";
       expect_no_miss(*conservative, file.kind, query.rounded, 0.0, where);
       // δ > 0: 1e-3 of the pair's size (the truth labels of the files are for 0; the reference decides here).
-      Vec3 lower = query.rounded[0], upper = lower;
-      for (const Vec3& r : query.rounded) {
-        lower = lower.cwiseMin(r);
-        upper = upper.cwiseMax(r);
-      }
-      expect_no_miss(*conservative, file.kind, query.rounded, 1e-3 * (upper - lower).norm(), where);
+      expect_no_miss(*conservative, file.kind, query.rounded, testing::small_thickness_for(query.rounded), where);
     }
   }
 }

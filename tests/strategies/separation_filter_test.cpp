@@ -34,12 +34,7 @@ TEST(SeparationFilter, NeverCallsACollidingPairApartOnTheSharedData) {
     const datasets::QueryFile file = datasets::read_query_file(path);
     const bool vertex_face = file.kind == datasets::QueryKind::vertex_face;
     for (const datasets::Query& query : file.queries) {
-      Vec3 lower = query.rounded[0], upper = lower;
-      for (const Vec3& r : query.rounded) {
-        lower = lower.cwiseMin(r);
-        upper = upper.cwiseMax(r);
-      }
-      for (double thickness : {0.0, 1e-3 * (upper - lower).norm()}) {
+      for (double thickness : {0.0, testing::small_thickness_for(query.rounded)}) {
         apart += check(query.rounded, vertex_face, thickness, path.string() + ":" + std::to_string(query.first_line)) ? 1 : 0;
         ++total;
       }

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cctype>
 #include <filesystem>
 #include <string>
@@ -49,6 +50,16 @@ std::string error_message(Call&& call) {
   }
   ADD_FAILURE() << "expected an exception";
   return "";
+}
+
+/// The positive thickness the data tests use for a query: 1e-3 of the diagonal of the box around its 8 rows.
+inline double small_thickness_for(const std::array<Vec3, 8>& rows) {
+  Vec3 lower = rows[0], upper = lower;
+  for (const Vec3& r : rows) {
+    lower = lower.cwiseMin(r);
+    upper = upper.cwiseMax(r);
+  }
+  return 1e-3 * (upper - lower).norm();
 }
 
 /// Names an instance of a test parametrized over strings by its parameter (test names allow letters, digits and
