@@ -6,6 +6,9 @@
 
 #include <mpfr.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace ccd::reference {
 namespace {
 
@@ -47,6 +50,128 @@ SignCondition<Interval> condition_over(PairKind kind, int index, const Positions
   return kind == PairKind::vertex_face ? vertex_face_condition(index, p.x[0], p.x[1], p.x[2], p.x[3], delta_squared)
                                        : edge_edge_condition(index, p.x[0], p.x[1], p.x[2], p.x[3], delta_squared);
 }
+
+/// The separation pre-check, tried before the sign conditions because most enumerated pairs are plainly apart
+/// and the conditions cost hundreds of interval products each (on the flag at resolution 100, 1.9 million
+/// enumerated pairs per step, 99.5% of them "no", took 88% of the truth's time in the conditions).
+///
+/// Why it is sound: along any fixed direction d, each vertex's projection d·x(t) is linear in t, so over a time
+/// piece the smallest projection of one primitive is concave and the largest of the other convex, and their gap
+/// is concave: its values at the piece's two ends bound it from below. A primitive lies in the convex hull of its
+/// vertices, so when that gap exceeds δ·|d| at both ends, every point pair is farther apart than δ over the
+/// whole piece. The direction may be any vector of doubles (how it was chosen does not matter); the projections,
+/// |d| and δ are enclosed by outward-rounded intervals, so the comparison is certified.
+class SeparationCheck {
+ public:
+  SeparationCheck(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness)
+      : kind_(kind), rows_(rows), thickness_(thickness) {}
+
+  /// True when the pair is farther apart than δ on every piece of [t0, t1] after at most `depth` halvings.
+  bool apart(double t0, double t1, int depth) const {
+    const Positions start = positions_over(rows_, Interval(t0));
+    const Positions end = positions_over(rows_, Interval(t1));
+    if (apart_on_piece(start, end, (t0 + t1) / 2)) return true;
+    const double middle = t0 + (t1 - t0) / 2;
+    if (depth <= 0 || !(t0 < middle && middle < t1)) return false;
+    return apart(t0, middle, depth - 1) && apart(middle, t1, depth - 1);
+  }
+
+ private:
+  using Direction = std::array<double, 3>;
+  struct Directions {
+    std::array<Direction, 8> d;
+    int count = 0;
+    /// Non-finite directions (from huge coordinates) are left out: intervals of infinities prove nothing.
+    void add(const Direction& v) {
+      if (std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])) d[count++] = v;
+    }
+  };
+
+  bool apart_on_piece(const Positions& start, const Positions& end, double t_middle) const {
+    const Directions candidates = directions(t_middle);
+    for (int i = 0; i < candidates.count; ++i) {
+      const Direction& d = candidates.d[i];
+      const int side = side_along(d, start);
+      if (side != 0 && side_along(d, end) == side) return true;
+    }
+    return false;
+  }
+
+  /// The first primitive is vertex 0 (vertex-face) or vertices 0-1 (edge-edge); the second the rest. +1 when
+  /// the second group's projections onto d exceed the first's by more than δ·|d|, -1 for the reverse, 0
+  /// otherwise. The concavity argument holds for one order only, so both ends must give the same side.
+  int side_along(const Direction& d, const Positions& p) const {
+    const Interval dx(d[0]), dy(d[1]), dz(d[2]);
+    std::array<Interval, 4> projection;
+    for (int k = 0; k < 4; ++k) projection[k] = dx * p.x[k].x + dy * p.x[k].y + dz * p.x[k].z;
+    const int split = kind_ == PairKind::vertex_face ? 1 : 2;
+    double first_lower = projection[0].inf(), first_upper = projection[0].sup();
+    for (int k = 1; k < split; ++k) {
+      first_lower = std::min(first_lower, projection[k].inf());
+      first_upper = std::max(first_upper, projection[k].sup());
+    }
+    double second_lower = projection[split].inf(), second_upper = projection[split].sup();
+    for (int k = split + 1; k < 4; ++k) {
+      second_lower = std::min(second_lower, projection[k].inf());
+      second_upper = std::max(second_upper, projection[k].sup());
+    }
+    // Certified upper bound of δ·|d| (rounding is upward here, and sqrt of an upper bound is an upper bound).
+    const double reach = (thickness_ * CGAL::sqrt(dx * dx + dy * dy + dz * dz)).sup();
+    const Interval gap_up = Interval(second_lower) - Interval(first_upper);
+    const Interval gap_down = Interval(first_lower) - Interval(second_upper);
+    if (gap_up.inf() > reach) return 1;
+    if (gap_down.inf() > reach) return -1;
+    return 0;
+  }
+
+  /// Candidate directions at the piece's middle time, in plain doubles: the axes, the line between the two
+  /// primitives' centroids, the primitives' common normal and, in that plane, the perpendiculars of the edges
+  /// (which separate neighbours lying flat in one sheet).
+  Directions directions(double t) const {
+    std::array<Direction, 4> x;
+    for (int k = 0; k < 4; ++k) {
+      const IntervalPoint& a = rows_[k];
+      const IntervalPoint& b = rows_[k + 4];
+      x[k] = {middle_of(a.x) + t * (middle_of(b.x) - middle_of(a.x)),
+              middle_of(a.y) + t * (middle_of(b.y) - middle_of(a.y)),
+              middle_of(a.z) + t * (middle_of(b.z) - middle_of(a.z))};
+    }
+    Directions out;
+    out.add({1, 0, 0});
+    out.add({0, 1, 0});
+    out.add({0, 0, 1});
+    const int split = kind_ == PairKind::vertex_face ? 1 : 2;
+    Direction first_centre{}, second_centre{};
+    for (int k = 0; k < 4; ++k) {
+      Direction& centre = k < split ? first_centre : second_centre;
+      const double weight = k < split ? 1.0 / split : 1.0 / (4 - split);
+      for (int i = 0; i < 3; ++i) centre[i] += weight * x[k][i];
+    }
+    out.add(minus(second_centre, first_centre));
+    if (kind_ == PairKind::vertex_face) {
+      const Direction n = cross_of(minus(x[2], x[1]), minus(x[3], x[1]));
+      out.add(n);
+      for (int k = 1; k <= 3; ++k) out.add(cross_of(minus(x[k % 3 + 1], x[k]), n));
+    } else {
+      const Direction ea = minus(x[1], x[0]), eb = minus(x[3], x[2]);
+      const Direction m = cross_of(ea, eb);
+      out.add(m);
+      out.add(cross_of(ea, m));
+      out.add(cross_of(eb, m));
+    }
+    return out;
+  }
+
+  static double middle_of(const Interval& i) { return i.inf() + (i.sup() - i.inf()) / 2; }
+  static Direction minus(const Direction& a, const Direction& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+  static Direction cross_of(const Direction& a, const Direction& b) {
+    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  }
+
+  PairKind kind_;
+  const std::array<IntervalPoint, 8>& rows_;
+  Interval thickness_;
+};
 
 enum class Region { excluded, holds, unknown };
 
@@ -107,8 +232,16 @@ class ConditionExplorer {
 
 }  // namespace
 
+bool certainly_apart(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness, int depth) {
+  CGAL::Protect_FPU_rounding<true> rounding_upward;
+  return SeparationCheck(kind, rows, thickness).apart(0.0, 1.0, depth);
+}
+
 FilterVerdict filter_decide(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness,
                             const FilterSettings& settings) {
+  if (settings.separation_depth >= 0 && certainly_apart(kind, rows, thickness, settings.separation_depth)) {
+    return FilterVerdict::certainly_no;
+  }
   CGAL::Protect_FPU_rounding<true> rounding_upward;
   const Interval delta_squared = CGAL::square(thickness);
   const int count = kind == PairKind::vertex_face ? kVertexFaceConditionCount : kEdgeEdgeConditionCount;

@@ -1,6 +1,7 @@
-// Seeded random pairs, near-degenerate ones included: the filter never changes an answer, answers are monotone
-// in δ, and symmetries of the problem never change them (metamorphic tests).
+// Seeded random pairs, near-degenerate ones included: the filter (and its separation pre-check alone) never
+// changes an answer, answers are monotone in δ, and symmetries of the problem never change them (metamorphic tests).
 
+#include "reference/certified_filter.hpp"
 #include "reference/elementary_pair.hpp"
 #include "tests/support/rational_rows.hpp"
 
@@ -58,6 +59,62 @@ TEST(ReferenceProperty, FilterThenExactEqualsExactOnly) {
       const bool filtered = decide(pair.kind, pair.rows, thickness).collides;
       ASSERT_EQ(filtered, exact_only) << describe(pair, thickness);
     }
+  }
+}
+
+/// A random pair pulled apart: the second primitive is moved by a random offset whose length is drawn on a log
+/// scale around δ, so that many pairs end just outside δ (where the separation pre-check must stop short) and many
+/// just inside (where it must never answer).
+std::vector<RandomPair> near_pairs(std::size_t count, std::uint64_t seed, double thickness) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::uniform_real_distribution<double> log_length(-3.0, 1.0);
+  std::vector<RandomPair> pairs = random_pairs(count, seed);
+  for (RandomPair& pair : pairs) {
+    const Vec3 offset = Vec3(uniform(random), uniform(random), uniform(random)).normalized() *
+                        std::pow(10.0, log_length(random)) * (thickness > 0 ? 20 * thickness : 1.0);
+    const int split = pair.kind == PairKind::vertex_face ? 1 : 2;
+    for (int k = split; k < 4; ++k) {
+      pair.rows[k] += offset;
+      pair.rows[k + 4] += offset;
+    }
+  }
+  return pairs;
+}
+
+// The filter's separation pre-check alone, at every depth, never calls a colliding pair apart; and it does call
+// most far pairs apart (otherwise it would prove nothing and this test could not fail).
+TEST(ReferenceProperty, SeparationPreCheckNeverRulesOutACollision) {
+  std::cout << "seed " << kSeed + 3 << "\n";
+  for (double thickness : {0.0, 0.05}) {
+    std::size_t apart = 0, colliding = 0;
+    const std::vector<RandomPair> pairs = near_pairs(2000, kSeed + 3, thickness);
+    for (const RandomPair& pair : pairs) {
+      const bool collides = decide(pair.kind, pair.rows, thickness, {false, false, 0}).collides;
+      colliding += collides;
+      for (int depth : {0, 2, 5}) {
+        const bool called_apart = certainly_apart(pair.kind, interval_rows(pair.rows), Interval(thickness), depth);
+        ASSERT_FALSE(called_apart && collides) << "depth " << depth << ": " << describe(pair, thickness);
+        apart += depth == 2 && called_apart;
+      }
+    }
+    EXPECT_GT(apart, pairs.size() / 4) << "δ = " << thickness;
+    EXPECT_GT(colliding, pairs.size() / 20) << "δ = " << thickness;
+    std::cout << "δ = " << thickness << ": " << apart << " of " << pairs.size() << " called apart at depth 2, " << colliding << " colliding\n";
+  }
+}
+
+// On its threshold: a vertex resting exactly δ above a face is within δ (it collides) and is not called apart;
+// one ulp higher it is apart, and the pre-check proves it.
+TEST(ReferenceProperty, SeparationPreCheckIsExactAtDistanceDelta) {
+  const double thickness = 0.1;
+  for (double height : {thickness, std::nextafter(thickness, 1.0)}) {
+    std::array<Vec3, 8> rows = {Vec3(0.25, 0.25, height), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+    for (int k = 0; k < 4; ++k) rows[k + 4] = rows[k];
+    const bool collides = decide(PairKind::vertex_face, rows, thickness, {false, false, 0}).collides;
+    EXPECT_EQ(collides, height == thickness);
+    EXPECT_EQ(certainly_apart(PairKind::vertex_face, interval_rows(rows), Interval(thickness), 2), !collides)
+        << "height " << height;
   }
 }
 
