@@ -120,6 +120,7 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
                            {"ee", truth.collisions.edge_edge().size()},
                            {"vf_pairs_enumerated", s.vertex_face_pairs},
                            {"ee_pairs_enumerated", s.edge_edge_pairs},
+                           {"time_slices", s.time_slices},
                            {"decided_by_filter", s.decided_by_filter},
                            {"decided_exactly", s.decided_exactly},
                            {"enumeration_ms", s.enumeration_milliseconds},
@@ -127,7 +128,8 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
   out << "truth for " << step.name << " (thickness " << request.thickness << ")\n"
       << "  colliding pairs: vertex-face " << truth.collisions.vertex_face().size() << ", edge-edge "
       << truth.collisions.edge_edge().size() << "\n"
-      << "  pairs enumerated (overlapping swept boxes): vertex-face " << s.vertex_face_pairs << ", edge-edge "
+      << "  pairs enumerated (overlapping swept boxes, " << s.time_slices << " time slice"
+      << (s.time_slices == 1 ? "" : "s") << "): vertex-face " << s.vertex_face_pairs << ", edge-edge "
       << s.edge_edge_pairs << "\n"
       << "  decided by the certified filter " << s.decided_by_filter << ", exactly " << s.decided_exactly << "\n"
       << std::fixed << std::setprecision(1) << "  time: enumeration " << s.enumeration_milliseconds

@@ -245,6 +245,14 @@ FilterVerdict filter_decide(PairKind kind, const std::array<IntervalPoint, 8>& r
   CGAL::Protect_FPU_rounding<true> rounding_upward;
   const Interval delta_squared = CGAL::square(thickness);
   const int count = kind == PairKind::vertex_face ? kVertexFaceConditionCount : kEdgeEdgeConditionCount;
+  // Resting contact first: pairs already within δ at the step's start or end (cloth lying on cloth) hold a
+  // condition at t = 0 or 1, which the bisection below would only reach after descending to that end.
+  for (double end : {0.0, 1.0}) {
+    const Positions at_end = positions_over(rows, Interval(end));
+    for (int index = 0; index < count; ++index) {
+      if (classify(condition_over(kind, index, at_end, delta_squared)) == Region::holds) return FilterVerdict::certainly_yes;
+    }
+  }
   bool all_excluded = true;
   for (int index = 0; index < count; ++index) {
     const Region region = ConditionExplorer(kind, index, rows, delta_squared, settings.max_depth).explore(0.0, 1.0, 0);

@@ -18,6 +18,9 @@ struct TruthRequest {
   bool with_toi = false;
   /// Called on the calling thread as decisions complete: (pairs decided, pairs to decide).
   std::function<void(std::size_t, std::size_t)> progress;
+  /// Time slices of the enumeration (0: chosen from the motion, see compute_step_truth). The answer never depends
+  /// on it; tests set it to compare.
+  std::size_t time_slices = 0;
 };
 
 struct TruthStatistics {
@@ -27,6 +30,8 @@ struct TruthStatistics {
   /// How the pairs were decided.
   std::size_t decided_by_filter = 0;
   std::size_t decided_exactly = 0;
+  /// Time slices the enumeration used.
+  std::size_t time_slices = 1;
   double enumeration_milliseconds = 0.0;
   double decision_milliseconds = 0.0;
 };
@@ -41,7 +46,8 @@ struct StepTruth {
 ///
 /// Enumeration shares no code with the strategies: boxes of each primitive over x0 and x1, widened by δ/2 with
 /// outward rounding (so any two primitives that come within δ have overlapping boxes), paired by a sort-and-sweep
-/// along the axis of largest extent. Vertices that no face uses are not primitives; VF pairs with v a corner of
+/// along the axis of largest extent. When vertices move farther than an edge's extent, the step is cut into 2, 4
+/// or 8 time slices with boxes per slice (certified the same way), and the pairs of all slices are merged. Vertices that no face uses are not primitives; VF pairs with v a corner of
 /// f and EE pairs with a shared endpoint are adjacent features and never count; self pairs only for objects with
 /// self-collision, pairs across objects only for collidable ones. Every candidate is decided by the certified
 /// filter and, where it is inconclusive, exactly. The result does not depend on the thread count.

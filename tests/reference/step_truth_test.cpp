@@ -94,6 +94,28 @@ TEST(StepTruth, EqualsBruteForceForEveryCollisionFilterAndThickness) {
   }
 }
 
+// Time slices only shorten the enumeration's boxes: 1, 2, 4 and 8 slices give the same pairs as brute force on
+// the fold (whose swinging half moves four edge lengths, so the automatic choice slices it too), and slicing
+// enumerates fewer pairs there (or it would not be worth its sweeps).
+TEST(StepTruth, TimeSlicesNeverChangeTheSet) {
+  for (double delta : {0.0, 0.1}) {
+    FoldScene fold = fold_scene(true, true);
+    const Scene scene = fold.scene.with_thickness(delta);
+    const CollisionSet expected = brute_force_truth(scene, fold.x0, fold.x1, delta);
+    std::size_t whole_step_pairs = 0;
+    for (std::size_t slices : {1, 2, 4, 8, 0}) {
+      TruthRequest request{delta, false, {}};
+      request.time_slices = slices;
+      const StepTruth truth = compute_step_truth(scene, fold.x0, fold.x1, request);
+      EXPECT_TRUE(truth.collisions.same_pairs(expected)) << slices << " slices, δ = " << delta;
+      const std::size_t enumerated = truth.statistics.vertex_face_pairs + truth.statistics.edge_edge_pairs;
+      if (slices == 1) whole_step_pairs = enumerated;
+      if (slices == 8) EXPECT_LT(enumerated, whole_step_pairs) << "δ = " << delta;
+      if (slices == 0) EXPECT_GT(truth.statistics.time_slices, 1u) << "the fold moves far: it should be sliced";
+    }
+  }
+}
+
 TEST(StepTruth, UnusedVerticesAreNeverPrimitives) {
   FoldScene fold = fold_scene(true, true);
   const StepTruth truth = compute_step_truth(fold.scene, fold.x0, fold.x1, {0.0, false, {}});
