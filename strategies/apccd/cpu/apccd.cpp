@@ -112,13 +112,18 @@ class Apccd final : public Strategy {
     if (session_start) {
       start_session(result);
     } else {
-      // Dangling vertices: beyond their budget around the session's anchor, in their object's frame.
+      // Dangling vertices: beyond their budget around the session's anchor, in their object's frame, at either end
+      // of the step. A vertex coming back within its budget still moves outside it during the step, on a segment
+      // that its enlarged leaf holds but that no earlier partial traversal searched from.
       std::vector<FaceId> dangling_faces;
       {
         ScopedStageTimer timer(result.stages, "dangling collection");
         std::vector<char> dangling(topology.num_vertices(), 0);
+        auto outside = [&](const Vec3& relative, std::size_t v) {
+          return (relative - anchor_[v]).cwiseAbs().maxCoeff() > budget_[v];
+        };
         tbb::parallel_for(std::size_t{0}, topology.num_vertices(), [&](std::size_t v) {
-          dangling[v] = (relative1_[v] - anchor_[v]).cwiseAbs().maxCoeff() > budget_[v] ? 1 : 0;
+          dangling[v] = outside(relative0_[v], v) || outside(relative1_[v], v) ? 1 : 0;
         });
         std::vector<char> face_dangles(topology.num_faces(), 0);
         for (std::size_t v = 0; v < dangling.size(); ++v) {
