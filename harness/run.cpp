@@ -1,6 +1,7 @@
 #include "harness/run.hpp"
 
 #include "ccd/config.hpp"
+#include "ccd/git_revision.hpp"
 #include "core/error.hpp"
 #include "datasets/atomic_file.hpp"
 #include "datasets/procedural_scenes.hpp"
@@ -19,7 +20,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -42,17 +42,6 @@ SceneSource generated(const std::string& name, std::map<std::string, double> par
           }};
 }
 
-std::string command_output(const std::string& command) {
-  std::string output;
-  if (FILE* pipe = ::popen(command.c_str(), "r")) {
-    char buffer[256];
-    while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
-    ::pclose(pipe);
-  }
-  while (!output.empty() && (output.back() == '\n' || output.back() == '\r')) output.pop_back();
-  return output;
-}
-
 /// What every record carries: machine, build type, thread count, git revision.
 json environment() {
   static const json cached = [] {
@@ -66,9 +55,7 @@ json environment() {
         break;
       }
     }
-    std::string revision = command_output("git -C '" + std::string(CCDBENCH_SOURCE_DIR) + "' rev-parse --short HEAD 2>/dev/null");
-    if (revision.empty()) revision = "unknown";
-    else if (!command_output("git -C '" + std::string(CCDBENCH_SOURCE_DIR) + "' status --porcelain --untracked-files=no 2>/dev/null").empty()) revision += "-dirty";
+    const std::string revision = CCDBENCH_GIT_REVISION;  // of the build, not of the source folder at run time
     return json{{"machine", std::string(host) + " (" + cpu + ", " + std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) + " cores)"},
                 {"build_type", CCDBENCH_BUILD_TYPE},
                 {"git_revision", revision}};
