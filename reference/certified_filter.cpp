@@ -66,44 +66,49 @@ class SeparationCheck {
   SeparationCheck(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness)
       : kind_(kind), rows_(rows), thickness_(thickness) {}
 
-  /// True when the pair is farther apart than δ on every piece of [t0, t1] after at most `depth` halvings.
-  bool apart(double t0, double t1, int depth) const {
-    const Positions start = positions_over(rows_, Interval(t0));
-    const Positions end = positions_over(rows_, Interval(t1));
-    if (apart_on_piece(start, end, (t0 + t1) / 2)) return true;
-    const double middle = t0 + (t1 - t0) / 2;
-    if (depth <= 0 || !(t0 < middle && middle < t1)) return false;
-    return apart(t0, middle, depth - 1) && apart(middle, t1, depth - 1);
+  /// True when the pair is farther apart than δ on every piece of [0, 1] after at most `depth` halvings.
+  bool apart(int depth) const {
+    return apart(0.0, positions_over(rows_, Interval(0.0)), 1.0, positions_over(rows_, Interval(1.0)), depth);
   }
 
  private:
-  using Direction = std::array<double, 3>;
+  using Direction = Vector3<double>;
   struct Directions {
     std::array<Direction, 8> d;
     int count = 0;
     /// Non-finite directions (from huge coordinates) are left out: intervals of infinities prove nothing.
     void add(const Direction& v) {
-      if (std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])) d[count++] = v;
+      if (std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) d[count++] = v;
     }
   };
+
+  /// The piece [t0, t1] with the positions at its ends; a halving computes only the middle's positions.
+  bool apart(double t0, const Positions& start, double t1, const Positions& end, int depth) const {
+    if (apart_on_piece(start, end, (t0 + t1) / 2)) return true;
+    const double middle = t0 + (t1 - t0) / 2;
+    if (depth <= 0 || !(t0 < middle && middle < t1)) return false;
+    const Positions at_middle = positions_over(rows_, Interval(middle));
+    return apart(t0, start, middle, at_middle, depth - 1) && apart(middle, at_middle, t1, end, depth - 1);
+  }
 
   bool apart_on_piece(const Positions& start, const Positions& end, double t_middle) const {
     const Directions candidates = directions(t_middle);
     for (int i = 0; i < candidates.count; ++i) {
-      const Direction& d = candidates.d[i];
-      const int side = side_along(d, start);
-      if (side != 0 && side_along(d, end) == side) return true;
+      const Vector3<Interval> d{Interval(candidates.d[i].x), Interval(candidates.d[i].y), Interval(candidates.d[i].z)};
+      // Certified upper bound of δ·|d| (rounding is upward here, and sqrt of an upper bound is an upper bound).
+      const double reach = (thickness_ * CGAL::sqrt(squared_norm(d))).sup();
+      const int side = side_along(d, reach, start);
+      if (side != 0 && side_along(d, reach, end) == side) return true;
     }
     return false;
   }
 
   /// The first primitive is vertex 0 (vertex-face) or vertices 0-1 (edge-edge); the second the rest. +1 when
-  /// the second group's projections onto d exceed the first's by more than δ·|d|, -1 for the reverse, 0
+  /// the second group's projections onto d exceed the first's by more than `reach` (δ·|d|), -1 for the reverse, 0
   /// otherwise. The concavity argument holds for one order only, so both ends must give the same side.
-  int side_along(const Direction& d, const Positions& p) const {
-    const Interval dx(d[0]), dy(d[1]), dz(d[2]);
+  int side_along(const Vector3<Interval>& d, double reach, const Positions& p) const {
     std::array<Interval, 4> projection;
-    for (int k = 0; k < 4; ++k) projection[k] = dx * p.x[k].x + dy * p.x[k].y + dz * p.x[k].z;
+    for (int k = 0; k < 4; ++k) projection[k] = dot(d, p.x[k]);
     const int split = kind_ == PairKind::vertex_face ? 1 : 2;
     double first_lower = projection[0].inf(), first_upper = projection[0].sup();
     for (int k = 1; k < split; ++k) {
@@ -115,8 +120,6 @@ class SeparationCheck {
       second_lower = std::min(second_lower, projection[k].inf());
       second_upper = std::max(second_upper, projection[k].sup());
     }
-    // Certified upper bound of δ·|d| (rounding is upward here, and sqrt of an upper bound is an upper bound).
-    const double reach = (thickness_ * CGAL::sqrt(dx * dx + dy * dy + dz * dz)).sup();
     const Interval gap_up = Interval(second_lower) - Interval(first_upper);
     const Interval gap_down = Interval(first_lower) - Interval(second_upper);
     if (gap_up.inf() > reach) return 1;
@@ -141,32 +144,28 @@ class SeparationCheck {
     out.add({0, 1, 0});
     out.add({0, 0, 1});
     const int split = kind_ == PairKind::vertex_face ? 1 : 2;
-    Direction first_centre{}, second_centre{};
+    Direction first_centre{0, 0, 0}, second_centre{0, 0, 0};
     for (int k = 0; k < 4; ++k) {
       Direction& centre = k < split ? first_centre : second_centre;
       const double weight = k < split ? 1.0 / split : 1.0 / (4 - split);
-      for (int i = 0; i < 3; ++i) centre[i] += weight * x[k][i];
+      centre = {centre.x + weight * x[k].x, centre.y + weight * x[k].y, centre.z + weight * x[k].z};
     }
-    out.add(minus(second_centre, first_centre));
+    out.add(second_centre - first_centre);
     if (kind_ == PairKind::vertex_face) {
-      const Direction n = cross_of(minus(x[2], x[1]), minus(x[3], x[1]));
+      const Direction n = cross(x[2] - x[1], x[3] - x[1]);
       out.add(n);
-      for (int k = 1; k <= 3; ++k) out.add(cross_of(minus(x[k % 3 + 1], x[k]), n));
+      for (int k = 1; k <= 3; ++k) out.add(cross(x[k % 3 + 1] - x[k], n));
     } else {
-      const Direction ea = minus(x[1], x[0]), eb = minus(x[3], x[2]);
-      const Direction m = cross_of(ea, eb);
+      const Direction ea = x[1] - x[0], eb = x[3] - x[2];
+      const Direction m = cross(ea, eb);
       out.add(m);
-      out.add(cross_of(ea, m));
-      out.add(cross_of(eb, m));
+      out.add(cross(ea, m));
+      out.add(cross(eb, m));
     }
     return out;
   }
 
   static double middle_of(const Interval& i) { return i.inf() + (i.sup() - i.inf()) / 2; }
-  static Direction minus(const Direction& a, const Direction& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-  static Direction cross_of(const Direction& a, const Direction& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-  }
 
   PairKind kind_;
   const std::array<IntervalPoint, 8>& rows_;
@@ -234,7 +233,7 @@ class ConditionExplorer {
 
 bool certainly_apart(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness, int depth) {
   CGAL::Protect_FPU_rounding<true> rounding_upward;
-  return SeparationCheck(kind, rows, thickness).apart(0.0, 1.0, depth);
+  return SeparationCheck(kind, rows, thickness).apart(depth);
 }
 
 FilterVerdict filter_decide(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness,

@@ -47,9 +47,10 @@ struct StepTruth {
 /// Enumeration shares no code with the strategies: boxes of each primitive over x0 and x1, widened by δ/2 with
 /// outward rounding (so any two primitives that come within δ have overlapping boxes), paired by a sort-and-sweep
 /// along the axis of largest extent. When vertices move farther than an edge's extent, the step is cut into 2, 4
-/// or 8 time slices with boxes per slice (certified the same way), and the pairs of all slices are merged. Vertices that no face uses are not primitives; VF pairs with v a corner of
-/// f and EE pairs with a shared endpoint are adjacent features and never count; self pairs only for objects with
-/// self-collision, pairs across objects only for collidable ones. Every candidate is decided by the certified
+/// or 8 time slices with boxes per slice (certified the same way), and the pairs of all slices are merged.
+/// Vertices that no face uses are not primitives; VF pairs with v a corner of f and EE pairs with a shared
+/// endpoint are adjacent features and never count; self pairs only for objects with self-collision, pairs across
+/// objects only for collidable ones. Every candidate is decided by the certified
 /// filter and, where it is inconclusive, exactly. The result does not depend on the thread count.
 StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1,
                              const TruthRequest& request);
