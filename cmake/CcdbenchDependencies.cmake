@@ -8,6 +8,8 @@ find_package(PkgConfig REQUIRED)
 # Prefixed: CGAL's own FindGMP/FindMPFR read the unprefixed GMP_* and MPFR_* variables.
 pkg_check_modules(CCD_GMP REQUIRED IMPORTED_TARGET gmp gmpxx)
 pkg_check_modules(CCD_MPFR REQUIRED IMPORTED_TARGET mpfr)
+# Content digests of cache keys, resumed cells and checksums (datasets/content_hash.hpp).
+pkg_check_modules(CCD_XXHASH REQUIRED IMPORTED_TARGET libxxhash)
 
 # Optional backends: ON by default when the distribution's package is found, and said clearly when OFF.
 find_package(OpenCL QUIET)

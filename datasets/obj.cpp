@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "datasets/atomic_file.hpp"
+#include "datasets/input_file.hpp"
 
 #include <charconv>
 #include <fstream>
@@ -42,8 +43,7 @@ VertexId parse_index(const std::filesystem::path& path, std::size_t line, const 
 }  // namespace
 
 MeshFrame read_obj(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, {}, "cannot open file");
+  std::ifstream in = open_input_file(path, "OBJ file");
   MeshFrame frame;
   frame.format = "OBJ";
   std::vector<std::size_t> vertex_lines, face_lines;

@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "datasets/atomic_file.hpp"
+#include "datasets/input_file.hpp"
 #include "datasets/rational.hpp"
 
 #include <nlohmann/json.hpp>
@@ -50,6 +51,11 @@ bool QueryFile::has_truth() const {
   return std::all_of(queries.begin(), queries.end(), [](const Query& q) { return q.truth.has_value(); });
 }
 
+std::size_t QueryFile::labelled() const {
+  return static_cast<std::size_t>(
+      std::count_if(queries.begin(), queries.end(), [](const Query& q) { return q.truth.has_value(); }));
+}
+
 std::size_t QueryFile::positives() const {
   return static_cast<std::size_t>(
       std::count_if(queries.begin(), queries.end(), [](const Query& q) { return q.truth.value_or(false); }));
@@ -95,14 +101,7 @@ std::optional<std::filesystem::path> truth_file_for(const std::filesystem::path&
 }
 
 std::vector<bool> read_truth_file(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, {}, "cannot open truth file");
-  nlohmann::json document;
-  try {
-    document = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& error) {
-    throw InputError(path, "byte " + std::to_string(error.byte), "malformed JSON");
-  }
+  const nlohmann::json document = read_json_file(path, "truth file");
   if (!document.is_array()) throw InputError(path, {}, "a truth file must be a JSON array of booleans");
   std::vector<bool> truth;
   truth.reserve(document.size());
@@ -119,8 +118,7 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
     throw InputError(path, {}, "cannot tell vertex-face from edge-edge: put the file under a 'vertex-face' or "
                                "'edge-edge' folder, or name it *vf.csv or *ee.csv");
   }
-  std::ifstream in(path);
-  if (!in) throw InputError(path, {}, "cannot open query file");
+  std::ifstream in = open_input_file(path, "query file");
 
   std::vector<Row> rows;
   std::size_t columns_expected = 0;

@@ -2,10 +2,10 @@
 
 #include "core/error.hpp"
 #include "datasets/frame_source.hpp"
+#include "datasets/input_file.hpp"
 
 #include <nlohmann/json.hpp>
 
-#include <fstream>
 
 namespace ccd::datasets {
 namespace {
@@ -20,14 +20,7 @@ void expect_same_count(const std::filesystem::path& candidates, std::size_t cand
 }  // namespace
 
 std::vector<std::pair<std::uint32_t, std::uint32_t>> read_candidate_pairs(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, {}, "cannot open candidate file");
-  nlohmann::json document;
-  try {
-    document = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& error) {
-    throw InputError(path, "byte " + std::to_string(error.byte), "malformed JSON");
-  }
+  const nlohmann::json document = read_json_file(path, "candidate file");
   if (!document.is_array()) throw InputError(path, {}, "must be a JSON array of [id_a, id_b] pairs");
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   pairs.reserve(document.size());

@@ -2,16 +2,15 @@
 
 #include "core/error.hpp"
 #include "datasets/frame_cache.hpp"
+#include "datasets/input_file.hpp"
 #include "datasets/procedural_scenes.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <set>
-#include <sstream>
 
 namespace ccd::datasets {
 namespace {
@@ -197,18 +196,7 @@ SceneSequence scene_from_json(const json& document, const std::filesystem::path&
 
 SceneSequence load_scene_file(const std::filesystem::path& path) {
   const std::filesystem::path file = std::filesystem::is_directory(path) ? path / "scene.json" : path;
-  std::ifstream in(file);
-  if (!in) throw InputError(file, {}, "cannot open scene file");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  json document;
-  try {
-    document = json::parse(text);
-  } catch (const json::parse_error& error) {
-    const auto byte = std::min<std::size_t>(error.byte, text.size());
-    const auto line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(byte), '\n'));
-    throw InputError(file, "line " + std::to_string(line), "malformed JSON");
-  }
-  return scene_from_json(document, file.parent_path(), file);
+  return scene_from_json(read_json_file(file, "scene file"), file.parent_path(), file);
 }
 
 }  // namespace ccd::datasets

@@ -9,7 +9,7 @@ packages=(
   libfcl-dev libccd-dev
   ocl-icd-opencl-dev opencl-headers pocl-opencl-icd
   libgtest-dev libgmock-dev libbenchmark-dev
-  nlohmann-json3-dev libcli11-dev
+  nlohmann-json3-dev libcli11-dev libxxhash-dev
   python3-matplotlib
 )
 
