@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "datasets/atomic_file.hpp"
+#include "datasets/input_file.hpp"
 
 #include <bit>
 #include <cmath>
@@ -58,9 +59,20 @@ CacheHeader read_header(const std::filesystem::path& path, std::istream& in) {
     throw InputError(path, "header", "truncated frame cache (inside the counts)");
   }
   header.faces_offset = header.frame_count_offset + 8;
-  header.frames_offset = header.faces_offset + header.num_faces * 3 * sizeof(std::uint32_t);
-  const std::uint64_t expected = header.frames_offset + header.num_frames * header.num_vertices * 3 * sizeof(double);
-  const std::uint64_t actual = std::filesystem::file_size(path);
+  const std::uint64_t actual = input_file_size(path);
+  // Counts are checked against the file's bytes before any product of them is formed or allocated: a corrupt
+  // count must not wrap around 2^64 into a small "expected" size.
+  constexpr std::uint64_t kFaceBytes = 3 * sizeof(std::uint32_t), kVertexBytes = 3 * sizeof(double);
+  if (header.num_vertices == 0) throw InputError(path, "header", "a frame cache with no vertices");
+  if (header.num_faces > actual / kFaceBytes || header.num_vertices > actual / kVertexBytes ||
+      header.num_frames > actual / (header.num_vertices * kVertexBytes)) {
+    throw InputError(path, "header", "corrupt counts: " + std::to_string(header.num_vertices) + " vertices, " +
+                                         std::to_string(header.num_faces) + " faces, " +
+                                         std::to_string(header.num_frames) + " frames do not fit in " +
+                                         std::to_string(actual) + " bytes");
+  }
+  header.frames_offset = header.faces_offset + header.num_faces * kFaceBytes;
+  const std::uint64_t expected = header.frames_offset + header.num_frames * header.num_vertices * kVertexBytes;
   if (actual < expected) {
     const std::uint64_t frame_bytes = std::max<std::uint64_t>(1, header.num_vertices * 3 * sizeof(double));
     const std::uint64_t complete = actual < header.frames_offset ? 0 : (actual - header.frames_offset) / frame_bytes;

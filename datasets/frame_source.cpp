@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <map>
+#include <optional>
 
 namespace ccd::datasets {
 namespace {
@@ -63,23 +64,46 @@ bool is_mesh_extension(const std::filesystem::path& path) {
   return extension == ".ply" || extension == ".obj";
 }
 
+/// The frame number at the end of `stem` ("frame_0007" -> 7), or nullopt when it ends in no digits or in more
+/// digits than any frame count needs.
+std::optional<unsigned long long> trailing_number(const std::string& stem, std::size_t& digits_begin) {
+  digits_begin = stem.size();
+  while (digits_begin > 0 && std::isdigit(static_cast<unsigned char>(stem[digits_begin - 1]))) --digits_begin;
+  const std::size_t digits = stem.size() - digits_begin;
+  if (digits == 0 || digits > 18) return std::nullopt;
+  return std::stoull(stem.substr(digits_begin));
+}
+
+/// Adds `path` as frame `number`, refusing a second file with the same number ("frame_0001" and "frame_01").
+void add_numbered_frame(const std::filesystem::path& where, std::map<unsigned long long, std::filesystem::path>& numbered,
+                        unsigned long long number, const std::filesystem::path& path) {
+  const auto [it, inserted] = numbered.emplace(number, path);
+  if (!inserted) {
+    throw InputError(where, {}, "two files for frame " + std::to_string(number) + ": '" + it->second.filename().string() +
+                                    "' and '" + path.filename().string() + "'");
+  }
+}
+
 std::vector<std::filesystem::path> list_frame_directory(const std::filesystem::path& directory) {
   std::map<unsigned long long, std::filesystem::path> numbered;
   std::string prefix_and_extension;
   for (const auto& entry : std::filesystem::directory_iterator(directory)) {
     const std::filesystem::path& path = entry.path();
-    if (!entry.is_regular_file() || !is_mesh_extension(path)) continue;
+    if (!is_mesh_extension(path)) continue;
     const std::string stem = path.stem().string();
-    std::size_t digits = stem.size();
-    while (digits > 0 && std::isdigit(static_cast<unsigned char>(stem[digits - 1]))) --digits;
-    if (digits == stem.size()) continue;  // no frame number
+    std::size_t digits = 0;
+    const auto number = trailing_number(stem, digits);
+    if (!number) continue;  // no frame number
+    if (!entry.is_regular_file()) {
+      throw InputError(path, {}, "is named like a frame file but is not a regular file (a folder?)");
+    }
     const std::string shape = stem.substr(0, digits) + "#" + path.extension().string();
     if (prefix_and_extension.empty()) prefix_and_extension = shape;
     if (shape != prefix_and_extension) {
       throw InputError(directory, {}, "frame files with different names or formats: '" + path.filename().string() +
                                           "' does not match " + prefix_and_extension + " (# = frame number)");
     }
-    numbered[std::stoull(stem.substr(digits))] = path;
+    add_numbered_frame(directory, numbered, *number, path);
   }
   if (numbered.empty()) throw InputError(directory, {}, "no numbered .ply or .obj frame files in this directory");
   std::vector<std::filesystem::path> files;
@@ -154,12 +178,52 @@ std::unique_ptr<FrameSource> make_file_frame_source(std::vector<std::filesystem:
 std::vector<std::filesystem::path> expand_frame_files(const std::filesystem::path& directory_or_pattern) {
   if (std::filesystem::is_directory(directory_or_pattern)) return list_frame_directory(directory_or_pattern);
   const FramePattern pattern = parse_frame_pattern(directory_or_pattern);
-  unsigned long long number = std::filesystem::exists(pattern.format(0)) ? 0 : 1;
-  std::vector<std::filesystem::path> files;
-  for (std::filesystem::path path; std::filesystem::exists(path = pattern.format(number)); ++number) {
-    files.push_back(path);
+  // Every file of the pattern's folder whose name is the pattern's with some number in place of the conversion,
+  // however padded: the sequence must be exactly these, numbered without a gap and without two files per number.
+  const std::filesystem::path folder = std::filesystem::path(pattern.prefix).parent_path();
+  const std::string name_prefix = std::filesystem::path(pattern.prefix).filename().string();
+  if (pattern.suffix.find('/') != std::string::npos) {
+    throw InputError(directory_or_pattern, {}, "frame pattern: the number must be in the file name, not in a folder");
   }
-  if (files.empty()) throw InputError(directory_or_pattern, {}, "no frame file matches this pattern (tried 0 and 1)");
+  std::map<unsigned long long, std::filesystem::path> numbered;
+  std::error_code error;
+  const std::filesystem::path listed = folder.empty() ? std::filesystem::path(".") : folder;
+  for (const auto& entry : std::filesystem::directory_iterator(listed, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() <= name_prefix.size() + pattern.suffix.size() || name.compare(0, name_prefix.size(), name_prefix) != 0 ||
+        name.compare(name.size() - pattern.suffix.size(), pattern.suffix.size(), pattern.suffix) != 0) {
+      continue;
+    }
+    std::string middle = name.substr(name_prefix.size(), name.size() - name_prefix.size() - pattern.suffix.size());
+    if (!pattern.zero_pad) middle.erase(0, middle.find_first_not_of(' '));  // %4d pads with spaces
+    std::size_t digits = 0;
+    const auto number = trailing_number(middle, digits);
+    if (!number || digits != 0) continue;
+    if (!entry.is_regular_file()) {
+      throw InputError(entry.path(), {}, "is named like a frame file but is not a regular file (a folder?)");
+    }
+    add_numbered_frame(directory_or_pattern, numbered, *number, folder / name);
+  }
+  if (error) throw InputError(listed, {}, "cannot list the frame pattern's folder: " + error.message());
+  if (numbered.empty()) throw InputError(directory_or_pattern, {}, "no frame file matches this pattern");
+  if (numbered.begin()->first > 1) {
+    throw InputError(directory_or_pattern, {}, "frames start at " + std::to_string(numbered.begin()->first) +
+                                                   ": frame 0 or 1 must exist");
+  }
+  std::vector<std::filesystem::path> files;
+  unsigned long long expected = numbered.begin()->first;
+  for (const auto& [number, path] : numbered) {
+    if (number != expected) {
+      throw InputError(directory_or_pattern, {}, "frame numbers have a gap: frame " + std::to_string(expected) +
+                                                     " is missing but frame " + std::to_string(number) + " exists");
+    }
+    if (path != pattern.format(number)) {
+      throw InputError(path, {}, "frame " + std::to_string(number) + " is not padded as the pattern says (expected '" +
+                                     pattern.format(number).filename().string() + "')");
+    }
+    files.push_back(path);
+    ++expected;
+  }
   return files;
 }
 

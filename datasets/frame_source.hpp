@@ -35,9 +35,10 @@ std::unique_ptr<FrameSource> make_file_frame_source(std::vector<std::filesystem:
 /// The files of a frame sequence named by
 ///  - a directory: its *.ply/*.obj files whose names end in a frame number ("frame_0007.ply", "227.ply"),
 ///    sorted by that number; they must share one prefix and extension, with no gap in the numbers;
-///  - a printf pattern with one integer conversion ("cloth/frame_%04d.ply"): frames from 0 (or from 1 when
-///    there is no frame 0) up to the first missing number.
-/// @throws InputError when nothing matches, numbers have a gap, or names mix prefixes.
+///  - a printf pattern with one integer conversion ("cloth/frame_%04d.ply"): every file of the pattern's folder
+///    that the pattern names with some number, from 0 (or 1 when there is no frame 0), without a gap.
+/// @throws InputError when nothing matches, numbers have a gap (frames 0 and 2 without 1), two files have the
+///         same number ("frame_0001" and "frame_01"), a folder is named like a frame, or names mix prefixes.
 std::vector<std::filesystem::path> expand_frame_files(const std::filesystem::path& directory_or_pattern);
 
 }  // namespace ccd::datasets

@@ -19,8 +19,9 @@ struct MeshFrame {
   std::string format;
 };
 
-/// Reads a .ply or .obj file (by extension, case-insensitive). Validates what every reader validates: finite
-/// coordinates, face indices in range, no repeated corner; warns on stderr about vertices no face uses.
+/// Reads a .ply or .obj file (by extension, case-insensitive). Validates what every reader validates: at least
+/// one triangle, finite coordinates, face indices in range, no repeated corner; warns on stderr about vertices no
+/// face uses.
 /// @throws InputError naming the file and the line or element.
 MeshFrame read_mesh(const std::filesystem::path& path);
 

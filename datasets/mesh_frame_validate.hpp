@@ -12,6 +12,8 @@ template <class WhereVertex, class WhereFace>
 void validate_mesh_frame(const std::filesystem::path& path, const MeshFrame& frame, WhereVertex where_vertex,
                          WhereFace where_face) {
   static constexpr const char* kAxis[3] = {"x", "y", "z"};
+  // A mesh without triangles has no primitive to collide (and FCL cannot even build a model of it).
+  if (frame.faces.empty()) throw InputError(path, "faces", "the mesh has no triangles (ccdbench reads triangle meshes)");
   for (std::size_t i = 0; i < frame.positions.size(); ++i) {
     for (int k = 0; k < 3; ++k) {
       const double value = frame.positions[i][k];

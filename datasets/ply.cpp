@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "datasets/atomic_file.hpp"
+#include "datasets/input_file.hpp"
 
 #include <bit>
 #include <charconv>
@@ -297,19 +298,33 @@ VertexId to_vertex_index(const std::filesystem::path& path, const std::string& w
   return static_cast<VertexId>(value);
 }
 
+/// Refuses elements that have entries but no properties: nothing in the body would bound their count.
+void check_elements_have_properties(const std::filesystem::path& path, const PlyHeader& header) {
+  for (const PlyElement& element : header.elements) {
+    if (element.count > 0 && element.properties.empty()) {
+      throw InputError(path, "header", "element '" + element.name + "' has " + std::to_string(element.count) +
+                                           " entries but no properties");
+    }
+  }
+}
+
 }  // namespace
 
 MeshFrame read_ply(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, {}, "cannot open file");
+  std::ifstream in = open_input_file(path, "PLY file", std::ios::in | std::ios::binary);
   const PlyHeader header = parse_header(path, in);
   const MeshLayout layout = find_mesh_layout(path, header);
+  check_elements_have_properties(path, header);
 
   MeshFrame frame;
   const PlyElement& vertex_element = header.elements[layout.vertex_element];
   const PlyElement& face_element = header.elements[layout.face_element];
-  frame.positions.resize(vertex_element.count);
-  frame.faces.resize(face_element.count);
+  // Vertices and faces are appended as the body delivers them, never allocated from the header's counts: a
+  // header may declare 300000000 faces in a 200-byte file. What is read is then backed by the file's own bytes.
+  auto begin_element = [&](std::size_t e) {
+    if (e == layout.vertex_element) frame.positions.emplace_back(0.0, 0.0, 0.0);
+    if (e == layout.face_element) frame.faces.push_back(Face{});
+  };
 
   std::vector<std::size_t> vertex_lines, face_lines;  // ASCII only: where each element was, for messages
   if (header.encoding == PlyEncoding::ascii) {
@@ -323,6 +338,7 @@ MeshFrame read_ply(const std::filesystem::path& path) {
                            "file ends at " + element_where(element, i) + " of " + std::to_string(element.count));
         }
         const std::string where = line_at(cursor.line_number());
+        begin_element(e);
         for (std::size_t p = 0; p < element.properties.size(); ++p) {
           const PlyProperty& property = element.properties[p];
           if (!property.is_list) {
@@ -348,6 +364,12 @@ MeshFrame read_ply(const std::filesystem::path& path) {
         if (e == layout.face_element) face_lines.push_back(cursor.line_number());
       }
     }
+    if (cursor.next_line()) {
+      throw InputError(path, line_at(cursor.line_number()),
+                       "more lines than the header declares (" + std::to_string(vertex_element.count) + " vertices, " +
+                           std::to_string(face_element.count) + " faces, " + std::to_string(header.elements.size()) +
+                           " elements in all)");
+    }
     validate_mesh_frame(
         path, frame, [&](std::size_t i) { return line_at(vertex_lines[i]); },
         [&](std::size_t i) { return line_at(face_lines[i]); });
@@ -371,6 +393,7 @@ MeshFrame read_ply(const std::filesystem::path& path) {
         }
         return value;
       };
+      begin_element(e);
       for (std::size_t p = 0; p < element.properties.size(); ++p) {
         const PlyProperty& property = element.properties[p];
         if (!property.is_list) {

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <cstring>
 
 namespace ccd::datasets {
@@ -62,6 +64,24 @@ TEST(FrameCacheBadInput, TruncatedAndForeignFilesAreErrors) {
   }
   testing::write_text(dir / "x.frames", "not a cache at all");
   EXPECT_THROW(open_frame_cache(dir / "x.frames", "k"), InputError);
+}
+
+// A corrupt count must not wrap around 2^64 into a small expected size and then be allocated.
+TEST(FrameCacheBadInput, CountsThatTheFileCannotHoldAreRefusedBeforeAllocating) {
+  testing::TempDir dir;
+  {
+    FrameCacheWriter writer(dir / "c.frames", "k", 9, testing::grid_faces(3));
+    writer.append(testing::grid_positions(3));
+    writer.finish();
+  }
+  std::fstream file(dir / "c.frames", std::ios::in | std::ios::out | std::ios::binary);
+  const std::streamoff faces_count = 8 + 4 + 4 + 8 + 1 + 8;  // magic, version, reserved, key length, key, vertices
+  const std::uint64_t wrapping = (std::uint64_t{1} << 62) + 1;  // 12 * wrapping wraps to 12
+  file.seekp(faces_count);
+  file.write(reinterpret_cast<const char*>(&wrapping), sizeof wrapping);
+  file.close();
+  const std::string error = testing::error_message<InputError>([&] { open_frame_cache(dir / "c.frames", "k"); });
+  EXPECT_NE(error.find("c.frames:header: corrupt counts"), std::string::npos) << error;
 }
 
 }  // namespace

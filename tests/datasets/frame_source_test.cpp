@@ -56,6 +56,44 @@ TEST(FrameFilesBadInput, GapsMixedNamesAndBadPatterns) {
   EXPECT_NE(error_of([&] { expand_frame_files(dir / "none_%d.ply"); }).find("no frame file"), std::string::npos);
 }
 
+// A pattern used to stop at the first missing number: frames 0 and 2 silently gave one frame.
+TEST(FrameFilesBadInput, APatternWithAGapIsAnError) {
+  TempDir dir;
+  write_mesh(dir / "frame_0000.ply", grid_frame(2, 0));
+  write_mesh(dir / "frame_0002.ply", grid_frame(2, 0));
+  const std::string error = error_of([&] { expand_frame_files(dir / "frame_%04d.ply"); });
+  EXPECT_NE(error.find("frame 1 is missing but frame 2 exists"), std::string::npos) << error;
+  write_mesh(dir / "frame_0001.ply", grid_frame(2, 0));
+  EXPECT_EQ(expand_frame_files(dir / "frame_%04d.ply").size(), 3u);
+}
+
+// frame_0001 and frame_01 used to give one of them, silently.
+TEST(FrameFilesBadInput, TwoFilesWithOneNumberAreAnError) {
+  TempDir dir;
+  write_mesh(dir / "frame_0000.ply", grid_frame(2, 0));
+  write_mesh(dir / "frame_0001.ply", grid_frame(2, 0));
+  write_mesh(dir / "frame_01.ply", grid_frame(2, 1));
+  const std::string listed = error_of([&] { expand_frame_files(dir.path()); });
+  EXPECT_NE(listed.find("two files for frame 1"), std::string::npos) << listed;
+  const std::string pattern = error_of([&] { expand_frame_files(dir / "frame_%04d.ply"); });
+  EXPECT_NE(pattern.find("two files for frame 1"), std::string::npos) << pattern;
+  std::filesystem::remove(dir / "frame_0001.ply");
+  const std::string padding = error_of([&] { expand_frame_files(dir / "frame_%04d.ply"); });
+  EXPECT_NE(padding.find("not padded as the pattern says"), std::string::npos) << padding;
+}
+
+// A folder named like a frame used to be skipped (and the frames after it with it, for a pattern).
+TEST(FrameFilesBadInput, AFolderNamedLikeAFrameIsAnError) {
+  TempDir dir;
+  write_mesh(dir / "frame_0000.ply", grid_frame(2, 0));
+  std::filesystem::create_directories(dir / "frame_0001.ply");
+  write_mesh(dir / "frame_0002.ply", grid_frame(2, 0));
+  for (const auto& path : {dir.path(), dir / "frame_%04d.ply"}) {
+    const std::string error = error_of([&] { expand_frame_files(path); });
+    EXPECT_NE(error.find("frame_0001.ply: is named like a frame file but is not a regular file"), std::string::npos) << error;
+  }
+}
+
 TEST(FrameFilesBadInput, VertexCountChangeBetweenFramesNamesTheFile) {
   TempDir dir;
   write_mesh(dir / "a.ply", grid_frame(3, 0));

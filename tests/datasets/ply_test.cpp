@@ -3,6 +3,7 @@
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <bit>
 #include <cstring>
@@ -165,6 +166,51 @@ TEST(PlyBadInput, MalformedHeaderAndBody) {
   EXPECT_NE(ply_error(ascii_ply("0 0 0\n1 0\n0 1 0\n", "3 0 1 2\n")).find("line 11"), std::string::npos);
   EXPECT_NE(ply_error(ascii_ply("0 0 0\n1 0 0 5\n0 1 0\n", "3 0 1 2\n")).find("too many"), std::string::npos);
   EXPECT_NE(ply_error(ascii_ply("0 0 0\n1 0 0\n0 1 0\n", "")).find("file ends"), std::string::npos);
+}
+
+// ASCII files used to keep the declared number of faces and ignore the lines after them (binary refused them).
+TEST(PlyBadInput, MoreLinesThanTheHeaderDeclaresAreAnError) {
+  const std::string extra = ply_error(ascii_ply("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 2\n3 0 2 1\n"));
+  EXPECT_NE(extra.find("bad.ply:line 14: more lines than the header declares"), std::string::npos) << extra;
+  EXPECT_EQ(ply_error(ascii_ply("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 2\n\n  \n")), "") << "blank lines at the end are fine";
+}
+
+/// The largest resident set of this process so far, in kilobytes.
+long peak_resident_kilobytes() {
+  rusage usage{};
+  ::getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
+
+// `element face 300000000` in a 200-byte file used to allocate 3.5 GB before refusing: elements are appended as
+// the body delivers them, so what is allocated is backed by the file's bytes.
+TEST(PlyBadInput, HeaderCountsAreNotAllocatedBeforeTheBodyBacksThem) {
+  const long before = peak_resident_kilobytes();
+  const std::string ascii = ply_error(ascii_ply("0 0 0\n1 0 0\n0 1 0\n", "3 0 1 2\n", 3, 300000000));
+  EXPECT_NE(ascii.find("file ends at face 1 of 300000000"), std::string::npos) << ascii;
+  const std::string vertices = ply_error(ascii_ply("0 0 0\n", "", 1000000000));
+  EXPECT_NE(vertices.find("file ends at vertex 1 of 1000000000"), std::string::npos) << vertices;
+  std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 3000000000\nproperty double x\n"
+                       "property double y\nproperty double z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                       "end_header\n";
+  binary += std::string(200, '\0');
+  const std::string truncated = ply_error(binary);
+  EXPECT_NE(truncated.find("truncated binary PLY"), std::string::npos) << truncated;
+  EXPECT_LT(peak_resident_kilobytes() - before, 200 * 1024) << "reading a 200-byte file must not allocate gigabytes";
+  const std::string no_properties = ply_error(
+      "ply\nformat ascii 1.0\nelement junk 18446744073709551615\nelement vertex 0\nproperty double x\nproperty double y\n"
+      "property double z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n");
+  EXPECT_NE(no_properties.find("element 'junk' has 18446744073709551615 entries but no properties"), std::string::npos)
+      << no_properties;
+}
+
+TEST(PlyBadInput, AMeshWithoutTrianglesOrAFolderIsRefused) {
+  EXPECT_NE(ply_error(ascii_ply("0 0 0\n1 0 0\n0 1 0\n", "", 3, 0)).find("bad.ply:faces: the mesh has no triangles"),
+            std::string::npos);
+  TempDir dir;
+  std::filesystem::create_directories(dir / "folder.ply");
+  const std::string folder = testing::error_message<InputError>([&] { read_ply(dir / "folder.ply"); });
+  EXPECT_NE(folder.find("folder.ply: is a folder, expected a PLY file"), std::string::npos) << folder;
 }
 
 TEST(PlyBadInput, UnusedVerticesWarnButAreRead) {
