@@ -10,6 +10,7 @@
 #include "strategies/fcl/fcl_strategies.hpp"
 #endif
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace ccd::strategies {
@@ -31,8 +32,36 @@ std::vector<std::string> strategy_names() {
   return names;
 }
 
+namespace {
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
+  return text.empty() ? "none" : text;
+}
+
+/// Refuses a key that neither the strategy nor its narrow phase has, naming both lists (so `apccd:foo=1` is not
+/// blamed on the narrow phase alone).
+void reject_unknown_keys(const StrategySpec& parsed, const std::vector<std::string>& own) {
+  const std::vector<std::string> narrow = narrowphase::narrow_phase_parameter_names(parsed.narrow_phase);
+  for (const auto& [key, value] : parsed.parameters) {
+    if (std::find(own.begin(), own.end(), key) != own.end() || std::find(narrow.begin(), narrow.end(), key) != narrow.end()) continue;
+    throw std::invalid_argument(parsed.name + "+" + parsed.narrow_phase + " has no parameter '" + key + "' (" + parsed.name +
+                                "'s: " + joined(own) + "; narrow phase " + parsed.narrow_phase + "'s: " + joined(narrow) + ")");
+  }
+}
+
+}  // namespace
+
 std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
   const StrategySpec parsed = parse_strategy_spec(spec);
+  const auto narrow_names = narrowphase::narrow_phase_names();
+  if (parsed.name != "fcl" && std::find(narrow_names.begin(), narrow_names.end(), parsed.narrow_phase) == narrow_names.end()) {
+    throw std::invalid_argument("unknown narrow phase '" + parsed.narrow_phase + "' in '" + spec + "' (known: " + joined(narrow_names) + ")");
+  }
+  if (parsed.name == "full" || parsed.name == "brute") reject_unknown_keys(parsed, {});
+  if (parsed.name == "apccd") reject_unknown_keys(parsed, apccd_parameter_names());
+  if (parsed.name == "fcl-bvh") reject_unknown_keys(parsed, {"bv"});
   // `full` and `brute` have no parameters of their own: every key is the narrow phase's.
   if (parsed.name == "full" || parsed.name == "brute") {
     auto narrow_phase = narrowphase::make_narrow_phase(parsed.narrow_phase, parsed.parameters);

@@ -124,6 +124,12 @@ void refuse_thickness(const Scene& scene, const std::string& name) {
     throw std::invalid_argument(name + " works at δ = 0 only: FCL has no thickness and its volumes are not inflated, "
                                 "but this scene's δ is " + std::to_string(scene.thickness()) + " (run with --thickness 0)");
   }
+  // FCL's endModel fails on a model without triangles (code -3): say which object instead.
+  for (const SceneObject& object : scene.objects()) {
+    if (object.num_faces == 0) {
+      throw std::invalid_argument(name + " cannot model object '" + object.name + "': it has no triangles");
+    }
+  }
 }
 
 template <class Pair>

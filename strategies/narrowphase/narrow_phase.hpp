@@ -50,9 +50,20 @@ using NarrowPhaseParameters = std::map<std::string, std::string>;
 ///         and for a value out of range.
 std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const NarrowPhaseParameters& parameters = {});
 
-/// The value of spec key `key` of `owner` as a number >= minimum (the whole text must be a finite number).
-/// @throws std::invalid_argument "OWNER: KEY=VALUE must be a number >= MINIMUM" otherwise.
-double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, double minimum);
+/// The values a numeric spec key accepts: [minimum, maximum], whole numbers only when `integer`. Every key has
+/// one, so that no value converts into something else (1e300 iterations into a negative count).
+struct SpecRange {
+  double minimum;
+  double maximum;
+  bool integer = false;
+};
+
+/// The value of spec key `key` of `owner` (the whole text must be a number within `range`).
+/// @throws std::invalid_argument "OWNER: KEY=VALUE must be a number in [MIN, MAX]" (or "an integer") otherwise.
+double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, SpecRange range);
+
+/// The keys a narrow phase accepts (empty for an unknown name).
+std::vector<std::string> narrow_phase_parameter_names(const std::string& name);
 
 /// Splits `HEAD[:key=value...]` into HEAD and its parameters. @throws std::invalid_argument for a malformed key.
 std::pair<std::string, NarrowPhaseParameters> split_spec(const std::string& spec);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <functional>
+#include <sstream>
 #include <stdexcept>
 
 namespace ccd::narrowphase {
@@ -16,10 +17,10 @@ class ParameterReader {
   ParameterReader(std::string variant, NarrowPhaseParameters parameters)
       : variant_(std::move(variant)), parameters_(std::move(parameters)) {}
 
-  double number(const std::string& key, double fallback, double minimum) {
+  double number(const std::string& key, double fallback, SpecRange range) {
     const auto it = parameters_.find(key);
     if (it == parameters_.end()) return fallback;
-    const double value = parse_spec_number(variant_, key, it->second, minimum);
+    const double value = parse_spec_number(variant_, key, it->second, range);
     parameters_.erase(it);
     return value;
   }
@@ -36,7 +37,13 @@ class ParameterReader {
 
 }  // namespace
 
-double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, double minimum) {
+// Ranges of the narrow phases' keys. Tolerances and eta are fractions of the pair's bounding-box diagonal: 1 is
+// already the whole pair. An iteration is one sub-box (or one advancement step) of about 100 ns: 1e9 caps a single
+// query at minutes, far beyond any use, and keeps the count exact in a long.
+constexpr SpecRange kFractionRange{0.0, 1.0};
+constexpr SpecRange kIterationRange{1.0, 1e9, true};
+
+double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, SpecRange range) {
   std::size_t used = 0;
   double number = 0;
   try {
@@ -44,10 +51,21 @@ double parse_spec_number(const std::string& owner, const std::string& key, const
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used == 0 || used != value.size() || !std::isfinite(number) || number < minimum) {
-    throw std::invalid_argument(owner + ": " + key + "=" + value + " must be a number >= " + std::to_string(minimum));
+  if (used == 0 || used != value.size() || !std::isfinite(number) || number < range.minimum || number > range.maximum ||
+      (range.integer && number != std::floor(number))) {
+    std::ostringstream message;
+    message << owner << ": " << key << "=" << value << " must be " << (range.integer ? "an integer" : "a number")
+            << " in [" << range.minimum << ", " << range.maximum << "]";
+    throw std::invalid_argument(message.str());
   }
   return number;
+}
+
+std::vector<std::string> narrow_phase_parameter_names(const std::string& name) {
+  if (name == "cubic32" || name == "cubic64") return {"eta"};
+  if (name == "conservative") return {"tolerance", "max_iterations"};
+  if (name == "advancement") return {"eta", "max_iterations"};
+  return {};
 }
 
 std::vector<std::string> narrow_phase_names() { return {"cubic32", "cubic64", "conservative", "advancement"}; }
@@ -56,21 +74,21 @@ std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const Na
   ParameterReader reader(name, parameters);
   if (name == "cubic32" || name == "cubic64") {
     CubicSettings settings;
-    settings.eta = reader.number("eta", settings.eta, 0.0);
+    settings.eta = reader.number("eta", settings.eta, kFractionRange);
     reader.finish("eta");
     return make_cubic(name == "cubic32", settings);
   }
   if (name == "conservative") {
     InclusionSettings settings;
-    settings.tolerance = reader.number("tolerance", settings.tolerance, 0.0);
-    settings.max_iterations = static_cast<long>(reader.number("max_iterations", static_cast<double>(settings.max_iterations), 1.0));
+    settings.tolerance = reader.number("tolerance", settings.tolerance, kFractionRange);
+    settings.max_iterations = static_cast<long>(reader.number("max_iterations", static_cast<double>(settings.max_iterations), kIterationRange));
     reader.finish("tolerance, max_iterations");
     return make_inclusion(settings);
   }
   if (name == "advancement") {
     AdvancementSettings settings;
-    settings.eta = reader.number("eta", settings.eta, 0.0);
-    settings.max_iterations = static_cast<long>(reader.number("max_iterations", static_cast<double>(settings.max_iterations), 1.0));
+    settings.eta = reader.number("eta", settings.eta, kFractionRange);
+    settings.max_iterations = static_cast<long>(reader.number("max_iterations", static_cast<double>(settings.max_iterations), kIterationRange));
     reader.finish("eta, max_iterations");
     return make_advancement(settings);
   }

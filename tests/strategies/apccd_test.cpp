@@ -91,6 +91,16 @@ TEST(Apccd, KnobsAreParsedRecordedAndChecked) {
   EXPECT_THROW(make_strategy("apccd:skip=maybe"), std::invalid_argument);
   EXPECT_THROW(make_strategy("apccd:nf_min=9:nf_max=4"), std::invalid_argument);
   EXPECT_THROW(make_strategy("apccd:nff=3"), std::invalid_argument);
+  // apccd's own keys are apccd's, not the narrow phase's: `apccd:foo=1` used to be blamed on "conservative".
+  const std::string unknown = testing::error_message<std::invalid_argument>([] { make_strategy("apccd:foo=1"); });
+  EXPECT_NE(unknown.find("apccd+conservative has no parameter 'foo' (apccd's: skip, nf_min, nf_max"), std::string::npos) << unknown;
+  // nf_max=2^31 used to wrap in the conversion to int and give a wrong message.
+  const std::string huge = testing::error_message<std::invalid_argument>([] { make_strategy("apccd:nf_max=2147483648"); });
+  EXPECT_NE(huge.find("apccd: nf_max=2147483648 must be an integer in [1, 1000]"), std::string::npos) << huge;
+  for (const char* bad : {"apccd:nf_min=2.5", "apccd:local=-1", "apccd:global=1e7", "apccd:dangling_max=1.5",
+                          "apccd:pending_max=0.5", "apccd:inflation_max=-1", "apccd:object_pairs=stale", "apccd:history=2"}) {
+    EXPECT_THROW(make_strategy(bad), std::invalid_argument) << bad;
+  }
 }
 
 }  // namespace

@@ -99,6 +99,16 @@ TEST(Fcl, ThicknessUnknownVolumesAndNarrowPhasesAreClearErrors) {
   EXPECT_EQ(make_strategy("fcl-bvh+cubic64:bv=kdop24")->name(), "fcl-bvh+cubic64:eta=1e-06:bv=kdop24");
 }
 
+// FCL's endModel fails on a model without triangles (it used to surface as "FCL endModel failed with code -3").
+TEST(Fcl, AnObjectWithoutTrianglesIsRefusedByName) {
+  const Scene scene({{"cloth", ObjectKind::deformable, true, 3, {{0, 1, 2}}}, {"points", ObjectKind::static_object, false, 2, {}}},
+                    {{0, 1}}, 0.0);
+  for (const char* spec : {"fcl", "fcl-bvh"}) {
+    const std::string message = testing::error_message<std::invalid_argument>([&] { make_strategy(spec)->check_scene(scene); });
+    EXPECT_NE(message.find("cannot model object 'points': it has no triangles"), std::string::npos) << message;
+  }
+}
+
 // tests/regression/fcl/KIND/CAUSE.csv: pairs from the default suite that collide (exact) and that FCL's own test
 // misses, one per cause (strategies/fcl/fcl_elementary.hpp). Each must still collide, still be missed by FCL for
 // that cause, and be found by the conservative narrow phase.

@@ -71,6 +71,21 @@ TEST(StrategyFactory, SpecsResolveAndErrorsAreClear) {
   EXPECT_THROW(make_strategy("full+quartic"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full:nf_max=3"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full:oops"), std::invalid_argument);
+  const std::string unknown = testing::error_message<std::invalid_argument>([] { make_strategy("full:nf_max=3"); });
+  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: none; narrow phase conservative's: "
+                         "tolerance, max_iterations)"), std::string::npos) << unknown;
+}
+
+// Every numeric key has a range: max_iterations=1e300 used to convert to a negative count (undefined behaviour)
+// and then report every query colliding.
+TEST(StrategyFactory, EveryNumericKeyIsCheckedAgainstItsRange) {
+  const std::string huge = testing::error_message<std::invalid_argument>([] { make_strategy("full:max_iterations=1e300"); });
+  EXPECT_NE(huge.find("max_iterations=1e300 must be an integer in [1, 1e+09]"), std::string::npos) << huge;
+  EXPECT_THROW(make_strategy("full:max_iterations=2.5"), std::invalid_argument);
+  EXPECT_THROW(make_strategy("full:tolerance=2"), std::invalid_argument);
+  EXPECT_THROW(make_strategy("full+cubic64:eta=-1e-9"), std::invalid_argument);
+  EXPECT_THROW(make_strategy("full+advancement:max_iterations=0"), std::invalid_argument);
+  EXPECT_EQ(make_strategy("full:max_iterations=1000000000")->name(), "full+conservative:tolerance=1e-06:max_iterations=1000000000");
 }
 
 }  // namespace

@@ -23,9 +23,18 @@ bool parse_switch(const std::string& key, const std::string& value) {
   throw std::invalid_argument("apccd: " + key + "=" + value + " must be on or off");
 }
 
-double parse_number(const std::string& key, const std::string& value, double minimum) {
-  return narrowphase::parse_spec_number("apccd", key, value, minimum);
+double parse_number(const std::string& key, const std::string& value, narrowphase::SpecRange range) {
+  return narrowphase::parse_spec_number("apccd", key, value, range);
 }
+
+// Ranges of apccd's keys. A session longer than 1000 frames is far past any scene's coherence (and nf stays an
+// exact int); budgets are multiples of motion, 1e6 of them already cover any scene; dangling_max is a fraction of
+// the vertices; pending_max a ratio of pair counts; inflation_max a multiple of the mean edge length (1e9: no cap).
+constexpr narrowphase::SpecRange kSessionFrames{1, 1000, true};
+constexpr narrowphase::SpecRange kMotionFactor{0, 1e6};
+constexpr narrowphase::SpecRange kFraction{0, 1};
+constexpr narrowphase::SpecRange kPendingRatio{1, 1e9};
+constexpr narrowphase::SpecRange kInflationCap{0, 1e9};
 
 /// Whether a flip of orientation can be a crossing: the vertex projects into the face (VF), or the closest points
 /// of the two edges' lines lie on both segments (EE), at the end of the step, with a little slack.
@@ -431,6 +440,11 @@ class Apccd final : public Strategy {
 
 }  // namespace
 
+std::vector<std::string> apccd_parameter_names() {
+  return {"skip", "nf_min", "nf_max", "local", "global", "dangling_max", "pending_max", "inflation_max", "heuristic",
+          "history", "object_pairs"};
+}
+
 ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters) {
   ApccdSettings settings;
   auto take = [&](const char* key, auto apply) {
@@ -446,13 +460,13 @@ ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters
     if (v != "fresh" && v != "session") throw std::invalid_argument("apccd: object_pairs=" + v + " must be fresh or session");
     settings.fresh_object_pairs = v == "fresh";
   });
-  take("nf_min", [&](const std::string& v) { settings.nf_min = static_cast<int>(parse_number("nf_min", v, 1)); });
-  take("nf_max", [&](const std::string& v) { settings.nf_max = static_cast<int>(parse_number("nf_max", v, 1)); });
-  take("local", [&](const std::string& v) { settings.local = parse_number("local", v, 0); });
-  take("global", [&](const std::string& v) { settings.global = parse_number("global", v, 0); });
-  take("dangling_max", [&](const std::string& v) { settings.dangling_max = parse_number("dangling_max", v, 0); });
-  take("pending_max", [&](const std::string& v) { settings.pending_max = parse_number("pending_max", v, 1); });
-  take("inflation_max", [&](const std::string& v) { settings.inflation_max = parse_number("inflation_max", v, 0); });
+  take("nf_min", [&](const std::string& v) { settings.nf_min = static_cast<int>(parse_number("nf_min", v, kSessionFrames)); });
+  take("nf_max", [&](const std::string& v) { settings.nf_max = static_cast<int>(parse_number("nf_max", v, kSessionFrames)); });
+  take("local", [&](const std::string& v) { settings.local = parse_number("local", v, kMotionFactor); });
+  take("global", [&](const std::string& v) { settings.global = parse_number("global", v, kMotionFactor); });
+  take("dangling_max", [&](const std::string& v) { settings.dangling_max = parse_number("dangling_max", v, kFraction); });
+  take("pending_max", [&](const std::string& v) { settings.pending_max = parse_number("pending_max", v, kPendingRatio); });
+  take("inflation_max", [&](const std::string& v) { settings.inflation_max = parse_number("inflation_max", v, kInflationCap); });
   if (settings.nf_min > settings.nf_max) throw std::invalid_argument("apccd: nf_min must not exceed nf_max");
   return settings;
 }

@@ -62,6 +62,9 @@ struct ApccdSettings {
   bool fresh_object_pairs = true;
 };
 
+/// The keys apccd itself accepts (the rest of a spec's keys are its narrow phase's).
+std::vector<std::string> apccd_parameter_names();
+
 /// Reads the apccd keys from `parameters`, removing them (what remains is the narrow phase's).
 /// @throws std::invalid_argument for a malformed or out-of-range value.
 ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters);
