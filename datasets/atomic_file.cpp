@@ -1,5 +1,10 @@
 #include "datasets/atomic_file.hpp"
 
+#include "core/error.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+
 #include <stdexcept>
 #include <system_error>
 #include <unistd.h>
@@ -29,6 +34,45 @@ void AtomicFile::commit() {
   if (!written || stream_.fail()) throw std::runtime_error("writing " + temporary_.string() + " failed");
   std::filesystem::rename(temporary_, path_);
   committed_ = true;
+}
+
+FileLock::FileLock(const std::filesystem::path& path) : fd_(::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644)) {
+  if (fd_ < 0) throw InputError(path, {}, "cannot open the lock file");
+  if (::flock(fd_, LOCK_EX) != 0) {
+    ::close(fd_);
+    throw InputError(path, {}, "cannot take the lock");
+  }
+}
+
+FileLock::~FileLock() {
+  ::flock(fd_, LOCK_UN);
+  ::close(fd_);
+}
+
+void require_writable_directory(const std::filesystem::path& directory) {
+  std::error_code error;
+  if (std::filesystem::exists(directory, error) && !std::filesystem::is_directory(directory, error)) {
+    throw InputError(directory, {}, "cannot write output here: it is a file, a folder is expected");
+  }
+  std::filesystem::create_directories(directory, error);
+  if (error) throw InputError(directory, {}, "cannot create the output folder: " + error.message());
+  std::filesystem::path probe = directory / (".ccdbench-probe." + std::to_string(::getpid()));
+  {
+    std::ofstream out(probe);
+    if (!out || !(out << "probe") || !out.flush()) {
+      throw InputError(directory, {}, "cannot write output here (permission denied or read-only?)");
+    }
+  }
+  std::filesystem::remove(probe, error);
+}
+
+void require_writable_file(const std::filesystem::path& file) {
+  std::error_code error;
+  if (std::filesystem::is_directory(file, error)) {
+    throw InputError(file, {}, "cannot write output here: it is a folder, a file is expected");
+  }
+  const std::filesystem::path folder = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
+  require_writable_directory(folder);
 }
 
 }  // namespace ccd::datasets

@@ -27,4 +27,26 @@ class AtomicFile {
   bool committed_ = false;
 };
 
+/// An exclusive advisory lock (flock) on `path`, created if needed, held until destruction: serialises processes
+/// that write the same files (two runs into one --out, two runs generating one scene).
+class FileLock {
+ public:
+  /// Blocks until the lock is held. @throws InputError (path) when the lock file cannot be opened or locked.
+  explicit FileLock(const std::filesystem::path& path);
+  ~FileLock();
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
+
+ private:
+  int fd_;
+};
+
+/// Checks before any work that `directory` can be written: creates it and writes and removes a probe file there.
+/// @throws InputError (directory) naming why not.
+void require_writable_directory(const std::filesystem::path& directory);
+
+/// Checks before any work that `file` can be written later (atomically, beside itself): it is not a folder and its
+/// folder can be written. @throws InputError (file) naming why not.
+void require_writable_file(const std::filesystem::path& file);
+
 }  // namespace ccd::datasets

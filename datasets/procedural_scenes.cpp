@@ -19,6 +19,8 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
+#include <unistd.h>
 
 namespace ccd::datasets {
 namespace {
@@ -412,6 +414,58 @@ Setup pile(CommonParameters& c, const SceneParameters& p) {
   return setup;
 }
 
+/// Kinematic: no simulation, every vertex follows a formula of time, so the scene makes what the simulator never
+/// does (it keeps cloth about δ/2 off everything): real crossings, for gates and tests at δ = 0. A sheet folds its
+/// right part over and then through its left part. The fold curls (the far edge turns `curl` degrees ahead of the
+/// hinge), so the contact front sweeps from the far edge towards the hinge over many frames rather than landing in
+/// one step. Meanwhile a rigid blade cuts down through the left part: contact between objects. Per frame, nothing
+/// moves more than a fraction of an edge, so apccd's sessions last several frames and find contacts inside them.
+Setup fold(CommonParameters& c, const SceneParameters& p) {
+  const double size = 1.0, spacing = size / static_cast<double>(c.n - 1);
+  const double degree = std::numbers::pi / 180.0;
+  const double start = p.at("fold_start") * degree, end = p.at("fold_end") * degree, curl = p.at("curl") * degree;
+  const double travel = p.at("blade_travel");
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  ShapeMesh sheet = cloth_grid(c.n, size);
+  // A seeded ripple of 1e-3 of an edge keeps the crossings transversal (no exactly coplanar landing).
+  for (Vec3& v : sheet.positions) v.z() = 1e-3 * spacing * (unit(c.random) - 0.5);
+  const double hinge = sheet.positions[c.n / 2].x(), reach = sheet.positions[c.n - 1].x() - hinge;
+  const double last_time = static_cast<double>(c.frames - 1) * SimulatorSettings{}.frame_seconds;
+  auto fold_angle = [=](double t) { return start + (end - start) * t / last_time; };
+  Setup setup;
+  setup.thickness = thickness_of(sheet);
+  setup.simulator = std::make_unique<ClothSimulator>(SimulatorSettings{});  // nothing to simulate
+  setup.objects.push_back({"sheet", ObjectKind::deformable, true, sheet.faces, sheet.positions.size(),
+                           [rest = sheet.positions, hinge, reach, curl, fold_angle](const ClothSimulator&, double t) {
+                             std::vector<Vec3> x = rest;
+                             for (Vec3& v : x) {
+                               const double d = v.x() - hinge;
+                               if (d <= 0) continue;
+                               const double angle = fold_angle(t) + curl * d / reach;
+                               v = Vec3(hinge + d * std::cos(angle), v.y(), v.z() + d * std::sin(angle));
+                             }
+                             return x;
+                           }});
+  // The blade: a vertical 3x3 plate across the left part, between two rows of the sheet, moving down by `travel`
+  // so that it passes the sheet's plane half-way through the frames.
+  const double row = std::floor(static_cast<double>(c.n) / 4.0);
+  const double blade_y = -0.5 + spacing * (row + 0.37), blade_x = -0.5 + 0.3 * (hinge + 0.5);
+  const double width = 0.4 * (hinge + 0.5), height = 0.3;
+  const ShapeMesh plate = cloth_grid(3, 1.0);
+  setup.objects.push_back({"blade", ObjectKind::rigid, false, plate.faces, plate.positions.size(),
+                           [plate = plate.positions, blade_x, blade_y, width, height, travel, last_time](const ClothSimulator&, double t) {
+                             const double centre = travel * (0.5 - t / last_time);
+                             std::vector<Vec3> x;
+                             for (const Vec3& q : plate) x.emplace_back(blade_x + (q.x() + 0.5) * width, blade_y, centre + q.y() * height);
+                             return x;
+                           }});
+  setup.collidable = {{"sheet", "blade"}};
+  setup.report = [fold_angle, travel, last_time](std::size_t, double t, const std::vector<std::vector<Vec3>>&) {
+    return Metrics{{"fold_angle_deg", fold_angle(t) * 180 / std::numbers::pi}, {"blade_centre_z", travel * (0.5 - t / last_time)}};
+  };
+  return setup;
+}
+
 struct SceneDefinition {
   ProceduralSceneInfo info;
   Setup (*build)(CommonParameters&, const SceneParameters&);
@@ -453,6 +507,12 @@ const std::vector<SceneDefinition>& definitions() {
       {{"pile", "several cloths fall on the ground and on each other: inter-object contact",
         with_common({{"count", 3, "number of cloths"}, {"friction", 0.5, "cloth-ground friction"}})},
        pile},
+      {{"fold", "kinematic: a sheet folds over and through itself while a blade cuts through it (real crossings)",
+        with_common({{"fold_start", 140, "fold angle at the first frame (degrees; 180 lays the part flat on the rest)"},
+                     {"fold_end", 200, "fold angle at the last frame (degrees)"},
+                     {"curl", 30, "how far the far edge turns ahead of the hinge (degrees)"},
+                     {"blade_travel", 0.5, "how far the blade moves down over the frames (m)"}})},
+       fold},
   };
   return scenes;
 }
@@ -491,6 +551,49 @@ SceneParameters resolve_parameters(const ProceduralSceneInfo& info, const SceneP
   require_integer("seed", 0, 9007199254740992.0);
   if (resolved.count("count")) require_integer("count", 1, 64);
   return resolved;
+}
+
+/// "wind=1e+06 (default 8), frames=400 (default 30)": the parameters a user changed, for messages.
+std::string changed_parameters(const ProceduralSceneInfo& info, const SceneParameters& parameters) {
+  std::ostringstream text;
+  for (const SceneParameter& parameter : info.parameters) {
+    const double value = parameters.at(parameter.name);
+    if (value == parameter.default_value) continue;
+    text << (text.tellp() > 0 ? ", " : "") << parameter.name << "=" << value << " (default " << parameter.default_value << ")";
+  }
+  return text.tellp() > 0 ? text.str() : "every parameter at its default";
+}
+
+/// Refuses, before anything is allocated, a scene whose simulation would not fit this machine's memory or whose
+/// frames would not fit the output's disk (resolution 4096 with 64 cloths would otherwise end in std::bad_alloc).
+/// The simulator keeps about kSimulatorBytesPerVertex per cloth vertex (positions, velocities, constraints and
+/// their colour groups, repulsion cells); each frame is written twice (cache and PLY), 24 bytes per vertex each.
+void check_scene_fits(const ProceduralSceneInfo& info, const SceneParameters& parameters, const std::filesystem::path& out) {
+  constexpr double kSimulatorBytesPerVertex = 1024;
+  constexpr double kFrameBytesPerVertex = 2 * 3 * sizeof(double);
+  const double n = parameters.at("resolution");
+  const double cloths = parameters.count("count") ? parameters.at("count") : 1.0;
+  const double vertices = n * n * cloths;
+  const double memory = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+  constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+  std::ostringstream message;
+  message << std::setprecision(3);
+  if (memory > 0 && vertices * kSimulatorBytesPerVertex > memory) {
+    message << "scene '" << info.name << "' with " << changed_parameters(info, parameters) << " needs about "
+            << vertices * kSimulatorBytesPerVertex / kGiB << " GiB to simulate; this machine has " << memory / kGiB << " GiB";
+    throw std::invalid_argument(message.str());
+  }
+  std::error_code error;
+  std::filesystem::path existing = out;
+  while (!existing.empty() && !std::filesystem::exists(existing, error)) existing = existing.parent_path();
+  const auto space = std::filesystem::space(existing.empty() ? std::filesystem::path(".") : existing, error);
+  const double frame_bytes = vertices * kFrameBytesPerVertex * parameters.at("frames");
+  if (!error && frame_bytes > static_cast<double>(space.available)) {
+    message << "scene '" << info.name << "' with " << changed_parameters(info, parameters) << " needs about "
+            << frame_bytes / kGiB << " GiB for its frames; " << out.string() << " has " << static_cast<double>(space.available) / kGiB
+            << " GiB free";
+    throw std::invalid_argument(message.str());
+  }
 }
 
 std::string cache_key(const std::string& name, const SceneParameters& parameters) {
@@ -559,12 +662,16 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
   const auto start = std::chrono::steady_clock::now();
   const SceneDefinition& definition = find_definition(request.name);
   const SceneParameters parameters = resolve_parameters(definition.info, request.parameters);
+  check_scene_fits(definition.info, parameters, request.out);
   CommonParameters common{static_cast<std::size_t>(parameters.at("resolution")),
                           static_cast<std::size_t>(parameters.at("frames")),
                           std::mt19937_64(static_cast<std::uint64_t>(parameters.at("seed")))};
   Setup setup = definition.build(common, parameters);
   const std::string key = cache_key(request.name, parameters);
   const double frame_seconds = SimulatorSettings{}.frame_seconds;
+  // One process generates a folder at a time; another one waits, then finds it complete.
+  std::filesystem::create_directories(request.out);
+  const FileLock lock(request.out / ".generate.lock");
 
   GenerateResult result;
   result.scene_file = request.out / "scene.json";
@@ -592,7 +699,12 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
       for (std::size_t k = 0; k < setup.objects.size(); ++k) {
         positions.push_back(setup.objects[k].positions(*setup.simulator, time));
         for (const Vec3& v : positions.back()) {
-          if (!v.allFinite()) throw std::runtime_error("simulation of '" + request.name + "' diverged at frame " + std::to_string(frame));
+          if (!v.allFinite()) {
+            throw std::invalid_argument("the simulation of '" + request.name + "' diverged at frame " + std::to_string(frame) +
+                                        " (non-finite positions of object '" + setup.objects[k].name + "') with " +
+                                        changed_parameters(definition.info, parameters) +
+                                        ": a parameter is outside the range where the simulator is stable");
+          }
         }
         if (frame < frames_of(setup.objects[k], common.frames)) writers[k]->append(positions.back());
       }

@@ -1,7 +1,8 @@
 #pragma once
 /// @file
 /// The built-in procedural scenes (the paper's benchmarks as deterministic, scalable frame sequences):
-/// spinning-ball, drape, flag, twist, funnel, pile. Each takes a cloth resolution N (N x N vertices,
+/// spinning-ball, drape, flag, twist, funnel, pile, and the kinematic fold (no simulation: real crossings, for
+/// gates and tests at δ = 0). Each takes a cloth resolution N (N x N vertices,
 /// 2(N-1)² triangles per cloth), a frame count and a seed; the same parameters give bit-identical frames on any
 /// thread count. Obstacles are triangle meshes with their own frames (a spinning ball moves, a table does not).
 
@@ -61,7 +62,9 @@ struct GenerateResult {
 };
 
 /// Simulates the scene (or finds it already in `out`, generated with the same parameters) and writes its folder.
-/// @throws std::invalid_argument for an unknown scene or parameter, or a value out of range.
+/// Two processes generating one folder take turns (a lock in the folder); the second finds it complete.
+/// @throws std::invalid_argument for an unknown scene or parameter, a value out of range, a scene too large for
+///         this machine's memory or the output's disk, or a simulation that diverges (naming the changed parameters).
 GenerateResult generate_procedural_scene(const GenerateRequest& request);
 
 /// Where scene files' {"generator": ...} blocks put generated scenes: CCDBENCH_CACHE_DIR, else

@@ -198,6 +198,52 @@ TEST(ProceduralScenes, FunnelClothIsPulledThroughAndStaysInsideTheFunnel) {
   EXPECT_GT(below, last.size() * 9 / 10);
 }
 
+// The kinematic fold exists for gates at δ = 0: it must make real crossings, of the sheet with itself and with the
+// blade, at δ = 0 as well as at its own δ, spread over many steps (not one landing).
+TEST(ProceduralScenes, FoldCrossesItselfAndTheBladeAtZeroThicknessOverManySteps) {
+  testing::TempDir dir;
+  const Frames f = load(generate("fold", {{"resolution", 8}, {"frames", 24}}, dir.path()));
+  const Scene& scene = f.sequence.scene();
+  ASSERT_EQ(scene.objects().size(), 2u);
+  for (double thickness : {0.0, scene.thickness()}) {
+    SCOPED_TRACE("δ = " + std::to_string(thickness));
+    std::size_t self = 0, across = 0, steps_with_self = 0;
+    for (std::size_t k = 0; k + 1 < f.frames.size(); ++k) {
+      const auto truth = reference::compute_step_truth(scene.with_thickness(thickness), f.frames[k], f.frames[k + 1],
+                                                       {thickness, false, {}});
+      std::size_t self_here = 0;
+      for (const auto& c : truth.collisions.vertex_face()) {
+        (scene.object_of_vertex(c.pair.v) == scene.object_of_face(c.pair.f) ? self_here : across) += 1;
+      }
+      for (const auto& c : truth.collisions.edge_edge()) {
+        (scene.object_of_vertex(c.pair.a.v0) == scene.object_of_vertex(c.pair.b.v0) ? self_here : across) += 1;
+      }
+      self += self_here;
+      steps_with_self += self_here > 0 ? 1 : 0;
+    }
+    EXPECT_GT(self, 0u);
+    EXPECT_GT(across, 0u);
+    EXPECT_GE(steps_with_self, 5u) << "the contact front must sweep over steps";
+  }
+  // Kinematic: the same frames on any thread count, and nothing moves more than half an edge in a frame.
+  const double edge = 1.0 / 7.0;
+  for (std::size_t k = 0; k + 1 < f.frames.size(); ++k) {
+    for (std::size_t v = 0; v < f.frames[k].size(); ++v) ASSERT_LT((f.frames[k + 1][v] - f.frames[k][v]).norm(), 0.5 * edge);
+  }
+}
+
+TEST(ProceduralScenes, ScenesThatCannotFitOrDivergeNameTheParameter) {
+  testing::TempDir dir;
+  const std::string huge = testing::error_message<std::invalid_argument>(
+      [&] { generate("pile", {{"resolution", 4096}, {"count", 64}}, dir / "huge"); });
+  EXPECT_NE(huge.find("scene 'pile' with resolution=4096 (default 32), count=64 (default 3) needs about"), std::string::npos) << huge;
+  EXPECT_NE(huge.find("GiB to simulate"), std::string::npos) << huge;
+  const std::string diverged = testing::error_message<std::invalid_argument>(
+      [&] { generate("flag", {{"resolution", 6}, {"frames", 4}, {"wind", 1e200}}, dir / "wind"); });
+  EXPECT_NE(diverged.find("the simulation of 'flag' diverged at frame 1"), std::string::npos) << diverged;
+  EXPECT_NE(diverged.find("wind=1e+200 (default 8)"), std::string::npos) << diverged;
+}
+
 TEST(ProceduralScenes, SceneFilesNameGeneratorsWithParameters) {
   testing::TempDir cache, dir;
   ::setenv("CCDBENCH_CACHE_DIR", cache.path().c_str(), 1);
