@@ -1,94 +1,190 @@
 #include "harness/truth_cache.hpp"
 
+#include "ccd/source_digest.hpp"
+#include "core/error.hpp"
 #include "datasets/atomic_file.hpp"
+#include "datasets/content_hash.hpp"
+#include "datasets/input_file.hpp"
 #include "reference/step_truth.hpp"
 
+#include <CGAL/version.h>
+
+#include <algorithm>
 #include <cstring>
-#include <fstream>
-#include <iomanip>
-#include <sstream>
+#include <iostream>
+#include <limits>
+#include <vector>
 
 namespace ccd::harness {
 namespace {
 
-/// Two FNV-1a streams with different offsets: 128 bits, so unrelated steps never share a key in practice.
-class ContentHash {
- public:
-  void bytes(const void* data, std::size_t size) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < size; ++i) {
-      a_ = (a_ ^ p[i]) * 1099511628211ull;
-      b_ = (b_ ^ p[i]) * 1099511628211ull;
-    }
-  }
-  template <class T>
-  void value(const T& v) {
-    bytes(&v, sizeof v);
-  }
-  std::string hex() const {
-    std::ostringstream out;
-    out << std::hex << std::setfill('0') << std::setw(16) << a_ << std::setw(16) << b_;
-    return out.str();
-  }
+constexpr char kMagic[8] = {'C', 'C', 'D', 'T', 'R', 'U', 'T', '2'};
+constexpr std::size_t kHeaderBytes = 8 + 8 + 8;  // magic, VF count, EE count
+constexpr std::size_t kChecksumBytes = 8;
+constexpr std::size_t kVertexFaceBytes = 2 * sizeof(std::uint32_t);
+constexpr std::size_t kEdgeEdgeBytes = 4 * sizeof(std::uint32_t);
 
- private:
-  std::uint64_t a_ = 14695981039346656037ull;
-  std::uint64_t b_ = 0x6c62272e07bb0142ull;
-};
+void put_u32(std::vector<unsigned char>& out, std::uint32_t value) {
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<unsigned char>(value >> (8 * i)));
+}
+void put_u64(std::vector<unsigned char>& out, std::uint64_t value) {
+  for (int i = 0; i < 8; ++i) out.push_back(static_cast<unsigned char>(value >> (8 * i)));
+}
+std::uint32_t get_u32(const unsigned char* p) {
+  std::uint32_t value = 0;
+  for (int i = 3; i >= 0; --i) value = (value << 8) | p[i];
+  return value;
+}
+std::uint64_t get_u64(const unsigned char* p) {
+  std::uint64_t value = 0;
+  for (int i = 7; i >= 0; --i) value = (value << 8) | p[i];
+  return value;
+}
 
-constexpr char kMagic[8] = {'C', 'C', 'D', 'T', 'R', 'U', 'T', 'H'};
+std::string pair_where(const char* kind, std::uint64_t index) { return std::string(kind) + " pair " + std::to_string(index); }
+
+void check_vertex_face(const std::filesystem::path& path, const Scene& scene, std::uint64_t index, const VertexFacePair& pair) {
+  const MeshTopology& topology = scene.topology();
+  const std::string where = pair_where("vertex-face", index);
+  if (pair.v >= topology.num_vertices() || pair.f >= topology.num_faces()) {
+    throw InputError(path, where, "vertex " + std::to_string(pair.v) + " or face " + std::to_string(pair.f) +
+                                      " out of range (" + std::to_string(topology.num_vertices()) + " vertices, " +
+                                      std::to_string(topology.num_faces()) + " faces)");
+  }
+  const Face& face = topology.face(pair.f);
+  if (!topology.is_used(pair.v) || pair.v == face[0] || pair.v == face[1] || pair.v == face[2] ||
+      !scene.may_collide(scene.object_of_vertex(pair.v), scene.object_of_face(pair.f))) {
+    throw InputError(path, where, "not a vertex-face pair this scene can have");
+  }
+}
+
+void check_edge(const std::filesystem::path& path, const MeshTopology& topology, const std::string& where, const Edge& e) {
+  if (e.v0 >= e.v1 || e.v1 >= topology.num_vertices() || !topology.find_edge(e.v0, e.v1)) {
+    throw InputError(path, where, "(" + std::to_string(e.v0) + ", " + std::to_string(e.v1) + ") is not an edge of the mesh");
+  }
+}
+
+void check_edge_edge(const std::filesystem::path& path, const Scene& scene, std::uint64_t index, const EdgeEdgePair& pair) {
+  const std::string where = pair_where("edge-edge", index);
+  check_edge(path, scene.topology(), where, pair.a);
+  check_edge(path, scene.topology(), where, pair.b);
+  if (!(pair.a < pair.b) || shares_vertex(pair.a, pair.b) ||
+      !scene.may_collide(scene.object_of_vertex(pair.a.v0), scene.object_of_vertex(pair.b.v0))) {
+    throw InputError(path, where, "not an edge-edge pair this scene can have");
+  }
+}
 
 }  // namespace
 
+std::string reference_version() {
+  return std::string("reference sources ") + CCDBENCH_REFERENCE_SOURCE_DIGEST + ", CGAL " + CGAL_VERSION_STR;
+}
+
 std::string truth_key(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1) {
-  ContentHash hash;
-  hash.bytes(kReferenceVersion, std::strlen(kReferenceVersion));
+  datasets::ContentHash hash;
+  hash.text("ccdbench truth v2");
+  hash.text(reference_version());
   hash.value(scene.thickness());
-  hash.value(scene.topology().num_vertices());
+  hash.value(static_cast<std::uint64_t>(scene.topology().num_vertices()));
   hash.bytes(scene.topology().faces().data(), scene.topology().faces().size() * sizeof(Face));
   for (const SceneObject& object : scene.objects()) {
-    hash.value(object.first_vertex);
-    hash.value(object.first_face);
-    hash.value(object.self_collision);
+    hash.value(static_cast<std::uint64_t>(object.first_vertex));
+    hash.value(static_cast<std::uint64_t>(object.first_face));
+    hash.value(static_cast<std::uint8_t>(object.self_collision));
   }
-  for (const auto& pair : scene.collidable_pairs()) hash.value(pair);
+  for (const auto& [a, b] : scene.collidable_pairs()) {
+    hash.value(static_cast<std::uint64_t>(a));
+    hash.value(static_cast<std::uint64_t>(b));
+  }
   hash.bytes(x0.data(), x0.size() * sizeof(Vec3));
   hash.bytes(x1.data(), x1.size() * sizeof(Vec3));
   return hash.hex();
 }
 
+void write_truth_file(const std::filesystem::path& path, const CollisionSet& truth) {
+  std::vector<unsigned char> bytes(kMagic, kMagic + 8);
+  put_u64(bytes, truth.vertex_face().size());
+  put_u64(bytes, truth.edge_edge().size());
+  for (const auto& c : truth.vertex_face()) {
+    put_u32(bytes, c.pair.v);
+    put_u32(bytes, c.pair.f);
+  }
+  for (const auto& c : truth.edge_edge()) {
+    for (VertexId v : {c.pair.a.v0, c.pair.a.v1, c.pair.b.v0, c.pair.b.v1}) put_u32(bytes, v);
+  }
+  put_u64(bytes, datasets::checksum64(bytes.data(), bytes.size()));
+  datasets::AtomicFile out(path);
+  out.stream().write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.commit();
+}
+
+CollisionSet read_truth_file(const std::filesystem::path& path, const Scene& scene) {
+  std::ifstream in = datasets::open_input_file(path, "truth cache file", std::ios::in | std::ios::binary);
+  const std::uintmax_t size = datasets::input_file_size(path);
+  if (size < kHeaderBytes + kChecksumBytes) throw InputError(path, "header", "truncated truth file");
+  unsigned char header[kHeaderBytes];
+  if (!in.read(reinterpret_cast<char*>(header), kHeaderBytes)) throw InputError(path, "header", "cannot read");
+  if (std::memcmp(header, kMagic, 8) != 0) throw InputError(path, "header", "not a ccdbench truth file (bad magic)");
+  const std::uint64_t vf = get_u64(header + 8), ee = get_u64(header + 16);
+  // Counts first against the bytes that back them, so that no corrupt count is ever allocated.
+  const std::uintmax_t body = size - kHeaderBytes - kChecksumBytes;
+  if (vf > body / kVertexFaceBytes || ee > (body - vf * kVertexFaceBytes) / kEdgeEdgeBytes ||
+      vf * kVertexFaceBytes + ee * kEdgeEdgeBytes != body) {
+    throw InputError(path, "header", std::to_string(vf) + " vertex-face and " + std::to_string(ee) +
+                                         " edge-edge pairs do not match the file's " + std::to_string(size) + " bytes");
+  }
+  std::vector<unsigned char> bytes(header, header + kHeaderBytes);
+  bytes.resize(static_cast<std::size_t>(size));
+  if (!in.read(reinterpret_cast<char*>(bytes.data() + kHeaderBytes), static_cast<std::streamsize>(size - kHeaderBytes))) {
+    throw InputError(path, "body", "cannot read (file changed while reading?)");
+  }
+  const std::size_t checked = bytes.size() - kChecksumBytes;
+  if (datasets::checksum64(bytes.data(), checked) != get_u64(bytes.data() + checked)) {
+    throw InputError(path, "checksum", "does not match the content (the file is corrupt)");
+  }
+  CollisionSet set;
+  const unsigned char* p = bytes.data() + kHeaderBytes;
+  VertexFacePair previous_vf{};
+  for (std::uint64_t i = 0; i < vf; ++i, p += kVertexFaceBytes) {
+    const VertexFacePair pair{get_u32(p), get_u32(p + 4)};
+    check_vertex_face(path, scene, i, pair);
+    if (i > 0 && !(previous_vf < pair)) throw InputError(path, pair_where("vertex-face", i), "pairs out of order or repeated");
+    set.add(pair);
+    previous_vf = pair;
+  }
+  EdgeEdgePair previous_ee{};
+  for (std::uint64_t i = 0; i < ee; ++i, p += kEdgeEdgeBytes) {
+    const EdgeEdgePair pair{{get_u32(p), get_u32(p + 4)}, {get_u32(p + 8), get_u32(p + 12)}};
+    check_edge_edge(path, scene, i, pair);
+    if (i > 0 && !(previous_ee < pair)) throw InputError(path, pair_where("edge-edge", i), "pairs out of order or repeated");
+    set.add(pair);
+    previous_ee = pair;
+  }
+  set.normalize();
+  return set;
+}
+
+std::filesystem::path TruthCache::file_for(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1) const {
+  return directory_ / (truth_key(scene, x0, x1) + ".truth");
+}
+
 CollisionSet TruthCache::truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed) const {
-  const std::filesystem::path file = directory_ / (truth_key(scene, x0, x1) + ".truth");
-  if (std::ifstream in{file, std::ios::binary}) {
-    char magic[8];
-    std::uint64_t vf = 0, ee = 0;
-    if (in.read(magic, 8) && std::memcmp(magic, kMagic, 8) == 0 && in.read(reinterpret_cast<char*>(&vf), 8) &&
-        in.read(reinterpret_cast<char*>(&ee), 8)) {
-      std::vector<VertexFacePair> vf_pairs(vf);
-      std::vector<EdgeEdgePair> ee_pairs(ee);
-      if (in.read(reinterpret_cast<char*>(vf_pairs.data()), static_cast<std::streamsize>(vf * sizeof(VertexFacePair))) &&
-          in.read(reinterpret_cast<char*>(ee_pairs.data()), static_cast<std::streamsize>(ee * sizeof(EdgeEdgePair)))) {
-        CollisionSet set;
-        for (const auto& p : vf_pairs) set.add(p);
-        for (const auto& p : ee_pairs) set.add(p);
-        set.normalize();
-        computed = false;
-        return set;
-      }
+  const std::filesystem::path file = file_for(scene, x0, x1);
+  if (std::filesystem::exists(file)) {
+    try {
+      CollisionSet set = read_truth_file(file, scene);
+      computed = false;
+      return set;
+    } catch (const InputError& error) {
+      (warnings_ ? *warnings_ : std::cerr) << "ccdbench: warning: " << error.what()
+                                           << "; the cached truth is not used, it is computed again\n";
     }
   }
   reference::TruthRequest request;
   request.thickness = scene.thickness();
   CollisionSet set = reference::compute_step_truth(scene, x0, x1, request).collisions;
   std::filesystem::create_directories(directory_);
-  datasets::AtomicFile out(file);
-  const std::uint64_t vf = set.vertex_face().size(), ee = set.edge_edge().size();
-  out.stream().write(kMagic, 8);
-  out.stream().write(reinterpret_cast<const char*>(&vf), 8);
-  out.stream().write(reinterpret_cast<const char*>(&ee), 8);
-  for (const auto& c : set.vertex_face()) out.stream().write(reinterpret_cast<const char*>(&c.pair), sizeof c.pair);
-  for (const auto& c : set.edge_edge()) out.stream().write(reinterpret_cast<const char*>(&c.pair), sizeof c.pair);
-  out.commit();
+  write_truth_file(file, set);
   computed = true;
   return set;
 }

@@ -1,32 +1,51 @@
 #pragma once
 /// @file
 /// Whole-step truth, computed once per step and kept on disk: keyed by the step's content (positions and
-/// topology), δ, the collision filter (self flags, collidable pairs) and the reference's version.
+/// topology), δ, the collision filter (self flags, collidable pairs) and a digest of the reference's sources taken
+/// at build time (so a change to the reference can never read old truth, and nobody has to remember a version).
+/// Each file carries a checksum and every pair is checked against the scene when read; a file that fails either
+/// check is reported and recomputed, never used.
 
 #include "core/collision_set.hpp"
 #include "core/scene.hpp"
 
 #include <filesystem>
+#include <iosfwd>
 #include <span>
 #include <string>
 
 namespace ccd::harness {
 
-/// Bump when the reference could decide anything differently: old cached truth is then never read.
-inline constexpr const char* kReferenceVersion = "reference-1";
+/// What the cache key holds of the reference's version: the build-time digest of its sources and CGAL's version.
+std::string reference_version();
 
 /// A 128-bit content key, as 32 hex digits.
 std::string truth_key(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1);
 
+/// Writes a truth file: magic, counts, the pairs, and an XXH3-64 checksum of everything before it.
+void write_truth_file(const std::filesystem::path& path, const CollisionSet& truth);
+
+/// Reads a truth file for `scene`. The counts must match the file's size before anything is allocated, the
+/// checksum must match, and every pair must be one the scene has: vertex and face ids in range, the vertex used and
+/// not a corner of the face, both edges of the mesh and sharing no vertex, objects that may collide, pairs sorted
+/// without repeats. @throws InputError (file, where, reason) otherwise.
+CollisionSet read_truth_file(const std::filesystem::path& path, const Scene& scene);
+
 class TruthCache {
  public:
-  explicit TruthCache(std::filesystem::path directory) : directory_(std::move(directory)) {}
+  /// `warnings` receives one line per cached file that was bad and recomputed (nullptr: std::cerr).
+  explicit TruthCache(std::filesystem::path directory, std::ostream* warnings = nullptr)
+      : directory_(std::move(directory)), warnings_(warnings) {}
 
   /// The truth of the step, from the cache or computed by the reference (and then stored). `computed` tells which.
   CollisionSet truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed) const;
 
+  /// Where the truth of this step is (or would be) kept.
+  std::filesystem::path file_for(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1) const;
+
  private:
   std::filesystem::path directory_;
+  std::ostream* warnings_;
 };
 
 }  // namespace ccd::harness

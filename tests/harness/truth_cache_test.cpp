@@ -1,0 +1,170 @@
+// The truth cache: a file is used only when its checksum holds and every pair is one the scene can have; anything
+// else is reported and the truth computed again.
+
+#include "ccd/source_digest.hpp"
+#include "core/error.hpp"
+#include "datasets/procedural_scenes.hpp"
+#include "harness/truth_cache.hpp"
+#include "reference/step_truth.hpp"
+#include "tests/support/cli.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+namespace ccd::harness {
+namespace {
+
+/// Two 5x5 sheets, the second passing down through the first during the step (self contact off on the second).
+struct CrossingStep {
+  Scene scene;
+  std::vector<Vec3> x0, x1;
+};
+
+CrossingStep crossing_step() {
+  std::vector<Face> faces = testing::grid_faces(5);
+  std::vector<Vec3> x0 = testing::grid_positions(5, 0.0), x1 = x0;
+  for (Vec3& p : x1) p.z() += 0.01 * p.x();  // the lower sheet bends a little
+  for (const Vec3& p : testing::grid_positions(5, 0.0)) {
+    x0.push_back(Vec3(0.3 + p.x() * 0.5, 0.2 + p.y() * 0.5, 0.5));
+    x1.push_back(Vec3(0.35 + p.x() * 0.5, 0.25 + p.y() * 0.5, -0.5 + 0.02 * p.y()));
+  }
+  Scene scene({{"lower", ObjectKind::deformable, true, 25, faces}, {"upper", ObjectKind::deformable, false, 25, faces}},
+              {{0, 1}}, 0.0);
+  return {std::move(scene), std::move(x0), std::move(x1)};
+}
+
+std::vector<char> file_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_bytes(const std::filesystem::path& path, const std::vector<char>& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+TEST(TruthCache, EveryFlippedBitIsDetectedAndTheTruthComputedAgain) {
+  testing::TempDir dir;
+  const CrossingStep step = crossing_step();
+  std::ostringstream warnings;
+  const TruthCache cache(dir / "truth", &warnings);
+  bool computed = false;
+  const CollisionSet truth = cache.truth(step.scene, step.x0, step.x1, computed);
+  ASSERT_TRUE(computed);
+  ASSERT_GT(truth.vertex_face().size(), 0u) << "the step must collide for this test to mean anything";
+  ASSERT_GT(truth.edge_edge().size(), 0u);
+  const auto file = cache.file_for(step.scene, step.x0, step.x1);
+  EXPECT_TRUE(read_truth_file(file, step.scene).same_pairs(truth));
+  EXPECT_TRUE(cache.truth(step.scene, step.x0, step.x1, computed).same_pairs(truth));
+  EXPECT_FALSE(computed);
+  const std::vector<char> original = file_bytes(file);
+  for (std::size_t byte = 0; byte < original.size(); ++byte) {
+    for (int bit : {0, 7}) {
+      std::vector<char> flipped = original;
+      flipped[byte] = static_cast<char>(flipped[byte] ^ (1 << bit));
+      write_bytes(file, flipped);
+      EXPECT_THROW(read_truth_file(file, step.scene), InputError) << "byte " << byte << " bit " << bit;
+    }
+  }
+  warnings.str("");
+  const CollisionSet again = cache.truth(step.scene, step.x0, step.x1, computed);
+  EXPECT_TRUE(computed) << "a corrupt file must be recomputed, not used";
+  EXPECT_TRUE(again.same_pairs(truth));
+  EXPECT_NE(warnings.str().find(file.filename().string()), std::string::npos) << warnings.str();
+  EXPECT_EQ(file_bytes(file), original) << "the recomputed truth replaces the corrupt file";
+}
+
+// A file with a valid checksum can still hold pairs of another scene: every pair is checked against this one (an
+// out-of-range index used to crash `run` in record_misses).
+TEST(TruthCache, PairsTheSceneCannotHaveAreRefused) {
+  testing::TempDir dir;
+  const CrossingStep step = crossing_step();
+  const auto file = dir / "x.truth";
+  auto refused = [&](const CollisionSet& set) {
+    write_truth_file(file, set);
+    return testing::error_message<InputError>([&] { read_truth_file(file, step.scene); });
+  };
+  CollisionSet out_of_range;
+  out_of_range.add(VertexFacePair{1000000, 0});
+  EXPECT_NE(refused(out_of_range).find("x.truth:vertex-face pair 0: vertex 1000000 or face 0 out of range"), std::string::npos);
+  CollisionSet corner;
+  corner.add(VertexFacePair{step.scene.topology().face(0)[1], 0});
+  EXPECT_NE(refused(corner).find("not a vertex-face pair this scene can have"), std::string::npos);
+  CollisionSet self_upper;  // the upper sheet has no self contact
+  self_upper.add(VertexFacePair{25 + 12, 33});
+  EXPECT_NE(refused(self_upper).find("not a vertex-face pair"), std::string::npos);
+  CollisionSet not_an_edge;
+  not_an_edge.add(EdgeEdgePair{{0, 24}, {25, 26}});
+  EXPECT_NE(refused(not_an_edge).find("is not an edge of the mesh"), std::string::npos);
+  {
+    CollisionSet two;
+    two.add(VertexFacePair{0, 20});
+    two.add(VertexFacePair{0, 10});  // written in this order: out of order
+    write_truth_file(file, two);
+  }
+  EXPECT_NE(testing::error_message<InputError>([&] { read_truth_file(file, step.scene); }).find("out of order"), std::string::npos);
+}
+
+TEST(TruthCache, CountsAreCheckedAgainstTheFileSizeBeforeAnythingIsAllocated) {
+  testing::TempDir dir;
+  const CrossingStep step = crossing_step();
+  const auto file = dir / "x.truth";
+  write_truth_file(file, CollisionSet{});
+  std::vector<char> bytes = file_bytes(file);
+  ASSERT_EQ(bytes.size(), 32u);
+  bytes[15] = 0x10;  // the VF count becomes 2^60
+  write_bytes(file, bytes);
+  EXPECT_NE(testing::error_message<InputError>([&] { read_truth_file(file, step.scene); }).find("do not match the file's 32 bytes"),
+            std::string::npos);
+  write_bytes(file, {'C', 'C'});
+  EXPECT_NE(testing::error_message<InputError>([&] { read_truth_file(file, step.scene); }).find("truncated"), std::string::npos);
+}
+
+// The key holds a digest of the reference's sources taken at build time: no version number to forget.
+TEST(TruthCache, TheKeyHoldsTheDigestOfTheReferenceSources) {
+  EXPECT_TRUE(std::regex_match(std::string(CCDBENCH_REFERENCE_SOURCE_DIGEST), std::regex("[0-9a-f]{64}")));
+  EXPECT_GE(CCDBENCH_REFERENCE_SOURCE_FILES, 20) << "the digest must cover reference/ and core/";
+  EXPECT_NE(reference_version().find(CCDBENCH_REFERENCE_SOURCE_DIGEST), std::string::npos);
+  const CrossingStep step = crossing_step();
+  const std::string key = truth_key(step.scene, step.x0, step.x1);
+  EXPECT_EQ(key.size(), 32u);
+  std::vector<Vec3> moved = step.x1;
+  moved[3].x() = std::nextafter(moved[3].x(), 9.0);
+  EXPECT_NE(truth_key(step.scene, step.x0, moved), key);
+  EXPECT_NE(truth_key(step.scene.with_thickness(1e-9), step.x0, step.x1), key);
+}
+
+// End to end: a bit flipped in every cached truth file used to change `missed`; now the run says so and its
+// verdicts are those of the fresh truth.
+TEST(TruthCache, ARunWithCorruptCachedTruthGivesTheSameVerdicts) {
+  testing::TempDir dir;
+  ::setenv("CCDBENCH_CACHE_DIR", (dir / "cache").c_str(), 1);
+  datasets::generate_procedural_scene({"fold", {{"resolution", 6}, {"frames", 8}}, dir / "s", {}, {}});
+  const std::string run = "run --strategy full --thickness 0 --scene " + testing::quoted(dir / "s") + " --fresh --out " +
+                          testing::quoted(dir / "out") + " --json " + testing::quoted(dir / "s.json");
+  const auto first = testing::run_ccdbench(run);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const nlohmann::json before = testing::read_json(dir / "s.json");
+  ASSERT_GT(before[0]["colliding"].get<int>(), 0);
+  std::size_t corrupted = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "cache/truth")) {
+    std::vector<char> bytes = file_bytes(entry.path());
+    if (bytes.size() <= 32) continue;  // no pair to corrupt
+    bytes[24] = static_cast<char>(bytes[24] ^ 1);  // the first pair's vertex: another pair, a valid-looking file
+    write_bytes(entry.path(), bytes);
+    ++corrupted;
+  }
+  ASSERT_GT(corrupted, 0u);
+  const auto second = testing::run_ccdbench(run);
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_NE(second.output.find("the cached truth is not used"), std::string::npos) << second.output;
+  const nlohmann::json after = testing::read_json(dir / "s.json");
+  for (const char* field : {"colliding", "missed", "false_alarms", "reported"}) EXPECT_EQ(after[0][field], before[0][field]) << field;
+  ::unsetenv("CCDBENCH_CACHE_DIR");
+}
+
+}  // namespace
+}  // namespace ccd::harness
