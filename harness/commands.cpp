@@ -1,6 +1,7 @@
 #include "harness/commands.hpp"
 
 #include "core/error.hpp"
+#include "datasets/atomic_file.hpp"
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/sample_step.hpp"
 #include "datasets/scene_file.hpp"
@@ -34,17 +35,32 @@ int run_inspect(const InspectOptions& options, std::ostream& out) {
 int run_queries(const QueriesOptions& options, std::ostream& out) {
   const std::vector<std::string> methods = options.sweep ? sweep_methods(options.methods) : options.methods;
   for (const std::string& method : methods) make_query_method(method);  // unknown names fail before work
+  if (options.json) datasets::require_writable_file(*options.json);
+  if (options.report) datasets::require_writable_directory(*options.report);
   std::vector<datasets::QueryFile> files;
   for (const auto& path : datasets::discover_query_files(options.paths)) files.push_back(datasets::read_query_file(path));
   if (options.extremes) {
     for (datasets::QueryFile& file : extremes_query_files(datasets::extremes_suite())) files.push_back(std::move(file));
   }
   if (files.empty()) throw InputError({}, {}, "no query files found under the given paths");
+  for (const datasets::QueryFile& file : files) {
+    const std::size_t unlabelled = file.queries.size() - file.labelled();
+    if (unlabelled > 0 && !options.allow_unlabelled) {
+      throw InputError(file.path, {}, std::to_string(unlabelled) + " of " + std::to_string(file.queries.size()) +
+                                          " queries have no truth label (no 7th column, no mma_bool/NAME_mma_bool.json): "
+                                          "their misses cannot be counted; --allow-unlabelled scores them with FN and "
+                                          "FP shown as '-'");
+    }
+  }
   Progress progress("queries: files", files.size());
   const std::vector<QueryScore> scores = score_query_files(
       files, {methods, options.thickness, options.repeats},
       [&](std::size_t done, std::size_t) { progress.update(done); });
   print_query_scores(scores, out);
+  if (const QueryScore& total = scores.back(); total.unlabeled > 0) {
+    out << "note: " << total.unlabeled << " of " << total.queries
+        << " queries had no truth label: FN and FP count the labelled ones only ('-': none labelled).\n";
+  }
   if (options.thickness > 0) {
     out << "note: the data's truth labels are for zero thickness; at thickness " << options.thickness
         << " a method may rightly report more (counted as FP here), never fewer.\n";
@@ -103,6 +119,7 @@ LoadedStep load_step(const TruthOptions& options) {
 }  // namespace
 
 int run_truth(const TruthOptions& options, std::ostream& out) {
+  if (options.json) datasets::require_writable_file(*options.json);
   const LoadedStep step = load_step(options);
   reference::TruthRequest request;
   request.thickness = step.scene.thickness();
@@ -151,6 +168,8 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
 }
 
 int run_stress_command(const StressOptions& options, std::ostream& out) {
+  if (options.json) datasets::require_writable_file(*options.json);
+  if (options.write_queries) datasets::require_writable_directory(*options.write_queries);
   const std::vector<datasets::ExtremeQuery> suite = datasets::extremes_suite(options.seed);
   out << "extremes suite: " << suite.size() << " queries in " << datasets::extremes_families().size()
       << " families (seed " << options.seed << "), at δ = 0 and at each case's δ > 0; truth from the exact reference\n";

@@ -26,6 +26,8 @@ struct QueriesOptions {
   bool sweep = false;
   /// Also score the extremes suite (labelled by the reference at zero thickness) as one more data set.
   bool extremes = false;
+  /// Score files without truth labels (their FN and FP are unknown, shown as '-'); otherwise such a file is an error.
+  bool allow_unlabelled = false;
   /// Write README.md and scores.json into this folder, with `command_line` above the table.
   std::optional<std::filesystem::path> report;
   std::string command_line;

@@ -1,6 +1,7 @@
 // ccdbench: the command line of the harness.
 
 #include "ccd/config.hpp"
+#include "datasets/input_file.hpp"
 #include "datasets/scene_file.hpp"
 #include "core/error.hpp"
 #include "harness/commands.hpp"
@@ -9,13 +10,13 @@
 #include "harness/run.hpp"
 #include "strategies/strategy.hpp"
 
-#include <fstream>
 
 #include <CLI/CLI.hpp>
 
 #include <tbb/global_control.h>
 
 #include <iostream>
+#include <limits>
 #include <optional>
 
 namespace {
@@ -24,7 +25,19 @@ constexpr const char* kDescription =
     "ccdbench: continuous collision detection of deforming triangle meshes, measured against an exact reference.\n"
     "Every strategy's collision sets are compared with exact truth (rational and algebraic arithmetic), so a\n"
     "reported '0 missed' is a checked statement. Commands print tables for people; --json gives the same for\n"
-    "scripts. Bad input stops with FILE:WHERE: REASON and a non-zero exit.";
+    "scripts. Bad input (or a bad option) stops with FILE:WHERE: REASON and exit status 2, before anything is\n"
+    "written; `check` exits 1 when the gate fails.";
+
+/// At most this many worker threads: far beyond any machine this runs on, and small enough that TBB's per-thread
+/// state stays a few megabytes (--threads 1e8 would ask it for gigabytes).
+constexpr std::size_t kMaxThreads = 1024;
+constexpr int kMaxRepeats = 1000;
+
+/// A refusal of the command line, in the same FILE:WHERE: REASON form as bad input.
+int refuse(const std::string& where, const std::string& reason) {
+  std::cerr << "ccdbench: error: command line:" << where << (where.empty() ? " " : ": ") << reason << '\n';
+  return 2;
+}
 
 std::string version_text() {
   return std::string("ccdbench ") + CCDBENCH_VERSION + " (" + CCDBENCH_BUILD_TYPE + "; OpenCL " +
@@ -38,8 +51,10 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", version_text());
   app.require_subcommand(1);
   std::size_t threads = 0;
-  app.add_option("--threads", threads, "worker threads for every command (default: all cores); results never depend on it")
-      ->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads,
+                 "worker threads for every command, 1 to " + std::to_string(kMaxThreads) +
+                     " (default: all cores); verdicts never depend on it, timings do")
+      ->check(CLI::Range(std::size_t{1}, kMaxThreads));
 
   ccd::harness::InspectOptions inspect_options;
   CLI::App* inspect = app.add_subcommand(
@@ -64,11 +79,14 @@ int main(int argc, char** argv) {
   queries->add_option("--method", methods, "comma-separated methods; `exact` is the reference itself")
       ->capture_default_str();
   queries->add_option("--thickness", queries_options.thickness, "thickness δ >= 0 (the data's truth is for 0)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Range(0.0, std::numeric_limits<double>::max()))
       ->capture_default_str();
-  queries->add_option("--repeat", queries_options.repeats, "timing passes per file; ns/query is their median")
-      ->check(CLI::PositiveNumber)
+  queries->add_option("--repeat", queries_options.repeats, "timing passes per file (1 to 1000); ns/query is their median")
+      ->check(CLI::Range(1, kMaxRepeats))
       ->capture_default_str();
+  queries->add_flag("--allow-unlabelled", queries_options.allow_unlabelled,
+                    "score files without truth labels too: their FN and FP show as '-' (unlabelled), never as 0, and\n"
+                    "the total says how many queries had no label (without this flag such a file is an error)");
   queries->add_option("--json", queries_options.json, "also write the scores as a JSON array to this file");
   queries->add_flag("--sweep", queries_options.sweep,
                     "vary each narrow phase's accuracy: conservative tolerance 1e-2..1e-7, eta 0..1e-2 of the others");
@@ -91,7 +109,7 @@ int main(int argc, char** argv) {
                     "a Scalable-CCD sample step folder: also compare with its own truth");
   truth->add_option("--thickness", truth_options.thickness,
                     "thickness δ >= 0 (default: the scene's; 0 for --frames and --sample)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, std::numeric_limits<double>::max()));
   truth->add_flag("--toi", truth_options.toi, "also compute every colliding pair's earliest contact time exactly");
   truth->add_option("--json", truth_options.json, "also write the counts and statistics as JSON to this file");
 
@@ -136,26 +154,38 @@ int main(int argc, char** argv) {
       ->expected(2, 100000);
   run->add_option("--strategy", run_strategies, "comma-separated strategy specs")->capture_default_str();
   run->add_option("--thickness", run_options.thickness, "thickness δ >= 0 (default: the scene's; 0 for --frames)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, std::numeric_limits<double>::max()));
   run->add_option("--verify", run_verify, "exact (every step against the exact truth) or none")
       ->check(CLI::IsMember({"exact", "none"}))
       ->capture_default_str();
-  run->add_option("--repeat", run_options.repeats, "timed passes; ms per step is the median")->check(CLI::PositiveNumber);
-  run->add_option("--out", run_options.out, "results folder: results.jsonl and the finished cells")->capture_default_str();
+  run->add_option("--repeat", run_options.repeats, "timed passes (1 to 1000); ms per step is the median")
+      ->check(CLI::Range(1, kMaxRepeats));
+  run->add_option("--out", run_options.out,
+                  "results folder: cells/ (one file per finished cell, reused by a later run only when its inputs,\n"
+                  "steps, δ, strategy, repeats, threads and executable are all the same) and results.jsonl (the step\n"
+                  "records and summary of every finished cell of every run into this folder)")
+      ->capture_default_str();
   run->add_option("--json", run_options.json, "write the summaries (one per scene and strategy) as a JSON array");
   run->add_option("--report", run_options.report, "write a Markdown page (table, steps.json for the plots) here");
-  run->add_option("--max-steps", run_options.max_steps, "only the first N steps of each scene");
+  run->add_option("--max-steps", run_options.max_steps, "only the first N steps of each scene (0: all)")
+      ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 40));
   run->add_flag("--fresh", run_options.fresh, "rerun cells kept from an earlier run");
   run->add_option("--misses", run_options.misses,
                   "write each cell's missed pairs here as rational query files by cause (DIR/SCENE/CELL/{vertex-face,"
                   "edge-edge}/CAUSE.csv; cause culled or tested, or for fcl why FCL's test said no), to replay with "
                   "`ccdbench queries`");
 
-  std::string baseline_file, results_file;
+  std::string baseline_file;
+  std::vector<std::string> results_files;
   CLI::App* check = app.add_subcommand(
-      "check", "The CI gate: fail (exit 1) when a result misses more collisions than its baseline allows.");
-  check->add_option("--baseline", baseline_file, "JSON array of {scene, strategy, max_missed}")->required();
-  check->add_option("RESULTS", results_file, "a `ccdbench run --json` summary file")->required();
+      "check",
+      "The CI gate: exit 1 when it fails, 2 when a file is malformed. It fails when the results are empty, a result\n"
+      "has no baseline entry or an entry no result, a result was not verified or has no colliding pair (it could\n"
+      "not miss anything, so it gates nothing), or a result misses more than its entry allows.");
+  check->add_option("--baseline", baseline_file,
+                    "JSON array of {scene, strategy, thickness: \"scene\" or a number, max_missed: integer >= 0}")
+      ->required();
+  check->add_option("RESULTS", results_files, "`ccdbench run --json` summary files, taken together")->required();
 
   CLI::App* scenes = app.add_subcommand("scenes", "List the built-in procedural scenes, their parameters and defaults.");
 
@@ -175,8 +205,14 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& help) {
+    return app.exit(help);
+  } catch (const CLI::CallForAllHelp& help) {
+    return app.exit(help);
+  } catch (const CLI::CallForVersion& version) {
+    return app.exit(version);
   } catch (const CLI::ParseError& error) {
-    return app.exit(error);
+    return refuse({}, error.what() + std::string(" (see ccdbench --help)"));
   }
 
   std::optional<tbb::global_control> thread_limit;
@@ -194,19 +230,27 @@ int main(int argc, char** argv) {
     if (*scenes) return ccd::harness::run_scenes(std::cout);
     if (*run) {
       const int sources = (run_suite.empty() ? 0 : 1) + (run_scene.empty() ? 0 : 1) + (run_frames.empty() ? 0 : 1);
-      if (sources != 1) throw std::invalid_argument("give exactly one of --suite, --scene, --frames");
+      if (sources != 1) return refuse({}, "give exactly one of --suite, --scene, --frames");
       if (!run_suite.empty()) run_options.scenes = ccd::harness::suite_scenes(run_suite);
       if (!run_scene.empty()) {
-        run_options.scenes.push_back({std::filesystem::path(run_scene).filename().string(),
+        run_options.scenes.push_back({ccd::harness::scene_file_label(run_scene),
                                       [run_scene] { return ccd::datasets::load_scene_file(run_scene); }});
       }
       if (!run_frames.empty()) {
         const std::vector<std::filesystem::path> files(run_frames.begin(), run_frames.end());
-        run_options.scenes.push_back({std::filesystem::path(run_frames[0]).parent_path().filename().string() + "/" +
-                                          std::filesystem::path(run_frames[0]).filename().string(),
+        const std::filesystem::path first(run_frames[0]);
+        const std::string folder = first.parent_path().filename().string();
+        run_options.scenes.push_back({(folder.empty() ? "" : folder + "/") + first.filename().string(),
                                       [files] { return ccd::datasets::scene_from_frame_files(files, 0.0); }});
       }
       run_options.strategies = CLI::detail::split(run_strategies, ',');
+      for (const std::string& spec : run_options.strategies) {
+        try {
+          ccd::strategies::make_strategy(spec);
+        } catch (const std::invalid_argument& error) {
+          return refuse("--strategy " + spec, error.what());
+        }
+      }
       run_options.verify = run_verify == "exact";
       run_options.command_line = "build/release/bin/ccdbench";
       for (int i = 1; i < argc; ++i) run_options.command_line += std::string(" ") + argv[i];
@@ -214,10 +258,10 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*check) {
-      std::ifstream baseline_in(baseline_file), results_in(results_file);
-      if (!baseline_in) throw ccd::InputError(baseline_file, {}, "cannot open baseline");
-      if (!results_in) throw ccd::InputError(results_file, {}, "cannot open results");
-      const bool ok = ccd::harness::check_against_baseline(nlohmann::json::parse(baseline_in), nlohmann::json::parse(results_in), std::cout);
+      const nlohmann::json baseline = ccd::datasets::read_json_file(baseline_file, "baseline file");
+      std::vector<std::pair<std::filesystem::path, nlohmann::json>> results;
+      for (const std::string& file : results_files) results.emplace_back(file, ccd::datasets::read_json_file(file, "results file"));
+      const bool ok = ccd::harness::check_against_baseline(baseline, baseline_file, results, std::cout);
       std::cout << (ok ? "check: every result within its baseline\n" : "check: FAILED\n");
       return ok ? 0 : 1;
     }
@@ -228,6 +272,12 @@ int main(int argc, char** argv) {
     if (*generate) return ccd::harness::run_generate(generate_options, std::cout);
   } catch (const ccd::InputError& error) {
     std::cerr << "ccdbench: error: " << error.what() << '\n';
+    return 2;
+  } catch (const std::invalid_argument& error) {
+    // Options that only the command's own code can judge (an unknown method, a generator parameter).
+    return refuse({}, error.what());
+  } catch (const std::bad_alloc&) {
+    std::cerr << "ccdbench: error: out of memory: the input or a parameter asks for more than this machine has\n";
     return 2;
   } catch (const std::exception& error) {
     std::cerr << "ccdbench: error: " << error.what() << '\n';

@@ -91,15 +91,28 @@ std::vector<std::string> query_method_names() {
   return names;
 }
 
+namespace {
+
+/// A count over the labelled queries, or null (unknown) when none is labelled: never a 0 nobody measured.
+nlohmann::json labelled_count(const QueryScore& s, std::size_t count) {
+  return s.any_labelled() ? nlohmann::json(count) : nlohmann::json(nullptr);
+}
+
+std::string labelled_text(const QueryScore& s, std::size_t count) {
+  return s.any_labelled() ? std::to_string(count) : "-";
+}
+
+}  // namespace
+
 nlohmann::json to_json(const QueryScore& s) {
   return {{"method", s.method},
           {"file", s.file},
           {"thickness", s.thickness},
           {"queries", s.queries},
-          {"positives", s.positives},
+          {"positives", labelled_count(s, s.positives)},
           {"reported", s.reported},
-          {"false_negatives", s.false_negatives},
-          {"false_positives", s.false_positives},
+          {"false_negatives", labelled_count(s, s.false_negatives)},
+          {"false_positives", labelled_count(s, s.false_positives)},
           {"unlabeled", s.unlabeled},
           {"ns_per_query", s.ns_per_query},
           {"false_negative_lines", s.false_negative_lines}};
@@ -183,8 +196,9 @@ void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out
       << "FN" << std::setw(8) << "FP" << std::setw(14) << "ns/query" << '\n';
   for (const QueryScore& s : scores) {
     out << std::left << std::setw(method_column) << s.method << std::setw(file_column) << s.file << std::right
-        << std::setw(9) << s.queries << std::setw(10) << s.positives << std::setw(10) << s.reported << std::setw(8)
-        << s.false_negatives << std::setw(8) << s.false_positives << std::setw(14) << std::fixed
+        << std::setw(9) << s.queries << std::setw(10) << labelled_text(s, s.positives) << std::setw(10) << s.reported
+        << std::setw(8) << labelled_text(s, s.false_negatives) << std::setw(8) << labelled_text(s, s.false_positives)
+        << std::setw(14) << std::fixed
         << std::setprecision(0) << s.ns_per_query << '\n';
     out.unsetf(std::ios::fixed);
   }
@@ -219,8 +233,9 @@ void write_query_report(const std::filesystem::path& directory, const std::vecto
       << "for zero thickness. Reproduce every number with:\n\n```sh\n" << command << "\n```\n\n"
       << "| method | file | queries | positives | reported | FN | FP | ns/query |\n|---|---|---:|---:|---:|---:|---:|---:|\n";
   for (const QueryScore& s : scores) {
-    out << "| `" << s.method << "` | " << s.file << " | " << s.queries << " | " << s.positives << " | " << s.reported
-        << " | " << s.false_negatives << " | " << s.false_positives << " | " << static_cast<long long>(s.ns_per_query) << " |\n";
+    out << "| `" << s.method << "` | " << s.file << " | " << s.queries << " | " << labelled_text(s, s.positives) << " | "
+        << s.reported << " | " << labelled_text(s, s.false_negatives) << " | " << labelled_text(s, s.false_positives)
+        << " | " << static_cast<long long>(s.ns_per_query) << " |\n";
   }
   out << "\nThe trade, per variant over all files (`(all)` rows): `tradeoff.png`, drawn by `scripts/plot_narrowphase.py`.\n";
   file.commit();

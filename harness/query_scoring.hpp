@@ -44,8 +44,10 @@ struct QueryScore {
   std::size_t reported = 0;
   std::size_t false_negatives = 0;
   std::size_t false_positives = 0;
-  /// Queries without a truth label: counted in `reported` but in neither error count.
+  /// Queries without a truth label: counted in `reported` but in neither error count. positives, FN and FP count
+  /// the labelled queries only; with none labelled they are unknown, shown as '-' and written as null.
   std::size_t unlabeled = 0;
+  bool any_labelled() const { return unlabeled < queries; }
   /// Median over repeats of (time for the file / queries).
   double ns_per_query = 0.0;
   /// First lines of the missed queries (for the regression library), at most 20.

@@ -6,6 +6,7 @@
 #include "datasets/atomic_file.hpp"
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/scene_file.hpp"
+#include "harness/cell_store.hpp"
 #include "harness/json_output.hpp"
 #include "harness/statistics.hpp"
 #include "harness/truth_cache.hpp"
@@ -16,15 +17,19 @@
 #endif
 #include "strategies/strategy.hpp"
 
+#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <ctime>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
 #include <sstream>
+#include <tuple>
 #include <unistd.h>
 
 namespace ccd::harness {
@@ -42,7 +47,13 @@ SceneSource generated(const std::string& name, std::map<std::string, double> par
           }};
 }
 
-/// What every record carries: machine, build type, thread count, git revision.
+/// The worker threads this process may use (--threads, or every core).
+std::size_t worker_threads() {
+  return std::min<std::size_t>(static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()),
+                               tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+}
+
+/// What every record carries: machine, build type, thread count, git revision, the executable's digest.
 json environment() {
   static const json cached = [] {
     char host[256] = {};
@@ -58,27 +69,25 @@ json environment() {
     const std::string revision = CCDBENCH_GIT_REVISION;  // of the build, not of the source folder at run time
     return json{{"machine", std::string(host) + " (" + cpu + ", " + std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) + " cores)"},
                 {"build_type", CCDBENCH_BUILD_TYPE},
-                {"git_revision", revision}};
+                {"git_revision", revision},
+                {"executable", executable_digest()}};
   }();
   json env = cached;
-  env["threads"] = tbb::this_task_arena::max_concurrency();
+  env["threads"] = worker_threads();
   return env;
 }
 
-std::string sanitized(const std::string& text) {
-  std::string out;
-  for (char c : text) out += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.' ? c : '_';
-  return out;
-}
-
-std::string cell_file_name(const std::string& scene, const std::string& strategy, double thickness, bool verify) {
-  std::uint64_t hash = 14695981039346656037ull;
-  std::ostringstream key;
-  key << strategy << '|' << std::setprecision(17) << thickness << '|' << verify;
-  for (char c : key.str()) hash = (hash ^ static_cast<unsigned char>(c)) * 1099511628211ull;
-  std::ostringstream name;
-  name << sanitized(scene) << "__" << sanitized(strategy.substr(0, strategy.find(':'))) << '_' << std::hex << hash << ".json";
-  return name.str();
+/// "2026-11-22T21:30:00.123456Z": orders the cells of results.jsonl by when they finished.
+std::string utc_now() {
+  const auto now = std::chrono::system_clock::now();
+  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
+  const auto micros = std::chrono::duration_cast<std::chrono::microseconds>(now.time_since_epoch()).count() % 1000000;
+  std::tm utc{};
+  ::gmtime_r(&seconds, &utc);
+  char text[64];
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%06lldZ", utc.tm_year + 1900, utc.tm_mon + 1,
+                utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, static_cast<long long>(micros));
+  return text;
 }
 
 /// Misses and false alarms of one step; misses split by whether the strategy tested the pair.
@@ -193,7 +202,8 @@ json record_misses(const Scene& scene, const std::vector<std::vector<Vec3>>& fra
 }
 
 /// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.
-json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps) {
+json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps,
+             const std::string& cell_name) {
   const Scene& scene = data.sequence.scene();
   std::vector<std::vector<double>> step_ms(steps);
   std::map<std::string, std::vector<double>> stage_ms;
@@ -239,7 +249,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
       }
       const bool fcl = resolved.rfind("fcl:", 0) == 0;
       std::optional<std::filesystem::path> directory;
-      if (options.misses) directory = *options.misses / data.label / std::filesystem::path(cell_file_name(data.label, resolved, scene.thickness(), true)).stem();
+      if (options.misses) directory = *options.misses / safe_path_component(data.label) / std::filesystem::path(cell_name).stem();
       miss_causes = record_misses(scene, data.frames, data.truth, first_pass, audited, fcl, directory);
     }
   }
@@ -298,8 +308,11 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                   {"history_bytes", history},
                   {"reported", reported},
                   {"judged_by", judging == strategies::Judging::triangle_pairs ? "triangle pairs" : "elementary pairs"},
+                  {"thickness_from", options.thickness ? "command line" : "scene"},
                   {"verified", options.verify},
-                  {"repeats", options.repeats}};
+                  {"repeats", options.repeats},
+                  {"cell", std::filesystem::path(cell_name).stem().string()},
+                  {"finished_at", utc_now()}};
   if (options.verify) {
     summary.update(json{{"colliding", colliding},
                         {"missed", missed},
@@ -417,13 +430,24 @@ void write_report(const std::filesystem::path& directory, const std::vector<std:
 
 }  // namespace
 
+std::string scene_file_label(const std::filesystem::path& path) {
+  std::filesystem::path normal = path.lexically_normal();
+  if (!normal.has_filename()) normal = normal.parent_path();  // "g1/" -> "g1"
+  if (normal.filename() == "scene.json") normal = normal.parent_path();
+  const std::string name = normal.filename().string();
+  return name.empty() || name == "." || name == ".." ? std::filesystem::absolute(normal).lexically_normal().filename().string() : name;
+}
+
 std::vector<std::string> suite_names() { return {"ci", "default", "paper"}; }
 
 std::vector<SceneSource> suite_scenes(const std::string& suite) {
   if (suite == "ci") {
+    // Every cell the gate holds (scene x strategy x δ) must have colliding pairs, at the scenes' δ and at δ = 0, or
+    // it gates nothing. The simulator keeps cloth about δ/2 off everything, so its scenes rarely touch at δ = 0:
+    // spinning-ball does (cloth against the ball's mesh), and the kinematic fold makes real crossings of the sheet
+    // with itself and with a blade, found by apccd inside its sessions as well as at their starts.
     return {generated("spinning-ball", {{"resolution", 8}, {"frames", 5}}),
-            generated("twist", {{"resolution", 8}, {"frames", 8}}),
-            generated("pile", {{"resolution", 6}, {"frames", 8}, {"count", 2}})};
+            generated("fold", {{"resolution", 8}, {"frames", 24}})};
   }
   if (suite == "default") {
     std::vector<SceneSource> scenes;
@@ -445,6 +469,12 @@ std::vector<SceneSource> suite_scenes(const std::string& suite) {
 
 std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   for (const std::string& spec : options.strategies) strategies::make_strategy(spec);  // unknown names fail first
+  // Every output is checked before any work: a run must not compute for an hour and then fail to write.
+  datasets::require_writable_directory(options.out);
+  datasets::require_writable_directory(options.out / "cells");
+  if (options.json) datasets::require_writable_file(*options.json);
+  if (options.report) datasets::require_writable_directory(*options.report);
+  if (options.misses) datasets::require_writable_directory(*options.misses);
   const TruthCache truth_cache(datasets::procedural_cache_root() / "truth");
   std::vector<json> cells;
   for (const SceneSource& source : options.scenes) {
@@ -456,23 +486,37 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     if (steps == 0) throw InputError(source.label, {}, "the scene has no steps (one frame)");
     for (std::size_t k = 0; k <= steps; ++k) data.frames.push_back(data.sequence.frame(k));
     const Scene& scene = data.sequence.scene();
-    std::vector<std::string> pending;
+    const std::string content = scene_content_digest(scene, data.frames);
+    struct Pending {
+      std::string spec;
+      std::filesystem::path file;
+      CellKey key;
+    };
+    std::vector<Pending> pending;
     for (const std::string& spec : options.strategies) {
-      const std::string resolved = strategies::make_strategy(spec)->name();
-      const auto file = options.out / "cells" / cell_file_name(source.label, resolved, scene.thickness(), options.verify);
-      if (!options.fresh && std::filesystem::exists(file)) {
-        std::ifstream in(file);
-        json cell = json::parse(in);
-        cell["summary"]["resumed"] = true;
-        std::cerr << "run: " << source.label << " / " << resolved << ": kept from an earlier run (--fresh reruns it)\n";
-        cells.push_back(std::move(cell));
+      CellKey key{source.label, content, steps, scene.thickness(), strategies::make_strategy(spec)->name(),
+                  options.verify, options.repeats, worker_threads(), executable_digest()};
+      const auto file = options.out / "cells" / cell_file_name(key);
+      std::optional<json> kept;
+      if (!options.fresh) {
+        try {
+          kept = read_cell(file, key);
+        } catch (const InputError& corrupt) {
+          throw InputError(corrupt.file(), corrupt.where(), corrupt.reason() + " (remove the file, or rerun with --fresh)");
+        }
+      }
+      if (kept) {
+        (*kept)["summary"]["resumed"] = true;
+        std::cerr << "run: " << source.label << " / " << key.strategy << ": kept from an earlier run with the same inputs, "
+                  << "strategy, steps, δ, repeats, threads and executable (--fresh reruns it)\n";
+        cells.push_back(std::move(*kept));
       } else {
-        pending.push_back(spec);
+        pending.push_back({spec, file, std::move(key)});
       }
     }
     if (pending.empty()) continue;
     // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
-    for (const std::string& spec : pending) strategies::make_strategy(spec)->check_scene(scene);
+    for (const Pending& cell : pending) strategies::make_strategy(cell.spec)->check_scene(scene);
     if (options.verify) {
       for (std::size_t k = 0; k < steps; ++k) {
         bool computed = false;
@@ -480,59 +524,164 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
         std::cerr << "run: " << source.label << ": truth of step " << k + 1 << "/" << steps << (computed ? " computed" : " cached") << "\n";
       }
     }
-    for (const std::string& spec : pending) {
-      json cell = run_cell(data, spec, options, steps);
-      const std::string resolved = cell["summary"]["strategy"];
-      write_json_file(options.out / "cells" / cell_file_name(source.label, resolved, scene.thickness(), options.verify), cell);
-      cells.push_back(std::move(cell));
+    for (const Pending& cell : pending) {
+      json result = run_cell(data, cell.spec, options, steps, cell.file.filename().string());
+      result["key"] = cell.key.to_json();
+      result["summary"]["key"] = result["key"];
+      write_cell(cell.file, result);
+      rebuild_results_log(options.out, std::cerr);
+      cells.push_back(std::move(result));
     }
   }
   std::vector<json> summaries;
   for (const json& cell : cells) summaries.push_back(cell["summary"]);
   const auto rows = table_rows(summaries);
   print_table(rows, out);
-  // Results: JSON lines of every step and summary of this invocation (kept cells included), written whole.
-  {
-    datasets::AtomicFile lines(options.out / "results.jsonl", std::ios::out);
-    for (const json& cell : cells) {
-      for (const json& step : cell["steps"]) lines.stream() << step.dump() << '\n';
-      lines.stream() << cell["summary"].dump() << '\n';
-    }
-    lines.commit();
-  }
   if (options.json) write_json_file(*options.json, summaries);
   if (options.report) {
     write_report(*options.report, rows, cells, options.command_line);
     out << "report: " << (*options.report / "README.md").string() << "\n";
   }
-  out << "results: " << (options.out / "results.jsonl").string() << "\n";
+  out << "results: " << (options.out / "results.jsonl").string() << " (every finished cell of every run into "
+      << options.out.string() << ")\n";
   return summaries;
 }
 
-bool check_against_baseline(const json& baseline, const json& results, std::ostream& out) {
-  if (!baseline.is_array() || !results.is_array()) throw std::invalid_argument("baseline and results must be JSON arrays");
+namespace {
+
+/// A gated cell's identity: (scene, strategy, δ). δ is "scene" (the scene's own) or the number the cell ran at.
+struct GateKey {
+  std::string scene, strategy;
+  std::optional<double> thickness;  // nullopt: the scene's own
+
+  std::string describe() const {
+    std::ostringstream text;
+    text << scene << " / " << strategy << " / δ " << (thickness ? "" : "scene's");
+    if (thickness) text << std::setprecision(17) << *thickness;
+    return text.str();
+  }
+};
+
+struct BaselineEntry {
+  GateKey key;
+  std::uint64_t max_missed = 0;
+};
+
+std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::filesystem::path& file) {
+  if (!baseline.is_array()) throw InputError(file, {}, "a baseline is a JSON array of {scene, strategy, thickness, max_missed}");
+  std::vector<BaselineEntry> entries;
+  for (std::size_t i = 0; i < baseline.size(); ++i) {
+    const json& entry = baseline[i];
+    const std::string where = "entry " + std::to_string(i);
+    if (!entry.is_object()) throw InputError(file, where, "must be an object");
+    for (const auto& item : entry.items()) {
+      if (item.key() != "scene" && item.key() != "strategy" && item.key() != "thickness" && item.key() != "max_missed") {
+        throw InputError(file, where, "unknown key '" + item.key() + "' (allowed: scene, strategy, thickness, max_missed)");
+      }
+    }
+    BaselineEntry parsed;
+    if (!entry.contains("scene") || !entry["scene"].is_string()) throw InputError(file, where + ".scene", "must be a string");
+    if (!entry.contains("strategy") || !entry["strategy"].is_string()) throw InputError(file, where + ".strategy", "must be a string");
+    parsed.key.scene = entry["scene"];
+    parsed.key.strategy = entry["strategy"];
+    if (!entry.contains("thickness")) throw InputError(file, where, "missing 'thickness': \"scene\" (the scene's own δ) or a number");
+    const json& thickness = entry["thickness"];
+    if (thickness.is_string() && thickness == "scene") {
+      parsed.key.thickness = std::nullopt;
+    } else if (thickness.is_number() && std::isfinite(thickness.get<double>()) && thickness.get<double>() >= 0) {
+      parsed.key.thickness = thickness.get<double>();
+    } else {
+      throw InputError(file, where + ".thickness", "must be \"scene\" or a finite number >= 0");
+    }
+    if (!entry.contains("max_missed") || !entry["max_missed"].is_number_unsigned()) {
+      throw InputError(file, where + ".max_missed", "must be an integer >= 0, got " + (entry.contains("max_missed") ? entry["max_missed"].dump() : std::string("nothing")));
+    }
+    parsed.max_missed = entry["max_missed"].get<std::uint64_t>();
+    for (const BaselineEntry& other : entries) {
+      if (other.key.scene == parsed.key.scene && other.key.strategy == parsed.key.strategy && other.key.thickness == parsed.key.thickness) {
+        throw InputError(file, where, "repeats the entry for " + parsed.key.describe());
+      }
+    }
+    entries.push_back(std::move(parsed));
+  }
+  return entries;
+}
+
+std::uint64_t result_count(const json& result, const char* field, const std::filesystem::path& file, const std::string& where) {
+  if (!result.contains(field) || !result[field].is_number_unsigned()) {
+    throw InputError(file, where + "." + field, "must be an integer >= 0 (a `ccdbench run --json` summary, verified)");
+  }
+  return result[field].get<std::uint64_t>();
+}
+
+}  // namespace
+
+bool check_against_baseline(const json& baseline, const std::filesystem::path& baseline_file,
+                            const std::vector<std::pair<std::filesystem::path, json>>& results_files, std::ostream& out) {
+  const std::vector<BaselineEntry> entries = parse_baseline(baseline, baseline_file);
+  std::vector<std::tuple<std::filesystem::path, std::size_t, const json*>> results;
+  for (const auto& [file, document] : results_files) {
+    if (!document.is_array()) throw InputError(file, {}, "must be a JSON array (a `ccdbench run --json` file)");
+    for (std::size_t i = 0; i < document.size(); ++i) results.emplace_back(file, i, &document[i]);
+  }
   bool ok = true;
-  for (const json& result : results) {
-    if (!result.contains("missed")) {
-      out << "FAIL " << result.value("scene", "?") << " / " << result.value("strategy", "?") << ": not verified (run with --verify exact)\n";
+  if (results.empty()) {
+    out << "FAIL the results are empty: nothing was gated\n";
+    ok = false;
+  }
+  std::vector<std::size_t> matches(entries.size(), 0);
+  for (const auto& [results_file, i, result_pointer] : results) {
+    const json& result = *result_pointer;
+    const std::string where = "entry " + std::to_string(i);
+    if (!result.is_object() || !result.contains("scene") || !result["scene"].is_string() || !result.contains("strategy") ||
+        !result["strategy"].is_string() || !result.contains("thickness") || !result["thickness"].is_number() ||
+        !result.contains("thickness_from") || !result["thickness_from"].is_string()) {
+      throw InputError(results_file, where, "not a summary of `ccdbench run --json` (scene, strategy, thickness, thickness_from)");
+    }
+    const GateKey key{result["scene"], result["strategy"], result["thickness"].get<double>()};
+    const bool scene_thickness = result["thickness_from"] == "scene";
+    const BaselineEntry* entry = nullptr;
+    for (std::size_t e = 0; e < entries.size(); ++e) {
+      const GateKey& gate = entries[e].key;
+      const bool same_thickness = gate.thickness ? *gate.thickness == *key.thickness : scene_thickness;
+      if (gate.scene == key.scene && gate.strategy == key.strategy && same_thickness) {
+        entry = &entries[e];
+        ++matches[e];
+      }
+    }
+    const std::string name = key.scene + " / " + key.strategy + " / δ " + (scene_thickness ? "scene's " : "") +
+                             [&] { std::ostringstream t; t << std::setprecision(17) << *key.thickness; return t.str(); }();
+    if (!entry) {
+      out << "FAIL " << name << ": not in the baseline (every gated cell needs an entry)\n";
       ok = false;
       continue;
     }
-    std::size_t allowed = 0;
-    for (const json& entry : baseline) {
-      if (entry.value("scene", "") == result["scene"] && entry.value("strategy", "") == result["strategy"]) {
-        allowed = entry.value("max_missed", std::size_t{0});
-      }
+    if (!result.value("verified", false) || !result.contains("missed")) {
+      out << "FAIL " << name << ": not verified (run with --verify exact)\n";
+      ok = false;
+      continue;
     }
-    const std::size_t missed = result["missed"];
-    if (missed > allowed) {
-      out << "FAIL " << result["scene"].get<std::string>() << " / " << result["strategy"].get<std::string>() << ": missed "
-          << missed << " (culled " << result["missed_culled"] << ", tested " << result["missed_tested"] << "), baseline allows "
-          << allowed << "\n";
+    const std::uint64_t missed = result_count(result, "missed", results_file, where);
+    const std::uint64_t colliding = result_count(result, "colliding", results_file, where);
+    if (colliding == 0) {
+      out << "FAIL " << name << ": no colliding pair in any step, so it cannot miss: this cell gates nothing\n";
+      ok = false;
+    } else if (missed > entry->max_missed) {
+      out << "FAIL " << name << ": missed " << missed << " of " << colliding << " (culled "
+          << result.value("missed_culled", json(0)).dump() << ", tested " << result.value("missed_tested", json(0)).dump()
+          << "), baseline allows " << entry->max_missed << "\n";
       ok = false;
     } else {
-      out << "ok   " << result["scene"].get<std::string>() << " / " << result["strategy"].get<std::string>() << ": missed "
-          << missed << " <= " << allowed << "\n";
+      out << "ok   " << name << ": missed " << missed << " of " << colliding << " <= " << entry->max_missed << "\n";
+    }
+  }
+  for (std::size_t e = 0; e < entries.size(); ++e) {
+    if (matches[e] == 0) {
+      out << "FAIL " << entries[e].key.describe() << ": in the baseline but has no result\n";
+      ok = false;
+    } else if (matches[e] > 1) {
+      out << "FAIL " << entries[e].key.describe() << ": " << matches[e] << " results for one entry\n";
+      ok = false;
     }
   }
   return ok;

@@ -21,11 +21,15 @@ struct SceneSource {
   std::function<datasets::SceneSequence()> load;
 };
 
-/// The scenes of a suite: `ci` (seconds), `default` (what scripts/run.sh runs: under two minutes on 2 cores, truth
-/// included), `paper` (tens of thousands of triangles, a hundred frames).
+/// The scenes of a suite: `ci` (seconds; every scene collides at its δ and at δ = 0, with self contact, contact
+/// between objects and contacts inside apccd's sessions), `default` (what scripts/run.sh runs: under two minutes on
+/// 2 cores, truth included), `paper` (tens of thousands of triangles, a hundred frames).
 /// @throws std::invalid_argument for an unknown suite.
 std::vector<SceneSource> suite_scenes(const std::string& suite);
 std::vector<std::string> suite_names();
+
+/// The label of a scene given as a file: the folder's name for FOLDER or FOLDER/scene.json, else the file's name.
+std::string scene_file_label(const std::filesystem::path& path);
 
 struct RunOptions {
   std::vector<SceneSource> scenes;
@@ -49,9 +53,15 @@ struct RunOptions {
 /// Runs the cells, prints the table and writes the results. Returns the summaries (DESIGN.md §5 fields).
 std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostream& out);
 
-/// The CI gate: each summary of `results` (a JSON array) may miss at most its `baseline` entry's max_missed
-/// (matched by scene and strategy; a result absent from the baseline may miss none). Prints every violation.
-/// @return whether every result is within its baseline.
-bool check_against_baseline(const nlohmann::json& baseline, const nlohmann::json& results, std::ostream& out);
+/// The CI gate (`ccdbench check`). The baseline is a JSON array of {scene, strategy, thickness, max_missed}:
+/// thickness is "scene" (the scene's own δ) or the number a cell ran at; max_missed an integer >= 0. `results` is
+/// a `ccdbench run --json` array (several are taken as one). It passes only when the results are not empty, every result has exactly one
+/// baseline entry and every entry exactly one result, every result was verified and has at least one colliding
+/// pair (a cell that cannot miss proves nothing), and none misses more than its entry allows. Prints one line per
+/// result and per unmatched entry.
+/// @throws InputError (the file, the entry) for a malformed baseline or results.
+/// @return whether the gate passes.
+bool check_against_baseline(const nlohmann::json& baseline, const std::filesystem::path& baseline_file,
+                            const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, std::ostream& out);
 
 }  // namespace ccd::harness

@@ -1,0 +1,112 @@
+// `ccdbench check`: the CI gate must be able to fail, and fails whenever a cell gates nothing.
+
+#include "tests/support/cli.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+namespace ccd {
+namespace {
+
+using testing::quoted;
+using testing::run_ccdbench;
+
+/// A verified summary as `ccdbench run --json` writes it (only the fields the gate reads).
+nlohmann::json summary(const std::string& strategy, std::size_t missed, std::size_t colliding,
+                       const std::string& thickness_from = "scene", double thickness = 0.01) {
+  return {{"scene", "s"},         {"strategy", strategy},     {"thickness", thickness}, {"thickness_from", thickness_from},
+          {"verified", true},     {"missed", missed},         {"missed_culled", missed}, {"missed_tested", 0},
+          {"colliding", colliding}};
+}
+
+nlohmann::json entry(const std::string& strategy, const nlohmann::json& max_missed, const nlohmann::json& thickness = "scene") {
+  return {{"scene", "s"}, {"strategy", strategy}, {"thickness", thickness}, {"max_missed", max_missed}};
+}
+
+class Gate : public ::testing::Test {
+ protected:
+  // Vectors, not nlohmann::json: a braced list of one object would make that object, not an array of it.
+  testing::CommandResult check(const std::vector<nlohmann::json>& baseline, const std::vector<nlohmann::json>& results) {
+    testing::write_text(dir_ / "baseline.json", nlohmann::json(baseline).dump());
+    testing::write_text(dir_ / "results.json", nlohmann::json(results).dump());
+    return run_ccdbench("check --baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "results.json"));
+  }
+  testing::TempDir dir_;
+};
+
+TEST_F(Gate, PassesWithinTheBaselineAndFailsOneMissBeyondIt) {
+  const std::vector<nlohmann::json> results = {summary("full+cubic64", 3, 10), summary("full", 0, 10)};
+  const auto loose = check({entry("full+cubic64", 3), entry("full", 0)}, results);
+  EXPECT_EQ(loose.exit_code, 0) << loose.output;
+  const auto tight = check({entry("full+cubic64", 2), entry("full", 0)}, results);
+  EXPECT_EQ(tight.exit_code, 1) << tight.output;
+  EXPECT_NE(tight.output.find("FAIL s / full+cubic64 / δ scene's 0.01: missed 3 of 10"), std::string::npos) << tight.output;
+}
+
+TEST_F(Gate, FailsAResultWithoutAnEntryAndAnEntryWithoutAResult) {
+  const auto absent = check({entry("full", 0)}, {summary("full", 0, 10), summary("apccd", 0, 10)});
+  EXPECT_EQ(absent.exit_code, 1);
+  EXPECT_NE(absent.output.find("apccd / δ scene's 0.01: not in the baseline"), std::string::npos) << absent.output;
+  const auto orphan = check({entry("full", 0), entry("apccd", 0)}, {summary("full", 0, 10)});
+  EXPECT_EQ(orphan.exit_code, 1);
+  EXPECT_NE(orphan.output.find("apccd / δ scene's: in the baseline but has no result"), std::string::npos) << orphan.output;
+}
+
+TEST_F(Gate, FailsEmptyResults) {
+  const auto empty = check({entry("full", 0)}, {});
+  EXPECT_EQ(empty.exit_code, 1);
+  EXPECT_NE(empty.output.find("the results are empty"), std::string::npos) << empty.output;
+}
+
+// A cell without a colliding pair cannot miss: it would pass whatever the strategy does.
+TEST_F(Gate, FailsACellWithoutCollidingPairs) {
+  const auto nothing = check({entry("full", 0)}, {summary("full", 0, 0)});
+  EXPECT_EQ(nothing.exit_code, 1);
+  EXPECT_NE(nothing.output.find("no colliding pair"), std::string::npos) << nothing.output;
+}
+
+TEST_F(Gate, EntriesNameTheThickness) {
+  const nlohmann::json at_zero = summary("full", 0, 10, "command line", 0.0);
+  EXPECT_EQ(check({entry("full", 0)}, {at_zero}).exit_code, 1) << "a scene-δ entry must not gate a δ = 0 cell";
+  const auto matched = check({entry("full", 0, 0.0)}, {at_zero});
+  EXPECT_EQ(matched.exit_code, 0) << matched.output;
+  EXPECT_EQ(check({entry("full", 0, 0.5)}, {at_zero}).exit_code, 1);
+  // Both δ of one scene and strategy in one baseline, the results given as two files.
+  testing::write_text(dir_ / "baseline.json", nlohmann::json::array({entry("full", 0), entry("full", 0, 0.0)}).dump());
+  testing::write_text(dir_ / "delta.json", nlohmann::json::array({summary("full", 0, 10)}).dump());
+  testing::write_text(dir_ / "zero.json", nlohmann::json::array({at_zero}).dump());
+  const auto both = run_ccdbench("check --baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "delta.json") +
+                                 " " + quoted(dir_ / "zero.json"));
+  EXPECT_EQ(both.exit_code, 0) << both.output;
+}
+
+// max_missed: -1 used to wrap to 2^64 - 1 and pass any number of misses.
+TEST_F(Gate, RefusesBaselineValuesOutOfRangeAsMalformed) {
+  const std::vector<nlohmann::json> results = {summary("full", 5, 10)};
+  for (const nlohmann::json& bad : std::vector<nlohmann::json>{-1, 1.5, "3", 1e30, nullptr}) {
+    const auto refused = check({entry("full", bad)}, results);
+    EXPECT_EQ(refused.exit_code, 2) << bad.dump() << ": " << refused.output;
+    EXPECT_NE(refused.output.find("baseline.json:entry 0.max_missed: must be an integer >= 0"), std::string::npos) << refused.output;
+  }
+  const auto no_thickness = check({nlohmann::json{{"scene", "s"}, {"strategy", "full"}, {"max_missed", 0}}}, results);
+  EXPECT_EQ(no_thickness.exit_code, 2) << no_thickness.output;
+  const auto typo = check({nlohmann::json{{"scene", "s"}, {"strategy", "full"}, {"thickness", "scene"}, {"max_mised", 9}}}, results);
+  EXPECT_EQ(typo.exit_code, 2) << typo.output;
+  EXPECT_NE(typo.output.find("unknown key 'max_mised'"), std::string::npos) << typo.output;
+}
+
+TEST_F(Gate, MalformedFilesExitTwoAndAFailedGateOne) {
+  testing::write_text(dir_ / "broken.json", "[{\"scene\": ");
+  testing::write_text(dir_ / "baseline.json", nlohmann::json::array({entry("full", 0)}).dump());
+  const auto broken = run_ccdbench("check --baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "broken.json"));
+  EXPECT_EQ(broken.exit_code, 2) << broken.output;
+  EXPECT_NE(broken.output.find("broken.json:line 1: malformed JSON"), std::string::npos) << broken.output;
+  const auto not_summaries = check({entry("full", 0)}, {nlohmann::json{{"scene", "s"}}});
+  EXPECT_EQ(not_summaries.exit_code, 2) << not_summaries.output;
+  const auto missing = run_ccdbench("check --baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "none.json"));
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_EQ(check({entry("full", 0)}, {summary("full", 1, 10)}).exit_code, 1);
+}
+
+}  // namespace
+}  // namespace ccd

@@ -1,0 +1,170 @@
+// Resumed cells (`ccdbench run --out`): a cell is reused only when everything its numbers depend on is the same,
+// a corrupt cell file is an error, and results.jsonl keeps every finished cell of every run into the folder.
+
+#include "datasets/procedural_scenes.hpp"
+#include "tests/support/cli.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <set>
+
+namespace ccd {
+namespace {
+
+using testing::quoted;
+using testing::read_json;
+using testing::run_ccdbench;
+
+class Resume : public ::testing::Test {
+ protected:
+  void SetUp() override { ::setenv("CCDBENCH_CACHE_DIR", (dir_ / "cache").c_str(), 1); }
+  void TearDown() override { ::unsetenv("CCDBENCH_CACHE_DIR"); }
+
+  /// The kinematic fold with `parameters`, generated into FOLDER (scene.json and PLY frames, so that any ccdbench
+  /// executable reads it, with or without that generator).
+  std::filesystem::path fold_scene(const std::string& folder, const datasets::SceneParameters& parameters) {
+    datasets::generate_procedural_scene({"fold", parameters, dir_ / folder, {}, {}});
+    return dir_ / folder;
+  }
+
+  /// `ccdbench ARGS --out OUT --json SUMMARY`: the run's summaries (one per cell).
+  nlohmann::json run(const std::string& arguments, const std::string& out = "out") {
+    const auto summary = dir_ / "summary.json";
+    std::filesystem::remove(summary);
+    const testing::CommandResult result =
+        run_ccdbench(arguments + " --out " + quoted(dir_ / out) + " --json " + quoted(summary));
+    last_output_ = result.output;
+    EXPECT_EQ(result.exit_code, 0) << arguments << "\n" << result.output;
+    return std::filesystem::exists(summary) ? read_json(summary) : nlohmann::json::array();
+  }
+
+  static bool resumed(const nlohmann::json& summaries) {
+    for (const auto& s : summaries) {
+      if (s.value("resumed", false)) return true;
+    }
+    return false;
+  }
+
+  testing::TempDir dir_;
+  std::string last_output_;
+};
+
+// Two scene folders with one name ("s") and other motions: the second run must not print the first one's result.
+TEST_F(Resume, ACellOfAnotherSceneUnderTheSameLabelIsComputedAgain) {
+  const auto first = fold_scene("a/s", {{"resolution", 6}, {"frames", 5}});
+  const auto second = fold_scene("b/s", {{"resolution", 6}, {"frames", 5}, {"fold_end", 170}, {"blade_travel", 0.1}});
+  const nlohmann::json a = run("run --strategy full --scene " + quoted(first));
+  const nlohmann::json b = run("run --strategy full --scene " + quoted(second));
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_EQ(a[0]["scene"], b[0]["scene"]) << "the test needs two scenes with one label";
+  EXPECT_FALSE(resumed(b)) << last_output_;
+  const nlohmann::json alone = run("run --strategy full --scene " + quoted(second), "alone");
+  EXPECT_EQ(b[0]["colliding"], alone[0]["colliding"]);
+  EXPECT_NE(a[0]["colliding"], b[0]["colliding"]) << "the scenes must differ in their answers for this test to mean anything";
+}
+
+// `--frames c0.ply c1.ply` after `--frames c0.ply c1_other.ply`: one label, other frames.
+TEST_F(Resume, OtherFramesUnderTheSameLabelAreComputedAgain) {
+  fold_scene("g", {{"resolution", 6}, {"frames", 12}});
+  std::filesystem::create_directories(dir_ / "f");
+  std::filesystem::copy_file(dir_ / "g/sheet/frame_0000.ply", dir_ / "f/c0.ply");
+  std::filesystem::copy_file(dir_ / "g/sheet/frame_0001.ply", dir_ / "f/c1.ply");
+  std::filesystem::copy_file(dir_ / "g/sheet/frame_0011.ply", dir_ / "f/c1_other.ply");
+  const std::string frames = "run --strategy full --thickness 0.05 --frames " + quoted(dir_ / "f/c0.ply") + " ";
+  const nlohmann::json near = run(frames + quoted(dir_ / "f/c1.ply"));
+  const nlohmann::json far = run(frames + quoted(dir_ / "f/c1_other.ply"));
+  EXPECT_EQ(near[0]["scene"], far[0]["scene"]);
+  EXPECT_FALSE(resumed(far)) << last_output_;
+  EXPECT_NE(near[0]["colliding"], far[0]["colliding"]) << "the steps must differ for this test to mean anything";
+  EXPECT_EQ(far[0]["colliding"], run(frames + quoted(dir_ / "f/c1_other.ply"), "alone")[0]["colliding"]);
+}
+
+TEST_F(Resume, StepsRepeatsThreadsAndTheExecutableAreInTheKey) {
+  const std::string scene = "run --strategy full --scene " + quoted(fold_scene("s", {{"resolution", 6}, {"frames", 6}}));
+  const nlohmann::json one_step = run("--threads 1 " + scene + " --max-steps 1");
+  ASSERT_EQ(one_step[0]["steps"], 1);
+  const nlohmann::json all_steps = run("--threads 1 " + scene);
+  EXPECT_FALSE(resumed(all_steps)) << "a --max-steps 1 cell reused by a full run";
+  EXPECT_EQ(all_steps[0]["steps"], 5);
+  EXPECT_TRUE(resumed(run("--threads 1 " + scene))) << "the same run must be reused: " << last_output_;
+  EXPECT_FALSE(resumed(run("--threads 1 " + scene + " --repeat 2"))) << "--repeat must be in the key";
+  EXPECT_FALSE(resumed(run("--threads 2 " + scene))) << "the thread count must be in the key";
+  // Another executable (the same program with one byte more: ELF ignores trailing bytes) must not reuse the cells.
+  const auto copy = dir_ / "ccdbench-copy";
+  std::filesystem::copy_file(CCDBENCH_EXECUTABLE, copy);
+  std::ofstream(copy, std::ios::app | std::ios::binary) << '\0';
+  std::filesystem::permissions(copy, std::filesystem::perms::owner_exec, std::filesystem::perm_options::add);
+  const testing::CommandResult other = testing::run_command(
+      quoted(copy) + " --threads 1 run --strategy full --scene " + quoted(dir_ / "s") + " --out " + quoted(dir_ / "out"));
+  ASSERT_EQ(other.exit_code, 0) << other.output;
+  EXPECT_EQ(other.output.find("(resumed)"), std::string::npos) << "another executable's cell was reused:\n" << other.output;
+}
+
+TEST_F(Resume, ACorruptCellFileIsAnErrorNamingItAndFreshRecomputesIt) {
+  const std::string scene = "run --strategy full --scene " + quoted(fold_scene("s", {{"resolution", 6}, {"frames", 4}}));
+  const nlohmann::json first = run(scene);
+  const std::filesystem::path cell = dir_ / "out/cells" / (first[0]["cell"].get<std::string>() + ".json");
+  ASSERT_TRUE(std::filesystem::exists(cell));
+  std::ifstream in(cell);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  // Another number where a colliding count is: still valid JSON, a different verdict.
+  const std::string field = "\"colliding\":";
+  const std::size_t at = text.find(field);
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t digits = text.find_first_not_of("0123456789", at + field.size());
+  text.replace(at + field.size(), digits - at - field.size(), "12345");
+  testing::write_text(cell, text);
+  const auto corrupt = run_ccdbench(scene + " --out " + quoted(dir_ / "out"));
+  EXPECT_EQ(corrupt.exit_code, 2) << corrupt.output;
+  EXPECT_NE(corrupt.output.find(cell.filename().string() + ":checksum: does not match"), std::string::npos) << corrupt.output;
+  EXPECT_EQ(corrupt.output.find("12345"), std::string::npos) << "the corrupt number must never be shown as a result";
+  testing::write_text(cell, "{\"key\": ");
+  const auto truncated = run_ccdbench(scene + " --out " + quoted(dir_ / "out"));
+  EXPECT_EQ(truncated.exit_code, 2) << truncated.output;
+  EXPECT_NE(truncated.output.find("malformed JSON"), std::string::npos) << truncated.output;
+  const nlohmann::json fresh = run(scene + " --fresh");
+  EXPECT_EQ(fresh[0]["colliding"], first[0]["colliding"]);
+}
+
+TEST_F(Resume, ResultsKeepEveryCellOfEveryRunIntoOneFolder) {
+  const std::string scene = "run --scene " + quoted(fold_scene("s", {{"resolution", 6}, {"frames", 4}}));
+  run(scene + " --strategy full");
+  run(scene + " --strategy apccd");
+  std::size_t full = 0, apccd = 0;
+  for (const auto& record : testing::read_json_lines(dir_ / "out/results.jsonl")) {
+    if (record["record"] != "summary") continue;
+    full += record["strategy"].get<std::string>().rfind("full", 0) == 0 ? 1 : 0;
+    apccd += record["strategy"].get<std::string>().rfind("apccd", 0) == 0 ? 1 : 0;
+  }
+  EXPECT_EQ(full, 1u);
+  EXPECT_EQ(apccd, 1u);
+}
+
+// Two runs into one --out at the same time: neither may drop the other's lines.
+TEST_F(Resume, TwoRunsAtOnceIntoOneFolderKeepEachOthersCells) {
+  const auto scene = quoted(fold_scene("s", {{"resolution", 8}, {"frames", 12}}));
+  const std::string out = " --out " + quoted(dir_ / "out");
+  const std::vector<std::string> strategies = {"full", "apccd", "brute", "full+cubic64"};
+  std::vector<FILE*> runs;
+  for (const std::string& strategy : strategies) {
+    runs.push_back(::popen((std::string(CCDBENCH_EXECUTABLE) + " run --scene " + scene + " --strategy " + strategy + out +
+                            " > /dev/null 2>&1").c_str(), "r"));
+  }
+  for (FILE* process : runs) EXPECT_EQ(::pclose(process), 0);
+  std::set<std::string> kept;
+  for (const auto& record : testing::read_json_lines(dir_ / "out/results.jsonl")) {
+    if (record["record"] == "summary") kept.insert(record["strategy"].get<std::string>().substr(0, 5));
+  }
+  EXPECT_EQ(kept, (std::set<std::string>{"full+", "apccd", "brute"})) << "full and full+cubic64 both begin with 'full+'";
+  std::size_t summaries = 0;
+  for (const auto& record : testing::read_json_lines(dir_ / "out/results.jsonl")) summaries += record["record"] == "summary" ? 1 : 0;
+  EXPECT_EQ(summaries, strategies.size());
+}
+
+}  // namespace
+}  // namespace ccd
