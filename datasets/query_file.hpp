@@ -47,6 +47,8 @@ struct QueryFile {
 
   /// Whether every query has a truth label.
   bool has_truth() const;
+  /// How many queries have a truth label.
+  std::size_t labelled() const;
   /// Queries whose truth is "collide".
   std::size_t positives() const;
   /// Queries with at least one coordinate that is not exactly a double.
