@@ -78,6 +78,8 @@ TEST(ReferenceSharedData, StepTruthHoldsEverySampleColliding) {
                                                     make_edge(vertex(r[2], r[6]), vertex(r[3], r[7])));
       EXPECT_TRUE(truth.collisions.contains(pair)) << "EE query " << i;
     }
+    EXPECT_EQ(vf_positives, std::string(name) == "cloth-funnel" ? 27u : 765u) << "the README's positives";
+    EXPECT_EQ(ee_positives, std::string(name) == "cloth-funnel" ? 107u : 4179u) << "the README's positives";
     EXPECT_GE(truth.collisions.vertex_face().size(), vf_positives);
     EXPECT_GE(truth.collisions.edge_edge().size(), ee_positives);
     EXPECT_EQ(truth.statistics.decided_by_filter + truth.statistics.decided_exactly,

@@ -35,9 +35,7 @@ TEST_P(FullTraversalOnScene, EqualsBruteForceForAnyThreadCountAndMissesNothing) 
       ASSERT_EQ(missed.size(), 0u) << "step " << k << ": full missed " << missed.size() << " of " << truth.collisions.size();
       colliding += truth.collisions.size();
     }
-    if (thickness > 0 && name != "flag") {
-      EXPECT_GT(colliding, 0u) << "the scene must collide somewhere to test this";
-    }
+    EXPECT_GT(colliding, 0u) << "the scene must collide somewhere for 'misses nothing' to mean anything";
   }
 }
 

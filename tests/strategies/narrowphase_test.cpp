@@ -40,8 +40,10 @@ class ConservativeOnData : public ::testing::TestWithParam<std::string> {};
 TEST_P(ConservativeOnData, NoMissAtZeroAndPositiveThickness) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   const auto conservative = make_narrow_phase("conservative");
+  std::size_t count = 0;
   for (const auto& path : datasets::discover_query_files({data / GetParam()})) {
     const datasets::QueryFile file = datasets::read_query_file(path);
+    count += file.queries.size();
     for (std::size_t q = 0; q < file.queries.size(); ++q) {
       const datasets::Query& query = file.queries[q];
       ASSERT_TRUE(query.exactly_double) << path;
@@ -51,6 +53,7 @@ TEST_P(ConservativeOnData, NoMissAtZeroAndPositiveThickness) {
       expect_no_miss(*conservative, file.kind, query.rounded, testing::small_thickness_for(query.rounded), where);
     }
   }
+  EXPECT_EQ(count, testing::shared_query_count(GetParam())) << "the data folder is missing queries";
 }
 
 INSTANTIATE_TEST_SUITE_P(SharedData, ConservativeOnData,

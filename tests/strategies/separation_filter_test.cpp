@@ -41,6 +41,8 @@ TEST(SeparationFilter, NeverCallsACollidingPairApartOnTheSharedData) {
     }
   }
   std::cout << "called apart: " << apart << " of " << total << "\n";
+  EXPECT_EQ(total, 2 * (testing::shared_query_count("sample-queries") + testing::shared_query_count("scalable-ccd-sample")))
+      << "the data folder is missing queries";
 }
 
 TEST(SeparationFilter, NeverCallsACollidingPairApartOnTheExtremesSuite) {

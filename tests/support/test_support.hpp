@@ -73,6 +73,17 @@ inline std::string param_name(const ::testing::TestParamInfo<std::string>& param
 /// The external data folder, when present with the expected content; otherwise nullopt and the reason.
 std::optional<std::filesystem::path> external_data_or_reason(std::string& reason);
 
+/// How many queries the public data holds under `folder` (../shared/data/README.md): data tests assert it, so that
+/// a data folder that exists but is empty or partial fails instead of passing over nothing.
+inline std::size_t shared_query_count(const std::string& folder) {
+  if (folder == "sample-queries") return 250 + 74;
+  if (folder == "scalable-ccd-sample/cloth-funnel") return 92 + 263;
+  if (folder == "scalable-ccd-sample/rod-twist") return 801 + 4370;
+  if (folder == "scalable-ccd-sample") return 92 + 263 + 801 + 4370;
+  ADD_FAILURE() << "no expected count for " << folder;
+  return 0;
+}
+
 }  // namespace ccd::testing
 
 /// Binds `dir` to the public data folder, or skips the test saying why (fails instead under

@@ -1,0 +1,59 @@
+// The `ci` suite is what the CI gate holds strategies to: it must be able to catch a miss of every kind.
+
+#include "harness/run.hpp"
+#include "reference/step_truth.hpp"
+#include "strategies/strategy.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+namespace ccd::harness {
+namespace {
+
+double extra(const strategies::StepResult& result, const std::string& name) {
+  for (const auto& [key, value] : result.counters.extra) {
+    if (key == name) return value;
+  }
+  return -1;
+}
+
+// At the scenes' δ and at δ = 0: every scene collides (a gated cell without colliding pairs gates nothing), and
+// the suite has self contact, contact between objects, and contacts that apccd meets inside its sessions.
+TEST(CiSuite, EveryCellCollidesWithContactsOfEveryKindAtBothThicknesses) {
+  testing::TempDir cache;
+  ::setenv("CCDBENCH_CACHE_DIR", cache.path().c_str(), 1);
+  for (const bool zero : {false, true}) {
+    std::size_t self = 0, across = 0, inside_sessions = 0;
+    for (const SceneSource& source : suite_scenes("ci")) {
+      datasets::SceneSequence sequence = source.load();
+      if (zero) sequence.set_thickness(0.0);
+      const Scene& scene = sequence.scene();
+      SCOPED_TRACE(source.label + ", δ = " + std::to_string(scene.thickness()));
+      auto apccd = strategies::make_strategy("apccd");
+      std::vector<Vec3> x0 = sequence.frame(0);
+      apccd->init(scene, x0);
+      std::size_t colliding = 0;
+      for (std::size_t k = 0; k < sequence.num_steps(); ++k) {
+        const std::vector<Vec3> x1 = sequence.frame(k + 1);
+        const auto truth = reference::compute_step_truth(scene, x0, x1, {scene.thickness(), false, {}}).collisions;
+        for (const auto& c : truth.vertex_face()) (scene.object_of_vertex(c.pair.v) == scene.object_of_face(c.pair.f) ? self : across) += 1;
+        for (const auto& c : truth.edge_edge()) (scene.object_of_vertex(c.pair.a.v0) == scene.object_of_vertex(c.pair.b.v0) ? self : across) += 1;
+        const strategies::StepResult result = apccd->step({&scene, k, x0, x1}, false);
+        if (extra(result, "session_start") == 0.0) inside_sessions += truth.size();
+        colliding += truth.size();
+        x0 = x1;
+      }
+      EXPECT_GT(colliding, 0u);
+    }
+    SCOPED_TRACE(zero ? "δ = 0" : "the scenes' δ");
+    EXPECT_GT(self, 0u);
+    EXPECT_GT(across, 0u);
+    EXPECT_GT(inside_sessions, 0u);
+  }
+  ::unsetenv("CCDBENCH_CACHE_DIR");
+}
+
+}  // namespace
+}  // namespace ccd::harness
