@@ -179,23 +179,21 @@ void FrameCacheWriter::finish() {
 
 std::optional<std::unique_ptr<FrameSource>> open_frame_cache(const std::filesystem::path& path,
                                                              const std::string& expected_key) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return std::nullopt;
+  if (!std::filesystem::exists(path)) return std::nullopt;
+  std::ifstream in = open_input_file(path, "frame cache", std::ios::in | std::ios::binary);
   CacheHeader header = read_header(path, in);
   if (header.key != expected_key) return std::nullopt;
   return open_with_header(path, in, std::move(header));
 }
 
 std::unique_ptr<FrameSource> open_frame_cache(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, {}, "cannot open frame cache");
+  std::ifstream in = open_input_file(path, "frame cache", std::ios::in | std::ios::binary);
   CacheHeader header = read_header(path, in);
   return open_with_header(path, in, std::move(header));
 }
 
 std::string frame_cache_key(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, {}, "cannot open frame cache");
+  std::ifstream in = open_input_file(path, "frame cache", std::ios::in | std::ios::binary);
   return read_header(path, in).key;
 }
 

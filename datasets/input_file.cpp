@@ -23,6 +23,10 @@ std::ifstream open_input_file(const std::filesystem::path& path, const std::stri
   const auto status = std::filesystem::status(path, error);
   if (error || !std::filesystem::exists(status)) throw InputError(path, {}, "no such file (expected a " + what + ")");
   if (std::filesystem::is_directory(status)) throw InputError(path, {}, "is a folder, expected a " + what);
+  // A pipe or a device would block or never end (/dev/stdin, /dev/zero); inputs are files whose size is known.
+  if (!std::filesystem::is_regular_file(status)) {
+    throw InputError(path, {}, "is not a regular file (a pipe or a device?), expected a " + what);
+  }
   std::ifstream in(path, mode);
   if (!in) throw InputError(path, {}, "cannot open " + what + " for reading");
   return in;

@@ -658,6 +658,10 @@ const std::vector<ProceduralSceneInfo>& procedural_scenes() {
   return infos;
 }
 
+SceneParameters resolve_scene_parameters(const std::string& name, const SceneParameters& given) {
+  return resolve_parameters(find_definition(name).info, given);
+}
+
 GenerateResult generate_procedural_scene(const GenerateRequest& request) {
   const auto start = std::chrono::steady_clock::now();
   const SceneDefinition& definition = find_definition(request.name);

@@ -61,6 +61,10 @@ struct GenerateResult {
   double thickness = 0.0;
 };
 
+/// The parameters of built-in scene `name`: defaults filled in, every value checked (what a generator block in a
+/// scene file resolves to). @throws std::invalid_argument for an unknown scene or parameter, or a value out of range.
+SceneParameters resolve_scene_parameters(const std::string& name, const SceneParameters& given);
+
 /// Simulates the scene (or finds it already in `out`, generated with the same parameters) and writes its folder.
 /// Two processes generating one folder take turns (a lock in the folder); the second finds it complete.
 /// @throws std::invalid_argument for an unknown scene or parameter, a value out of range, a scene too large for

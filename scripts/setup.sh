@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what a fresh Debian 12 machine lacks to build, test and run ccdbench: exactly the missing
 # packages, all from the distribution. Safe to run again: it installs nothing when nothing is missing.
+# Usage: scripts/setup.sh [EXTRA_PACKAGE...]   (scripts/fuzz.sh adds clang-14 and libclang-rt-14-dev)
 set -euo pipefail
 
 packages=(
@@ -11,6 +12,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev libxxhash-dev
   python3-matplotlib
+  "$@"
 )
 
 missing=()

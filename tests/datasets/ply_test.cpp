@@ -211,6 +211,9 @@ TEST(PlyBadInput, AMeshWithoutTrianglesOrAFolderIsRefused) {
   std::filesystem::create_directories(dir / "folder.ply");
   const std::string folder = testing::error_message<InputError>([&] { read_ply(dir / "folder.ply"); });
   EXPECT_NE(folder.find("folder.ply: is a folder, expected a PLY file"), std::string::npos) << folder;
+  // A device never ends (reading /dev/zero for a header line grew a string until memory ran out).
+  const std::string device = testing::error_message<InputError>([&] { read_ply("/dev/zero"); });
+  EXPECT_NE(device.find("/dev/zero: is not a regular file"), std::string::npos) << device;
 }
 
 TEST(PlyBadInput, UnusedVerticesWarnButAreRead) {
