@@ -4,6 +4,7 @@
 #include "datasets/atomic_file.hpp"
 #include "datasets/content_hash.hpp"
 #include "datasets/input_file.hpp"
+#include "harness/truth_cache.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -52,21 +53,7 @@ json CellKey::to_json() const {
 std::string scene_content_digest(const Scene& scene, std::span<const std::vector<Vec3>> frames) {
   datasets::ContentHash hash;
   hash.text("ccdbench scene content v1");
-  const MeshTopology& topology = scene.topology();
-  hash.value(static_cast<std::uint64_t>(topology.num_vertices()));
-  hash.value(static_cast<std::uint64_t>(topology.num_faces()));
-  hash.bytes(topology.faces().data(), topology.faces().size() * sizeof(Face));
-  for (const SceneObject& object : scene.objects()) {
-    hash.text(object.name);
-    hash.value(static_cast<std::uint8_t>(object.kind));
-    hash.value(static_cast<std::uint8_t>(object.self_collision));
-    hash.value(static_cast<std::uint64_t>(object.first_vertex));
-    hash.value(static_cast<std::uint64_t>(object.first_face));
-  }
-  for (const auto& [a, b] : scene.collidable_pairs()) {
-    hash.value(static_cast<std::uint64_t>(a));
-    hash.value(static_cast<std::uint64_t>(b));
-  }
+  hash_scene_structure(hash, scene);
   hash.value(static_cast<std::uint64_t>(frames.size()));
   for (const auto& frame : frames) hash.bytes(frame.data(), frame.size() * sizeof(Vec3));
   return hash.hex();

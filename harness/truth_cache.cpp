@@ -80,22 +80,32 @@ std::string reference_version() {
   return std::string("reference sources ") + CCDBENCH_REFERENCE_SOURCE_DIGEST + ", CGAL " + CGAL_VERSION_STR;
 }
 
+void hash_scene_structure(datasets::ContentHash& hash, const Scene& scene) {
+  const MeshTopology& topology = scene.topology();
+  hash.value(static_cast<std::uint64_t>(topology.num_vertices()));
+  hash.value(static_cast<std::uint64_t>(topology.num_faces()));
+  hash.bytes(topology.faces().data(), topology.faces().size() * sizeof(Face));
+  hash.value(static_cast<std::uint64_t>(scene.objects().size()));
+  for (const SceneObject& object : scene.objects()) {
+    hash.text(object.name);
+    hash.value(static_cast<std::uint8_t>(object.kind));
+    hash.value(static_cast<std::uint8_t>(object.self_collision));
+    hash.value(static_cast<std::uint64_t>(object.first_vertex));
+    hash.value(static_cast<std::uint64_t>(object.first_face));
+  }
+  hash.value(static_cast<std::uint64_t>(scene.collidable_pairs().size()));
+  for (const auto& [a, b] : scene.collidable_pairs()) {
+    hash.value(static_cast<std::uint64_t>(a));
+    hash.value(static_cast<std::uint64_t>(b));
+  }
+}
+
 std::string truth_key(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1) {
   datasets::ContentHash hash;
   hash.text("ccdbench truth v2");
   hash.text(reference_version());
   hash.value(scene.thickness());
-  hash.value(static_cast<std::uint64_t>(scene.topology().num_vertices()));
-  hash.bytes(scene.topology().faces().data(), scene.topology().faces().size() * sizeof(Face));
-  for (const SceneObject& object : scene.objects()) {
-    hash.value(static_cast<std::uint64_t>(object.first_vertex));
-    hash.value(static_cast<std::uint64_t>(object.first_face));
-    hash.value(static_cast<std::uint8_t>(object.self_collision));
-  }
-  for (const auto& [a, b] : scene.collidable_pairs()) {
-    hash.value(static_cast<std::uint64_t>(a));
-    hash.value(static_cast<std::uint64_t>(b));
-  }
+  hash_scene_structure(hash, scene);
   hash.bytes(x0.data(), x0.size() * sizeof(Vec3));
   hash.bytes(x1.data(), x1.size() * sizeof(Vec3));
   return hash.hex();

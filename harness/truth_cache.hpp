@@ -8,6 +8,7 @@
 
 #include "core/collision_set.hpp"
 #include "core/scene.hpp"
+#include "datasets/content_hash.hpp"
 
 #include <filesystem>
 #include <iosfwd>
@@ -18,6 +19,11 @@ namespace ccd::harness {
 
 /// What the cache key holds of the reference's version: the build-time digest of its sources and CGAL's version.
 std::string reference_version();
+
+/// Feeds everything of a scene but its positions and δ to `hash`: topology, objects (name, kind, self-collision
+/// flag, numbering) and the collidable pairs. Truth keys and the keys of resumed cells both use it, so that
+/// neither can forget a part of the scene that the other covers.
+void hash_scene_structure(datasets::ContentHash& hash, const Scene& scene);
 
 /// A 128-bit content key, as 32 hex digits.
 std::string truth_key(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1);

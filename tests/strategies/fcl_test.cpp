@@ -52,14 +52,20 @@ TEST_P(FclBvhOnScene, CandidatesCoverEveryTruthPairAndNothingIsMissed) {
       for (const auto& c : truth[k].vertex_face()) {
         const bool tested = contains_sorted(result.tested->vertex_face, c.pair);
         culled += tested ? 0 : 1;
-        if (conservative) ASSERT_TRUE(tested) << "step " << k << ": VF " << c.pair.v << "/" << c.pair.f << " culled";
+        if (conservative) {
+          ASSERT_TRUE(tested) << "step " << k << ": VF " << c.pair.v << "/" << c.pair.f << " culled";
+        }
       }
       for (const auto& c : truth[k].edge_edge()) {
         const bool tested = contains_sorted(result.tested->edge_edge, c.pair);
         culled += tested ? 0 : 1;
-        if (conservative) ASSERT_TRUE(tested) << "step " << k << ": an EE pair culled";
+        if (conservative) {
+          ASSERT_TRUE(tested) << "step " << k << ": an EE pair culled";
+        }
       }
-      if (conservative) ASSERT_EQ(set_difference(truth[k], result.collisions).size(), 0u) << "step " << k;
+      if (conservative) {
+        ASSERT_EQ(set_difference(truth[k], result.collisions).size(), 0u) << "step " << k;
+      }
     }
     if (!conservative) std::cout << name << ": fcl-bvh:bv=obbrss culled " << culled << " colliding pairs\n";
   }
