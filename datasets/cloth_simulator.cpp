@@ -153,10 +153,14 @@ void ClothSimulator::substep(double dt) {
 
 void ClothSimulator::self_repulsion() {
   const double radius = settings_.repulsion_radius;
+  // A diverging simulation (caught after the frame, with the parameter named) may hold huge or non-finite
+  // positions here: their cells are clamped into range (NaN to 0) so that converting them is defined.
   auto cell_of = [radius](const Vec3& p) {
-    return std::array<long long, 3>{static_cast<long long>(std::floor(p.x() / radius)),
-                                    static_cast<long long>(std::floor(p.y() / radius)),
-                                    static_cast<long long>(std::floor(p.z() / radius))};
+    auto cell = [radius](double x) {
+      const double c = std::floor(x / radius);
+      return static_cast<long long>(c >= -0x1p40 && c <= 0x1p40 ? c : c > 0 ? 0x1p40 : c < 0 ? -0x1p40 : 0.0);
+    };
+    return std::array<long long, 3>{cell(p.x()), cell(p.y()), cell(p.z())};
   };
   auto key_of = [](const std::array<long long, 3>& c) {
     // 21 bits per axis: a cloth of a few metres at millimetre radii stays far inside that range.
