@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <cstdio>
+#include <functional>
+#include <optional>
 #include <random>
 
 namespace ccd::datasets {
@@ -39,7 +40,7 @@ double size_of(const Rows& rows) {
     lower = lower.cwiseMin(r);
     upper = upper.cwiseMax(r);
   }
-  return (upper - lower).norm();
+  return (upper - lower).stableNorm();  // no overflow of the squares near DBL_MAX
 }
 
 struct Base {
@@ -151,7 +152,66 @@ std::vector<Base> base_cases() {
       vf({0.5, 1e-9, 1}, {0, 0, 0}, {1, 0, 0}, {0.5, 1e-6, 0}, {0.5, 1e-9, -1}, {0, 0, 0}, {1, 0, 0}, {0.5, 1e-6, 0}));
   add("degenerate-primitives", "sliver face missed just beside it", VF,
       vf({0.5, 2e-6, 1}, {0, 0, 0}, {1, 0, 0}, {0.5, 1e-6, 0}, {0.5, 2e-6, -1}, {0, 0, 0}, {1, 0, 0}, {0.5, 1e-6, 0}));
+
+  // The numerical extremes of double itself. Coordinates with few significant bits (0.25, 0.5, 0.75, 1.25, 2)
+  // stay exact when scaled into the subnormal range.
+  const Rows vf_cross = vf_still({0.25, 0.25, 1}, {0.25, 0.25, -1});
+  const Rows vf_edge_miss = vf_still({0.5, -0.25, 1}, {0.5, -0.25, -1});
+  const Rows vf_stop_short = vf_still({0.25, 0.25, 1}, {0.25, 0.25, 0.25});
+  const Rows ee_cross = ee({-1, 0, 1}, {1, 0, 1}, {0, -1, 0}, {0, 1, 0}, {-1, 0, -1}, {1, 0, -1}, {0, -1, 0}, {0, 1, 0});
+  const Rows ee_pass = ee({-1, 0, 1}, {1, 0, 1}, {2, -1, 0}, {2, 1, 0}, {-1, 0, -1}, {1, 0, -1}, {2, -1, 0}, {2, 1, 0});
+  for (auto [family, exponent] : {std::pair{"smallest-normal", -1015}, {"subnormal", -1062}, {"near-max", 1020}}) {
+    const std::string at = " at 2^" + std::to_string(exponent);
+    add(family, "vertex through the face" + at, VF, scaled(vf_cross, std::ldexp(1.0, exponent)));
+    add(family, "vertex passing outside an edge" + at, VF, scaled(vf_edge_miss, std::ldexp(1.0, exponent)));
+    add(family, "vertex stopping short of the face" + at, VF, scaled(vf_stop_short, std::ldexp(1.0, exponent)));
+    add(family, "edges crossing" + at, EE, scaled(ee_cross, std::ldexp(1.0, exponent)));
+    add(family, "edges passing beside each other" + at, EE, scaled(ee_pass, std::ldexp(1.0, exponent)));
+  }
+  // Motion far larger than the features: the whole pair is carried 1e10 (an integer, exact) along an axis
+  // during the step, while the features do what the base cases do.
+  for (double carried : {1e10, -1e10}) {
+    const Vec3 by(carried, 0, 0);
+    auto carried_away = [&](Rows rows) {
+      for (int k = 4; k < 8; ++k) rows[k] += by;
+      return rows;
+    };
+    // δ > 0 at 1e-3 of the features (not of the swept box, which is 1e10 long).
+    const std::string how = " while carried " + number(carried);
+    add("huge-motion", "vertex through the face" + how, VF, carried_away(vf_cross), 1e-3);
+    add("huge-motion", "vertex passing outside an edge" + how, VF, carried_away(vf_edge_miss), 1e-3);
+    add("huge-motion", "vertex stopping short of the face" + how, VF, carried_away(vf_stop_short), 1e-3);
+    add("huge-motion", "edges crossing" + how, EE, carried_away(ee_cross), 1e-3);
+    add("huge-motion", "edges passing beside each other" + how, EE, carried_away(ee_pass), 1e-3);
+  }
   return cases;
+}
+
+
+}  // namespace
+
+std::optional<std::array<Vec3, 8>> scaled_exactly(const std::array<Vec3, 8>& rows, int exponent) {
+  std::array<Vec3, 8> out = rows;
+  for (Vec3& row : out) {
+    for (int k = 0; k < 3; ++k) {
+      const double value = std::ldexp(row[k], exponent);
+      if (!std::isfinite(value) || (value != 0 && !std::isnormal(value)) || std::ldexp(value, -exponent) != row[k]) return std::nullopt;
+      row[k] = value;
+    }
+  }
+  return out;
+}
+
+std::vector<int> extremes_scale_exponents() { return {-1000, -960, -530, -515, 500, 960, 1000}; }
+
+namespace {
+
+std::string scaled_family(int exponent) { return "scaled-2^" + std::to_string(exponent); }
+
+/// Families whose cases are already at an extreme of double, which rescaling would push out of range.
+bool at_an_extreme(const std::string& family) {
+  return family == "smallest-normal" || family == "subnormal" || family == "near-max" || family == "magnitudes" ||
+         family == "tiny-next-to-one" || family == "large-translation" || family == "huge-motion";
 }
 
 }  // namespace
@@ -161,6 +221,7 @@ std::vector<std::string> extremes_families() {
   for (const Base& base : base_cases()) {
     if (std::find(families.begin(), families.end(), base.family) == families.end()) families.push_back(base.family);
   }
+  for (int exponent : extremes_scale_exponents()) families.push_back(scaled_family(exponent));
   return families;
 }
 
@@ -199,7 +260,7 @@ std::vector<ExtremeQuery> extremes_suite(std::uint64_t seed) {
           name += ", reordered";
         }
         // Powers of two scale exactly (kept moderate so tiny and huge cases stay representable).
-        if (base.family != "magnitudes" && base.family != "tiny-next-to-one" && base.family != "large-translation" && random() % 2) {
+        if (!at_an_extreme(base.family) && random() % 2) {
           scale = std::ldexp(1.0, static_cast<int>(random() % 17) - 8);
           rows = scaled(rows, scale);
           name += ", scaled by 2^" + std::to_string(static_cast<int>(std::log2(scale)));
@@ -207,6 +268,17 @@ std::vector<ExtremeQuery> extremes_suite(std::uint64_t seed) {
       }
       const double positive = base.positive_thickness > 0 ? base.positive_thickness * scale : 1e-3 * size_of(rows);
       suite.push_back({base.family, name, base.kind, rows, positive});
+    }
+  }
+  // Every other family at the scales of double's far ends, where the rescaling is exact (δ > 0 rescaled alike).
+  for (int exponent : extremes_scale_exponents()) {
+    for (const Base& base : base_cases()) {
+      if (at_an_extreme(base.family)) continue;
+      const std::optional<Rows> rows = scaled_exactly(base.rows, exponent);
+      if (!rows) continue;
+      const double positive = std::ldexp(base.positive_thickness > 0 ? base.positive_thickness : 1e-3 * size_of(base.rows), exponent);
+      suite.push_back({scaled_family(exponent), base.family + ": " + base.name + ", scaled by 2^" + std::to_string(exponent),
+                       base.kind, *rows, positive});
     }
   }
   return suite;

@@ -3,9 +3,16 @@
 #include "reference/certified_filter.hpp"
 #include "reference/exact_decision.hpp"
 
+#include <cmath>
+#include <stdexcept>
+
 namespace ccd::reference {
 
 ExactPair exact_pair_from_doubles(PairKind kind, const std::array<Vec3, 8>& rows) {
+  // GMP raises SIGFPE on a non-finite double: refuse it as an argument error instead.
+  for (const Vec3& row : rows) {
+    if (!row.allFinite()) throw std::invalid_argument("reference: a coordinate is not finite");
+  }
   ExactPair pair;
   pair.kind = kind;
   for (int r = 0; r < 8; ++r) {
@@ -38,6 +45,7 @@ Decision decide(const ExactPair& pair, const mpq_class& thickness, const Decisio
 }
 
 Decision decide(PairKind kind, const std::array<Vec3, 8>& rows, double thickness, const DecisionRequest& request) {
+  if (!std::isfinite(thickness) || thickness < 0) throw std::invalid_argument("reference: δ must be finite and >= 0");
   return filter_then_exact(kind, interval_rows(rows), Interval(thickness), request, [&] {
     return std::pair<ExactPair, mpq_class>(exact_pair_from_doubles(kind, rows), mpq_class(thickness));
   });
