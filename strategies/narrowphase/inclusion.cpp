@@ -3,6 +3,7 @@
 #include "strategies/narrowphase/primitive_distance.hpp"
 
 #include "strategies/narrowphase/coplanarity.hpp"
+#include "strategies/narrowphase/exact_scaling.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -27,8 +28,23 @@ namespace {
 // and stays below M(1 + 5.01u). S, X, Y are one rounded difference of two such values: error < 12.03 uM,
 // magnitude < 2.01 M. fl(u·X), fl(v·Y) with u, v in [0, 1] add one rounding: < 14.04 uM. The two sums add
 // 12.03 + 14.04 + 4.02 (rounding of a value < 4.02 M) and then 14.04 + 6.03: the computed F errs by less than
-// 51 uM. We use 64 uM, plus 64 smallest subnormals for products that underflow.
+// 51 uM. We use 64 uM, plus 64 smallest subnormals for products that underflow. Pairs arrive rescaled to
+// M < 1 (exact_scaling.hpp), so the bound is the same at every scale, and no square below underflows unless the
+// pair itself spans more than 2^500.
 constexpr double kUnitRoundoff = 0x1p-53;
+constexpr double kCornerErrorUnits = 64;      // of u·M, covering the 51 derived above
+constexpr double kCornerErrorSubnormals = 64;  // smallest subnormals, for products that underflow
+/// Exclusion compares a rounded sum of three squares with a rounded δ²: at most 6 roundings, 6u relative while
+/// nothing underflows, which 2^-40 (about 1.6e3 times that) covers.
+constexpr double kExclusionRelativeSlack = 0x1p-40;
+/// The same 6 roundings when their results are subnormal: each errs by at most half the smallest subnormal.
+constexpr double kExclusionSubnormalSlack = 8 * std::numeric_limits<double>::denorm_min();
+/// A point proven within δ (stage 2) must be so with this relative room: it only ever adds a false alarm.
+constexpr double kProofRelativeSlack = 0x1p-40;
+/// Stage 0 calls a pair within δ at t = 0 when its squared distance is below δ² by this much of the squared size:
+/// the closest-point distance is computed in a few dozen roundings (<< 1e-10); a mistake here would only be a
+/// false alarm with TOI 0, never a miss.
+constexpr double kStartDistanceMargin = 1e-10;
 
 struct SubBox {
   double t0, t1, u0, u1, v0, v1;
@@ -58,10 +74,10 @@ class InclusionSearch {
       x0_[k] = rows[k];
       dx_[k] = rows[k + 4] - rows[k];
     }
-    error_ = (64 * kUnitRoundoff) * magnitude + Vec3::Constant(64 * std::numeric_limits<double>::denorm_min());
+    error_ = (kCornerErrorUnits * kUnitRoundoff) * magnitude +
+             Vec3::Constant(kCornerErrorSubnormals * std::numeric_limits<double>::denorm_min());
     tolerance_ = settings.tolerance * (upper - lower).norm();
-    // Exclusion compares a rounded sum of squares with δ²: the relative margin covers that sum's rounding.
-    exclusion_bound_ = thickness * thickness * (1 + 0x1p-40);
+    exclusion_bound_ = thickness * thickness * (1 + kExclusionRelativeSlack) + kExclusionSubnormalSlack;
   }
 
   bool over_budget() { return ++iterations_ > settings_.max_iterations; }
@@ -289,7 +305,7 @@ class InclusionSearch {
     Vec3 S, X, Y;
     terms_at(t, S, X, Y);
     const double distance = ((S + u * X) + v * Y).norm() + error_.norm();
-    if (distance * (1 + 0x1p-40) <= thickness_) return t;
+    if (distance * (1 + kProofRelativeSlack) <= thickness_) return t;
     return std::nullopt;
   }
 
@@ -354,7 +370,16 @@ class InclusionTest final : public NarrowPhase {
   /// Stage 1: the whole domain at once excludes far pairs. Stage 2: a cheap proof of a contact; then only a
   /// lower bound of its TOI is searched, with a small budget. Stage 3: the full search (depth first to a contact
   /// or to proof of none, then earliest first for the TOI).
-  NarrowPhaseResult test(const PairRows& rows, double thickness, bool vertex_face) const {
+  NarrowPhaseResult test(const PairRows& original, double thickness_given, bool vertex_face) const {
+    const RoundToNearest rounding;
+    const std::optional<ScaledPair> scaled = scale_to_unit(original, thickness_given);
+    if (!scaled) return {true, 0.0, false, std::numeric_limits<double>::infinity()};  // unscalable: never a miss
+    NarrowPhaseResult result = test_scaled(scaled->rows, scaled->thickness, vertex_face);
+    result.achieved_tolerance = std::ldexp(result.achieved_tolerance, scaled->exponent);  // back to the pair's units
+    return result;
+  }
+
+  NarrowPhaseResult test_scaled(const PairRows& rows, double thickness, bool vertex_face) const {
     if (within_thickness_at_start(rows, thickness, vertex_face)) return {true, 0.0, false, 0.0};
     InclusionSearch search(rows, thickness, vertex_face, settings_);
     SubBox low, high;
@@ -373,14 +398,14 @@ class InclusionTest final : public NarrowPhase {
 
   /// Stage 0, for δ > 0: a pair already within δ at t = 0 (resting contact) collides, and 0 is its TOI. The
   /// distance is to a point of each closed primitive, so rounding can only move it by a few ulps of the
-  /// coordinates; the margin of 1e-10 of their squared size is far beyond that. At δ = 0 it never fires.
+  /// coordinates; kStartDistanceMargin of their squared size is far beyond that. At δ = 0 it never fires.
   static bool within_thickness_at_start(const PairRows& r, double thickness, bool vertex_face) {
     if (!(thickness > 0)) return false;
     double scale = 0;
     for (int i = 0; i < 4; ++i) scale = std::max(scale, r[i].cwiseAbs().maxCoeff());
     const double squared = vertex_face ? point_triangle_squared_distance<double>(r[0], r[1], r[2], r[3])
                                        : segment_segment_squared_distance<double>(r[0], r[1], r[2], r[3]);
-    return squared <= thickness * thickness - 1e-10 * scale * scale;
+    return squared <= thickness * thickness - kStartDistanceMargin * scale * scale;
   }
 
   /// Boxes spent bounding the TOI below once a contact is proven.

@@ -6,9 +6,16 @@
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 #include "tests/support/rational_rows.hpp"
+#include "tests/support/scale_pairs.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
+
+#include <cfenv>
+#include <cmath>
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 
 namespace ccd::narrowphase {
 namespace {
@@ -69,6 +76,69 @@ TEST(Conservative, NoMissOnTheWholeExtremesSuite) {
       expect_no_miss(*conservative, query.kind, query.rows, thickness, query.family + ": " + query.name);
     }
   }
+}
+
+// An exact rescaling by a power of two is the same question (DESIGN.md §6): the conservative test gives the same
+// answer and the same TOI at 2^-1000 .. 2^1000 as at unit scale (it used to add false alarms away from unit scale,
+// 123 on the extremes suite at δ = 0 against 14).
+TEST(Conservative, SameAnswerAndToiAtEveryExactScale) {
+  const auto conservative = make_narrow_phase("conservative");
+  std::size_t compared = 0;
+  for (const testing::ScalePair& pair : testing::scale_test_pairs()) {
+    for (double thickness : {0.0, pair.positive_thickness}) {
+      const NarrowPhaseResult unit = run(*conservative, pair.kind, pair.rows, thickness);
+      for (int exponent : {-1000, -960, -530, -515, 500, 960, 1000}) {
+        const auto scaled = datasets::scaled_exactly(pair.rows, exponent);
+        const double scaled_thickness = std::ldexp(thickness, exponent);
+        if (!scaled || (thickness > 0 && (!std::isnormal(scaled_thickness) || std::ldexp(scaled_thickness, -exponent) != thickness))) continue;
+        const NarrowPhaseResult answer = run(*conservative, pair.kind, *scaled, scaled_thickness);
+        ASSERT_EQ(answer.collides, unit.collides) << pair.where << " at 2^" << exponent << ", δ = " << thickness;
+        if (unit.collides) ASSERT_EQ(answer.toi, unit.toi) << pair.where << " at 2^" << exponent;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 10000u);
+}
+
+// The caller's rounding mode (the reference switches modes in the same process) changes no answer, and is restored.
+TEST(Conservative, AnswersDoNotDependOnTheCallersRoundingMode) {
+  const auto conservative = make_narrow_phase("conservative");
+  const auto suite = datasets::extremes_suite(1);
+  std::vector<NarrowPhaseResult> nearest;
+  for (const auto& query : suite) nearest.push_back(run(*conservative, query.kind, query.rows, query.positive_thickness));
+  for (int mode : {FE_UPWARD, FE_DOWNWARD, FE_TOWARDZERO}) {
+    std::fesetround(mode);
+    std::vector<NarrowPhaseResult> other;
+    for (const auto& query : suite) other.push_back(run(*conservative, query.kind, query.rows, query.positive_thickness));
+    const int after = std::fegetround();
+    std::fesetround(FE_TONEAREST);
+    EXPECT_EQ(after, mode) << "the caller's rounding mode must be restored";
+    for (std::size_t i = 0; i < suite.size(); ++i) {
+      ASSERT_EQ(other[i].collides, nearest[i].collides) << suite[i].family << ": " << suite[i].name << ", mode " << mode;
+      if (nearest[i].collides) ASSERT_EQ(other[i].toi, nearest[i].toi) << suite[i].name;
+    }
+  }
+}
+
+// No flush to zero: subnormal inputs keep their value. A clear miss at subnormal scale is answered "no"; flushed to
+// zero, every point would coincide and the answer would be "collides".
+TEST(Conservative, SubnormalsAreNotFlushed) {
+#ifdef __FAST_MATH__
+  FAIL() << "built with fast math";
+#endif
+#if defined(__SSE__)
+  EXPECT_EQ(_mm_getcsr() & 0x8040u, 0u) << "flush-to-zero (bit 15) or denormals-are-zero (bit 6) is set in MXCSR";
+#endif
+  const double tiny = std::ldexp(1.0, -1062);
+  ASSERT_FALSE(std::isnormal(tiny));
+  ASSERT_GT(tiny, 0.0);
+  const PairRows stops_short = {Vec3(0.25, 0.25, 1) * tiny, Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny,
+                                Vec3(0.25, 0.25, 0.25) * tiny, Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny};
+  EXPECT_FALSE(make_narrow_phase("conservative")->vertex_face(stops_short, 0.0).collides);
+  const PairRows crosses = {Vec3(0.25, 0.25, 1) * tiny, Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny,
+                            Vec3(0.25, 0.25, -1) * tiny, Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny};
+  EXPECT_TRUE(make_narrow_phase("conservative")->vertex_face(crosses, 0.0).collides);
 }
 
 TEST(Conservative, AnswersNoOnlyWithProofAndReportsItsCap) {
