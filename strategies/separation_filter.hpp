@@ -8,12 +8,17 @@
 /// never more than the distance between the primitives. Over t in [0,1], f is a cubic and n a quadratic curve; by
 /// the convex hull property of the Bernstein form, f(t) >= min of f's Bernstein coefficients and
 /// |n(t)| <= max |n's Bernstein control points|. If f's coefficients all exceed δ·max|n| (or all lie below
-/// -δ·max|n|), the pair never comes within δ. The margin for rounding is 1e-9 of the size of the products involved,
-/// some 10^7 times the double rounding of these few operations, so a pair it rejects is apart in exact arithmetic.
-/// Before that, cheaper separating directions: the normals at t = 0 and t = 1 and, in the plane, the perpendiculars
-/// of the face's edges (VF) or of both edges (EE). Along a fixed direction every vertex's projection moves linearly,
-/// so the gap between the two groups is concave in t and it suffices to check both ends; this separates the
-/// in-plane neighbours of a flat cloth, which no plane distance can.
+/// -δ·max|n|), the pair never comes within δ. Before that, cheaper separating directions: the normals at t = 0 and
+/// t = 1 and, in the plane, the perpendiculars of the face's edges (VF) or of both edges (EE). Along a fixed
+/// direction every vertex's projection moves linearly, so the gap between the two groups is concave in t and it
+/// suffices to check both ends; this separates the in-plane neighbours of a flat cloth, which no plane distance
+/// can. Last, a motion bound: certified lower bounds of the distance at t = 0, ½, 1 and how far the primitives can
+/// move in between.
+///
+/// Certified: every comparison carries a bound of its own rounding, derived for round-to-nearest (which it sets on
+/// entry), on the pair rescaled exactly by a power of two to unit size (narrowphase/exact_scaling.hpp), so its
+/// answers are the same at every scale from 2^-1000 to 2^1000, tiny coordinates do not underflow and a motion far
+/// larger than the features does not enter the rounding (no x1 - x0 is formed where features are compared).
 /// It decides "apart" only; "maybe" goes to the narrow phase.
 
 #include "strategies/narrowphase/narrow_phase.hpp"

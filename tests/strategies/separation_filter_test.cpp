@@ -7,10 +7,13 @@
 #include "reference/elementary_pair.hpp"
 #include "strategies/separation_filter.hpp"
 #include "tests/support/rational_rows.hpp"
+#include "tests/support/scale_pairs.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cfenv>
+#include <cmath>
 #include <iostream>
 #include <random>
 
@@ -49,6 +52,42 @@ TEST(SeparationFilter, NeverCallsACollidingPairApartOnTheExtremesSuite) {
   for (const datasets::ExtremeQuery& query : datasets::extremes_suite(1)) {
     for (double thickness : {0.0, query.positive_thickness}) {
       check(query.rows, query.kind == datasets::QueryKind::vertex_face, thickness, query.family + ": " + query.name);
+    }
+  }
+}
+
+// Exact rescaling changes no decision: the filter used to call colliding pairs apart at tiny scales (2^-530: a
+// closest-point distance is an upper bound, and a·e - b² underflows) and pairs carried far during the step.
+TEST(SeparationFilter, SameDecisionAtEveryExactScale) {
+  std::size_t compared = 0, apart = 0;
+  for (const testing::ScalePair& pair : testing::scale_test_pairs()) {
+    const bool vertex_face = pair.kind == datasets::QueryKind::vertex_face;
+    for (double thickness : {0.0, pair.positive_thickness}) {
+      const bool unit = provably_apart(pair.rows, vertex_face, thickness);
+      apart += unit ? 1 : 0;
+      for (int exponent : {-1000, -960, -530, -515, 500, 960, 1000}) {
+        const auto scaled = datasets::scaled_exactly(pair.rows, exponent);
+        const double scaled_thickness = std::ldexp(thickness, exponent);
+        if (!scaled || (thickness > 0 && (!std::isnormal(scaled_thickness) || std::ldexp(scaled_thickness, -exponent) != thickness))) continue;
+        ASSERT_EQ(provably_apart(*scaled, vertex_face, scaled_thickness), unit) << pair.where << " at 2^" << exponent;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 10000u);
+  EXPECT_GT(apart, 100u) << "a filter that never says apart would pass: it must still separate";
+}
+
+TEST(SeparationFilter, DecisionsDoNotDependOnTheCallersRoundingMode) {
+  const auto suite = datasets::extremes_suite(1);
+  for (int mode : {FE_UPWARD, FE_DOWNWARD, FE_TOWARDZERO}) {
+    for (const auto& query : suite) {
+      const bool vertex_face = query.kind == datasets::QueryKind::vertex_face;
+      const bool nearest = provably_apart(query.rows, vertex_face, query.positive_thickness);
+      std::fesetround(mode);
+      const bool other = provably_apart(query.rows, vertex_face, query.positive_thickness);
+      std::fesetround(FE_TONEAREST);
+      ASSERT_EQ(other, nearest) << query.family << ": " << query.name << ", mode " << mode;
     }
   }
 }
