@@ -32,8 +32,7 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
     Box3 box(x0[v]);
     box.extend(x1[v]);
-    const Vec3 margin = Vec3::Constant(thickness / 2) + (box.min().cwiseAbs().cwiseMax(box.max().cwiseAbs()) * 0x1p-50);
-    vertex_boxes[v] = Box3(box.min() - margin, box.max() + margin);
+    vertex_boxes[v] = bvh::widened(box, thickness / 2);
   });
   auto box_of = [&](std::initializer_list<VertexId> vertices) {
     Box3 box;

@@ -15,11 +15,7 @@ Box3 swept_face_box(const Face& face, std::span<const Vec3> x0, std::span<const 
     box.extend(x0[v]);
     box.extend(x1[v]);
   }
-  // The relative margin covers the rounding of the widening itself, so that two primitives within 2·inflation
-  // always get overlapping boxes.
-  box.min().array() -= inflation + box.min().array().abs() * 0x1p-50;
-  box.max().array() += inflation + box.max().array().abs() * 0x1p-50;
-  return box;
+  return widened(box, inflation);
 }
 
 void TriangleBvh::build(const MeshTopology& topology, FaceId first_face, std::size_t face_count,

@@ -10,6 +10,7 @@
 #include "core/topology.hpp"
 #include "core/vec.hpp"
 
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -17,6 +18,19 @@ namespace ccd::bvh {
 
 /// A face's box over the step, x0 ∪ x1, widened by `inflation` on every side (and a rounding margin).
 Box3 swept_face_box(const Face& face, std::span<const Vec3> x0, std::span<const Vec3> x1, double inflation);
+
+/// Relative room for the rounding of widened boxes: a corner c ± w (w the widening) is computed in one or two
+/// roundings of values of magnitude |c| + w, at most 2u = 2^-52 of it; 2^-50 of it covers them at every scale, and
+/// the smallest subnormal covers corners that underflow. So two primitives within 2w always get overlapping boxes.
+inline constexpr double kBoxRoundingMargin = 0x1p-50;
+
+/// Widens `box` by `widening` on every side, with the rounding room above.
+inline Box3 widened(const Box3& box, double widening) {
+  const auto room = [&](const Vec3& corner) {
+    return Vec3((corner.cwiseAbs().array() + widening) * kBoxRoundingMargin + widening + std::numeric_limits<double>::denorm_min());
+  };
+  return Box3(box.min() - room(box.min()), box.max() + room(box.max()));
+}
 
 class TriangleBvh {
  public:

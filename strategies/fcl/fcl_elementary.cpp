@@ -63,8 +63,10 @@ FclMissCause explain_fcl_answer(const narrowphase::PairRows& rows, bool vertex_f
   for (double coefficient : c) largest = std::max(largest, std::abs(coefficient));
   for (const Vec3& row : rows) span = std::max(span, (row - rows[0]).cwiseAbs().maxCoeff());
   if (!found_when_scaled) {
-    // Rounding noise of a cubic in three length differences is about 1e-16·span³; anything near it is zero.
-    return largest <= 1e-12 * span * span * span ? FclMissCause::coplanar_motion : FclMissCause::root_rejected;
+    // Rounding noise of a cubic in three length differences is about 1e-16·span³ (scale-free: relative to
+    // span³); a cubic within kCoplanarNoise of it is the coplanar motion FCL cannot see. Only names a cause.
+    constexpr double kCoplanarNoise = 1e-12;
+    return largest <= kCoplanarNoise * span * span * span ? FclMissCause::coplanar_motion : FclMissCause::root_rejected;
   }
   if (largest < kFclNearZero) return FclMissCause::near_zero_cubic;
   return vertex_face ? FclMissCause::root_rejected : FclMissCause::parallel_threshold;

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <limits>
 #include <unordered_map>
 
 namespace ccd::strategies {
@@ -36,17 +37,21 @@ constexpr narrowphase::SpecRange kFraction{0, 1};
 constexpr narrowphase::SpecRange kPendingRatio{1, 1e9};
 constexpr narrowphase::SpecRange kInflationCap{0, 1e9};
 
+/// Slack of history's plausibility test, relative to the face's squared area (VF) or the edges' squared cross
+/// product (EE), so the same at every scale. History only adds reports to what the narrow phase found: a looser
+/// slack can only add false alarms, a tighter one only drops history's extra reports; no miss depends on it.
+constexpr double kCrossingSlack = 1e-6;
+
 /// Whether a flip of orientation can be a crossing: the vertex projects into the face (VF), or the closest points
-/// of the two edges' lines lie on both segments (EE), at the end of the step, with a little slack.
+/// of the two edges' lines lie on both segments (EE), at the end of the step, within kCrossingSlack.
 bool crossing_is_plausible(const MeshTopology& topology, std::span<const Vec3> x, const VertexFacePair& p) {
   const Face& f = topology.face(p.f);
   const Vec3 a = x[f[0]], b = x[f[1]], c = x[f[2]], q = x[p.v];
   const Vec3 n = (b - a).cross(c - a);
   const double area2 = n.squaredNorm();
   if (!(area2 > 0)) return false;
-  constexpr double kSlack = 1e-6;
-  return (b - a).cross(q - a).dot(n) >= -kSlack * area2 && (c - b).cross(q - b).dot(n) >= -kSlack * area2 &&
-         (a - c).cross(q - c).dot(n) >= -kSlack * area2;
+  return (b - a).cross(q - a).dot(n) >= -kCrossingSlack * area2 && (c - b).cross(q - b).dot(n) >= -kCrossingSlack * area2 &&
+         (a - c).cross(q - c).dot(n) >= -kCrossingSlack * area2;
 }
 bool crossing_is_plausible(const MeshTopology&, std::span<const Vec3> x, const EdgeEdgePair& p) {
   const Vec3 ea = x[p.a.v1] - x[p.a.v0], eb = x[p.b.v1] - x[p.b.v0], r = x[p.b.v0] - x[p.a.v0];
@@ -54,8 +59,8 @@ bool crossing_is_plausible(const MeshTopology&, std::span<const Vec3> x, const E
   const double m2 = m.squaredNorm();
   if (!(m2 > 0)) return false;
   const double s = r.cross(eb).dot(m), u = r.cross(ea).dot(m);
-  constexpr double kSlack = 1e-6;
-  return s >= -kSlack * m2 && s <= (1 + kSlack) * m2 && u >= -kSlack * m2 && u <= (1 + kSlack) * m2;
+  return s >= -kCrossingSlack * m2 && s <= (1 + kCrossingSlack) * m2 && u >= -kCrossingSlack * m2 &&
+         u <= (1 + kCrossingSlack) * m2;
 }
 
 /// Orientation of an elementary pair at the end of the step: which side of the face plane the vertex is on, or
@@ -316,8 +321,12 @@ class Apccd final : public Strategy {
       double mean_budget = 0;
       for (std::size_t i = 0; i < object.num_vertices; ++i) mean_budget += budget_[object.first_vertex + i];
       mean_budget /= static_cast<double>(object.num_vertices);
-      const double frames = settings_.inflation_max * mean_edge_[id] / std::max(mean_budget, 1e-300);
-      allowed = std::min(allowed, 1 + static_cast<int>(std::min(frames, 1e6)));
+      // A still object (zero budget) allows any session length unless inflation_max is 0; frames is compared
+      // with nf_max before the conversion, so that no huge quotient is converted to int.
+      const double frames = mean_budget > 0 ? settings_.inflation_max * mean_edge_[id] / mean_budget
+                            : settings_.inflation_max > 0 ? std::numeric_limits<double>::infinity()
+                                                          : 0.0;
+      if (frames < settings_.nf_max) allowed = std::min(allowed, 1 + static_cast<int>(frames));
     }
     nf_ = std::clamp(std::min(nf_, allowed), settings_.nf_min, settings_.nf_max);
   }

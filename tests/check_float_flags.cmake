@@ -1,0 +1,26 @@
+# Fails when the build or the sources ask for floating-point semantics other than IEEE 754 round-to-nearest with
+# subnormals: the conservative tests' error budgets (and the exact reference's filter) assume them. Checks the
+# flags this build was configured with (FLAGS) and every build file and source of the project, for
+# -ffast-math, -Ofast, -funsafe-math-optimizations, -ffinite-math-only, -fno-signed-zeros and flush-to-zero
+# (-mdaz-ftz, _MM_SET_FLUSH_ZERO_MODE, _MM_SET_DENORMALS_ZERO_MODE), and the OpenCL build options that do the same.
+set(forbidden "-ffast-math|-Ofast|-funsafe-math-optimizations|-ffinite-math-only|-fno-signed-zeros|-mdaz-ftz|_MM_SET_FLUSH_ZERO_MODE|_MM_SET_DENORMALS_ZERO_MODE|-cl-fast-relaxed-math|-cl-unsafe-math-optimizations|-cl-finite-math-only|-cl-denorms-are-zero|-cl-mad-enable")
+set(violations "")
+if(FLAGS MATCHES "(${forbidden})")
+  string(APPEND violations "  the build's flags: ${FLAGS}\n")
+endif()
+file(GLOB_RECURSE files "${SOURCE_DIR}/CMakeLists.txt" "${SOURCE_DIR}/*.cmake" "${SOURCE_DIR}/CMakePresets.json"
+     "${SOURCE_DIR}/core/*" "${SOURCE_DIR}/datasets/*" "${SOURCE_DIR}/reference/*" "${SOURCE_DIR}/strategies/*"
+     "${SOURCE_DIR}/harness/*" "${SOURCE_DIR}/benchmarks/*")
+foreach(file IN LISTS files)
+  if(file MATCHES "/build/|check_float_flags.cmake$")
+    continue()
+  endif()
+  file(STRINGS "${file}" lines REGEX "(${forbidden})")
+  foreach(line IN LISTS lines)
+    string(APPEND violations "  ${file}: ${line}\n")
+  endforeach()
+endforeach()
+if(violations)
+  message(FATAL_ERROR "floating-point semantics changed:\n${violations}")
+endif()
+message(STATUS "float flags: IEEE semantics kept")
