@@ -93,7 +93,9 @@ TEST(Conservative, SameAnswerAndToiAtEveryExactScale) {
         if (!scaled || (thickness > 0 && (!std::isnormal(scaled_thickness) || std::ldexp(scaled_thickness, -exponent) != thickness))) continue;
         const NarrowPhaseResult answer = run(*conservative, pair.kind, *scaled, scaled_thickness);
         ASSERT_EQ(answer.collides, unit.collides) << pair.where << " at 2^" << exponent << ", δ = " << thickness;
-        if (unit.collides) ASSERT_EQ(answer.toi, unit.toi) << pair.where << " at 2^" << exponent;
+        if (unit.collides) {
+          ASSERT_EQ(answer.toi, unit.toi) << pair.where << " at 2^" << exponent;
+        }
         ++compared;
       }
     }
@@ -116,7 +118,9 @@ TEST(Conservative, AnswersDoNotDependOnTheCallersRoundingMode) {
     EXPECT_EQ(after, mode) << "the caller's rounding mode must be restored";
     for (std::size_t i = 0; i < suite.size(); ++i) {
       ASSERT_EQ(other[i].collides, nearest[i].collides) << suite[i].family << ": " << suite[i].name << ", mode " << mode;
-      if (nearest[i].collides) ASSERT_EQ(other[i].toi, nearest[i].toi) << suite[i].name;
+      if (nearest[i].collides) {
+        ASSERT_EQ(other[i].toi, nearest[i].toi) << suite[i].name;
+      }
     }
   }
 }
