@@ -10,6 +10,7 @@
 #include <CGAL/version.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
 #include <iostream>
 #include <limits>
@@ -18,8 +19,10 @@
 namespace ccd::harness {
 namespace {
 
-constexpr char kMagic[8] = {'C', 'C', 'D', 'T', 'R', 'U', 'T', '2'};
-constexpr std::size_t kHeaderBytes = 8 + 8 + 8;  // magic, VF count, EE count
+constexpr char kMagic[8] = {'C', 'C', 'D', 'T', 'R', 'U', 'T', '3'};
+constexpr std::size_t kHeaderBytes = 8 + 8 + 8 + 8;  // magic, VF count, EE count, flags
+constexpr std::uint64_t kWithToi = 1;
+constexpr std::size_t kToiBytes = sizeof(double);
 constexpr std::size_t kChecksumBytes = 8;
 constexpr std::size_t kVertexFaceBytes = 2 * sizeof(std::uint32_t);
 constexpr std::size_t kEdgeEdgeBytes = 4 * sizeof(std::uint32_t);
@@ -111,10 +114,11 @@ std::string truth_key(const Scene& scene, std::span<const Vec3> x0, std::span<co
   return hash.hex();
 }
 
-void write_truth_file(const std::filesystem::path& path, const CollisionSet& truth) {
+void write_truth_file(const std::filesystem::path& path, const CollisionSet& truth, bool with_toi) {
   std::vector<unsigned char> bytes(kMagic, kMagic + 8);
   put_u64(bytes, truth.vertex_face().size());
   put_u64(bytes, truth.edge_edge().size());
+  put_u64(bytes, with_toi ? kWithToi : 0);
   for (const auto& c : truth.vertex_face()) {
     put_u32(bytes, c.pair.v);
     put_u32(bytes, c.pair.f);
@@ -122,24 +126,31 @@ void write_truth_file(const std::filesystem::path& path, const CollisionSet& tru
   for (const auto& c : truth.edge_edge()) {
     for (VertexId v : {c.pair.a.v0, c.pair.a.v1, c.pair.b.v0, c.pair.b.v1}) put_u32(bytes, v);
   }
+  if (with_toi) {
+    auto put_time = [&](double toi) { put_u64(bytes, std::bit_cast<std::uint64_t>(toi)); };
+    for (const auto& c : truth.vertex_face()) put_time(c.toi);
+    for (const auto& c : truth.edge_edge()) put_time(c.toi);
+  }
   put_u64(bytes, datasets::checksum64(bytes.data(), bytes.size()));
   datasets::AtomicFile out(path);
   out.stream().write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   out.commit();
 }
 
-CollisionSet read_truth_file(const std::filesystem::path& path, const Scene& scene) {
+CachedTruth read_truth_file(const std::filesystem::path& path, const Scene& scene) {
   std::ifstream in = datasets::open_input_file(path, "truth cache file", std::ios::in | std::ios::binary);
   const std::uintmax_t size = datasets::input_file_size(path);
   if (size < kHeaderBytes + kChecksumBytes) throw InputError(path, "header", "truncated truth file");
   unsigned char header[kHeaderBytes];
   if (!in.read(reinterpret_cast<char*>(header), kHeaderBytes)) throw InputError(path, "header", "cannot read");
   if (std::memcmp(header, kMagic, 8) != 0) throw InputError(path, "header", "not a ccdbench truth file (bad magic)");
-  const std::uint64_t vf = get_u64(header + 8), ee = get_u64(header + 16);
+  const std::uint64_t vf = get_u64(header + 8), ee = get_u64(header + 16), flags = get_u64(header + 24);
+  if (flags & ~kWithToi) throw InputError(path, "header", "unknown flags " + std::to_string(flags));
+  const bool with_toi = (flags & kWithToi) != 0;
+  const std::size_t vf_bytes = kVertexFaceBytes + (with_toi ? kToiBytes : 0), ee_bytes = kEdgeEdgeBytes + (with_toi ? kToiBytes : 0);
   // Counts first against the bytes that back them, so that no corrupt count is ever allocated.
   const std::uintmax_t body = size - kHeaderBytes - kChecksumBytes;
-  if (vf > body / kVertexFaceBytes || ee > (body - vf * kVertexFaceBytes) / kEdgeEdgeBytes ||
-      vf * kVertexFaceBytes + ee * kEdgeEdgeBytes != body) {
+  if (vf > body / vf_bytes || ee > (body - vf * vf_bytes) / ee_bytes || vf * vf_bytes + ee * ee_bytes != body) {
     throw InputError(path, "header", std::to_string(vf) + " vertex-face and " + std::to_string(ee) +
                                          " edge-edge pairs do not match the file's " + std::to_string(size) + " bytes");
   }
@@ -152,14 +163,23 @@ CollisionSet read_truth_file(const std::filesystem::path& path, const Scene& sce
   if (datasets::checksum64(bytes.data(), checked) != get_u64(bytes.data() + checked)) {
     throw InputError(path, "checksum", "does not match the content (the file is corrupt)");
   }
-  CollisionSet set;
   const unsigned char* p = bytes.data() + kHeaderBytes;
+  const unsigned char* times = p + vf * kVertexFaceBytes + ee * kEdgeEdgeBytes;
+  auto next_time = [&](const char* kind, std::uint64_t i) {
+    if (!with_toi) return kNoToi;
+    const double toi = std::bit_cast<double>(get_u64(times));
+    times += kToiBytes;
+    if (!(toi >= 0 && toi <= 1)) throw InputError(path, pair_where(kind, i), "TOI outside [0, 1]");
+    return toi;
+  };
+  CachedTruth cached;
+  cached.with_toi = with_toi;
   VertexFacePair previous_vf{};
   for (std::uint64_t i = 0; i < vf; ++i, p += kVertexFaceBytes) {
     const VertexFacePair pair{get_u32(p), get_u32(p + 4)};
     check_vertex_face(path, scene, i, pair);
     if (i > 0 && !(previous_vf < pair)) throw InputError(path, pair_where("vertex-face", i), "pairs out of order or repeated");
-    set.add(pair);
+    cached.collisions.add(pair, next_time("vertex-face", i));
     previous_vf = pair;
   }
   EdgeEdgePair previous_ee{};
@@ -167,24 +187,27 @@ CollisionSet read_truth_file(const std::filesystem::path& path, const Scene& sce
     const EdgeEdgePair pair{{get_u32(p), get_u32(p + 4)}, {get_u32(p + 8), get_u32(p + 12)}};
     check_edge_edge(path, scene, i, pair);
     if (i > 0 && !(previous_ee < pair)) throw InputError(path, pair_where("edge-edge", i), "pairs out of order or repeated");
-    set.add(pair);
+    cached.collisions.add(pair, next_time("edge-edge", i));
     previous_ee = pair;
   }
-  set.normalize();
-  return set;
+  cached.collisions.normalize();
+  return cached;
 }
 
 std::filesystem::path TruthCache::file_for(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1) const {
   return directory_ / (truth_key(scene, x0, x1) + ".truth");
 }
 
-CollisionSet TruthCache::truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed) const {
+CollisionSet TruthCache::truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed,
+                               bool with_toi) const {
   const std::filesystem::path file = file_for(scene, x0, x1);
   if (std::filesystem::exists(file)) {
     try {
-      CollisionSet set = read_truth_file(file, scene);
-      computed = false;
-      return set;
+      CachedTruth cached = read_truth_file(file, scene);
+      if (cached.with_toi || !with_toi) {
+        computed = false;
+        return std::move(cached.collisions);
+      }
     } catch (const InputError& error) {
       (warnings_ ? *warnings_ : std::cerr) << "ccdbench: warning: " << error.what()
                                            << "; the cached truth is not used, it is computed again\n";
@@ -192,9 +215,10 @@ CollisionSet TruthCache::truth(const Scene& scene, std::span<const Vec3> x0, std
   }
   reference::TruthRequest request;
   request.thickness = scene.thickness();
+  request.with_toi = with_toi;
   CollisionSet set = reference::compute_step_truth(scene, x0, x1, request).collisions;
   std::filesystem::create_directories(directory_);
-  write_truth_file(file, set);
+  write_truth_file(file, set, with_toi);
   computed = true;
   return set;
 }

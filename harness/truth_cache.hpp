@@ -28,14 +28,22 @@ void hash_scene_structure(datasets::ContentHash& hash, const Scene& scene);
 /// A 128-bit content key, as 32 hex digits.
 std::string truth_key(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1);
 
-/// Writes a truth file: magic, counts, the pairs, and an XXH3-64 checksum of everything before it.
-void write_truth_file(const std::filesystem::path& path, const CollisionSet& truth);
+/// Writes a truth file: magic, counts, a flags word (1: exact TOIs follow the pairs), the pairs, with_toi the TOI
+/// of every pair (the largest double not after the exact earliest contact), and an XXH3-64 checksum of everything
+/// before it.
+void write_truth_file(const std::filesystem::path& path, const CollisionSet& truth, bool with_toi = false);
+
+struct CachedTruth {
+  CollisionSet collisions;
+  /// Whether the file holds exact TOIs (then every contact's toi is set).
+  bool with_toi = false;
+};
 
 /// Reads a truth file for `scene`. The counts must match the file's size before anything is allocated, the
 /// checksum must match, and every pair must be one the scene has: vertex and face ids in range, the vertex used and
 /// not a corner of the face, both edges of the mesh and sharing no vertex, objects that may collide, pairs sorted
-/// without repeats. @throws InputError (file, where, reason) otherwise.
-CollisionSet read_truth_file(const std::filesystem::path& path, const Scene& scene);
+/// without repeats; TOIs must lie in [0, 1]. @throws InputError (file, where, reason) otherwise.
+CachedTruth read_truth_file(const std::filesystem::path& path, const Scene& scene);
 
 class TruthCache {
  public:
@@ -44,7 +52,9 @@ class TruthCache {
       : directory_(std::move(directory)), warnings_(warnings) {}
 
   /// The truth of the step, from the cache or computed by the reference (and then stored). `computed` tells which.
-  CollisionSet truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed) const;
+  /// With `with_toi`, every contact carries its exact TOI's floor (a cached file without TOIs is computed again).
+  CollisionSet truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed,
+                     bool with_toi = false) const;
 
   /// Where the truth of this step is (or would be) kept.
   std::filesystem::path file_for(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1) const;

@@ -49,6 +49,9 @@ struct Decision {
   DecidedBy decided_by = DecidedBy::exact;
   /// With want_toi and collides: an interval that contains the earliest such t.
   std::optional<RationalInterval> toi;
+  /// With want_toi and collides: the largest double <= the earliest such t, exactly. A double TOI is later than
+  /// the true one exactly when it is greater than this.
+  std::optional<double> toi_floor;
 };
 
 /// Decides `pair` at thickness δ (taken as the exact rational it is).

@@ -7,6 +7,7 @@
 #include <CGAL/CORE_arithmetic_kernel.h>
 
 #include <algorithm>
+#include <cmath>
 #include <mutex>
 
 namespace ccd::reference {
@@ -116,6 +117,23 @@ std::optional<AlgebraicReal> earliest_time(const ExactCondition& condition) {
   return std::nullopt;
 }
 
+/// The largest double <= t, for t in [0, 1]: from a 64-bit relative approximation (a double or two away, also
+/// for tiny t), then corrected by exact comparisons, so it is exact whatever the approximation's rounding. The
+/// comparisons refine t's isolating interval only as far as the doubles next to it require.
+double floor_to_double(const AlgebraicReal& t) {
+  const AlgebraicKernel kernel;
+  const auto compare = kernel.compare_1_object();
+  auto as_bound = [](double d) { return Bound(mpq_class(d).get_mpq_t()); };
+  const auto bounds = kernel.approximate_relative_1_object()(t, 64);
+  double floor = std::clamp(to_mpq(bounds.first).get_d(), 0.0, 1.0);  // get_d truncates towards zero
+  while (floor > 0 && compare(t, as_bound(floor)) == CGAL::SMALLER) floor = std::nextafter(floor, 0.0);
+  for (double next = std::nextafter(floor, 2.0); next <= 1 && compare(t, as_bound(next)) != CGAL::SMALLER;
+       next = std::nextafter(floor, 2.0)) {
+    floor = next;
+  }
+  return floor;
+}
+
 Vector3<RationalPolynomial> moving_point(const RationalPoint& at0, const RationalPoint& at1) {
   return {RationalPolynomial::linear(at0[0], at1[0] - at0[0]), RationalPolynomial::linear(at0[1], at1[1] - at0[1]),
           RationalPolynomial::linear(at0[2], at1[2] - at0[2])};
@@ -153,6 +171,7 @@ ExactResult decide_exactly(const ExactPair& pair, const mpq_class& thickness, un
   if (earliest && toi_bits > 0) {
     const auto bounds = kernel.approximate_absolute_1_object()(*earliest, static_cast<int>(toi_bits));
     result.toi = RationalInterval{to_mpq(bounds.first), to_mpq(bounds.second)};
+    result.toi_floor = floor_to_double(*earliest);
   }
   return result;
 }

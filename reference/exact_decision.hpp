@@ -14,6 +14,9 @@ namespace ccd::reference {
 struct ExactResult {
   bool collides = false;
   std::optional<RationalInterval> toi;
+  /// With a TOI: the largest double <= the earliest contact time, decided exactly. A double TOI t is later than
+  /// the true one exactly when t > toi_floor (no double lies strictly between toi_floor and the true time).
+  std::optional<double> toi_floor;
 };
 
 /// Decides exactly. Method, per condition: isolate the real roots in [0, 1] of every polynomial of the

@@ -227,7 +227,7 @@ StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::
     (decision.decided_by == DecidedBy::filter ? local.by_filter : local.exactly) += 1;
     if (!decision.collides) return;
     double toi = kNoToi;
-    if (decision.toi) toi = mpq_class((decision.toi->lower + decision.toi->upper) / 2).get_d();
+    if (decision.toi_floor) toi = *decision.toi_floor;
     local.collisions.add(pair, toi);
   };
   const std::size_t total = vf_pairs.size() + ee_pairs.size();

@@ -14,7 +14,8 @@ namespace ccd::reference {
 struct TruthRequest {
   /// δ >= 0 (usually the scene's).
   double thickness = 0.0;
-  /// Also compute each colliding pair's earliest contact time (exactly; its double midpoint goes in the set).
+  /// Also compute each colliding pair's earliest contact time exactly; the set holds the largest double not after
+  /// it (a reported double TOI t is late exactly when t > that value).
   bool with_toi = false;
   /// Called on the calling thread as decisions complete: (pairs decided, pairs to decide).
   std::function<void(std::size_t, std::size_t)> progress;

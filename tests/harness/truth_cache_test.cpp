@@ -3,8 +3,10 @@
 
 #include "ccd/source_digest.hpp"
 #include "core/error.hpp"
+#include "core/step.hpp"
 #include "datasets/procedural_scenes.hpp"
 #include "harness/truth_cache.hpp"
+#include "reference/elementary_pair.hpp"
 #include "reference/step_truth.hpp"
 #include "tests/support/cli.hpp"
 #include "tests/support/test_support.hpp"
@@ -57,7 +59,7 @@ TEST(TruthCache, EveryFlippedBitIsDetectedAndTheTruthComputedAgain) {
   ASSERT_GT(truth.vertex_face().size(), 0u) << "the step must collide for this test to mean anything";
   ASSERT_GT(truth.edge_edge().size(), 0u);
   const auto file = cache.file_for(step.scene, step.x0, step.x1);
-  EXPECT_TRUE(read_truth_file(file, step.scene).same_pairs(truth));
+  EXPECT_TRUE(read_truth_file(file, step.scene).collisions.same_pairs(truth));
   EXPECT_TRUE(cache.truth(step.scene, step.x0, step.x1, computed).same_pairs(truth));
   EXPECT_FALSE(computed);
   const std::vector<char> original = file_bytes(file);
@@ -114,13 +116,40 @@ TEST(TruthCache, CountsAreCheckedAgainstTheFileSizeBeforeAnythingIsAllocated) {
   const auto file = dir / "x.truth";
   write_truth_file(file, CollisionSet{});
   std::vector<char> bytes = file_bytes(file);
-  ASSERT_EQ(bytes.size(), 32u);
+  ASSERT_EQ(bytes.size(), 40u);
   bytes[15] = 0x10;  // the VF count becomes 2^60
   write_bytes(file, bytes);
-  EXPECT_NE(testing::error_message<InputError>([&] { read_truth_file(file, step.scene); }).find("do not match the file's 32 bytes"),
+  EXPECT_NE(testing::error_message<InputError>([&] { read_truth_file(file, step.scene); }).find("do not match the file's 40 bytes"),
             std::string::npos);
   write_bytes(file, {'C', 'C'});
   EXPECT_NE(testing::error_message<InputError>([&] { read_truth_file(file, step.scene); }).find("truncated"), std::string::npos);
+}
+
+// Exact TOIs are cached with the truth when asked for; a file without them is computed again when they are.
+TEST(TruthCache, ExactToisAreCachedWithTheTruth) {
+  testing::TempDir dir;
+  const CrossingStep step = crossing_step();
+  std::ostringstream warnings;
+  const TruthCache cache(dir / "truth", &warnings);
+  bool computed = false;
+  const CollisionSet plain = cache.truth(step.scene, step.x0, step.x1, computed);
+  EXPECT_TRUE(computed);
+  EXPECT_FALSE(read_truth_file(cache.file_for(step.scene, step.x0, step.x1), step.scene).with_toi);
+  const CollisionSet timed = cache.truth(step.scene, step.x0, step.x1, computed, true);
+  EXPECT_TRUE(computed) << "a cached file without TOIs must be computed again with them";
+  ASSERT_TRUE(timed.same_pairs(plain));
+  const CachedTruth cached = read_truth_file(cache.file_for(step.scene, step.x0, step.x1), step.scene);
+  ASSERT_TRUE(cached.with_toi);
+  for (std::size_t i = 0; i < timed.vertex_face().size(); ++i) {
+    EXPECT_EQ(cached.collisions.vertex_face()[i].toi, timed.vertex_face()[i].toi);
+    const auto rows = pair_rows(step.scene.topology(), step.x0, step.x1, timed.vertex_face()[i].pair);
+    EXPECT_EQ(timed.vertex_face()[i].toi, *reference::decide(reference::PairKind::vertex_face, rows, 0.0, {true, true, 64}).toi_floor);
+  }
+  EXPECT_TRUE(cache.truth(step.scene, step.x0, step.x1, computed, true).same_pairs(timed));
+  EXPECT_FALSE(computed);
+  EXPECT_TRUE(cache.truth(step.scene, step.x0, step.x1, computed, false).same_pairs(timed));
+  EXPECT_FALSE(computed) << "a file with TOIs serves a request without them";
+  EXPECT_EQ(warnings.str(), "");
 }
 
 // The key holds a digest of the reference's sources taken at build time: no version number to forget.
@@ -152,8 +181,8 @@ TEST(TruthCache, ARunWithCorruptCachedTruthGivesTheSameVerdicts) {
   std::size_t corrupted = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir / "cache/truth")) {
     std::vector<char> bytes = file_bytes(entry.path());
-    if (bytes.size() <= 32) continue;  // no pair to corrupt
-    bytes[24] = static_cast<char>(bytes[24] ^ 1);  // the first pair's vertex: another pair, a valid-looking file
+    if (bytes.size() <= 40) continue;  // no pair to corrupt
+    bytes[32] = static_cast<char>(bytes[32] ^ 1);  // the first pair's vertex: another pair, a valid-looking file
     write_bytes(entry.path(), bytes);
     ++corrupted;
   }

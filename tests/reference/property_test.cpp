@@ -176,3 +176,46 @@ TEST(ReferenceProperty, SymmetriesNeverChangeTheAnswer) {
 
 }  // namespace
 }  // namespace ccd::reference
+
+namespace ccd::reference {
+namespace {
+
+// The exact TOI's floor is the largest double not after the earliest contact: exactly 0.5 for a contact at 1/2,
+// the double just below 1/3 for a contact at 1/3 (1/3 is not a double), and for an irrational time a double whose
+// successor lies beyond the exact interval. A double TOI is late exactly when it exceeds the floor.
+TEST(ReferenceToi, FloorIsTheLargestDoubleNotAfterTheEarliestContact) {
+  const Vec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  auto vertex_through = [&](double z0, double z1) {
+    return std::array<Vec3, 8>{Vec3(0.25, 0.25, z0), a, b, c, Vec3(0.25, 0.25, z1), a, b, c};
+  };
+  const DecisionRequest with_toi{true, true, 64};
+  const Decision half = decide(PairKind::vertex_face, vertex_through(1, -1), 0.0, with_toi);
+  ASSERT_TRUE(half.collides);
+  EXPECT_EQ(*half.toi_floor, 0.5);
+  const Decision third = decide(PairKind::vertex_face, vertex_through(1, -2), 0.0, with_toi);  // z = 1 - 3t: t = 1/3
+  const double below_third = 1.0 / 3.0;  // round to nearest of 1/3 lies below it (binary 0.0101...01|0101...)
+  ASSERT_LT(mpq_class(below_third), mpq_class(1, 3));
+  EXPECT_EQ(*third.toi_floor, below_third);
+  EXPECT_GT(mpq_class(std::nextafter(below_third, 1.0)), mpq_class(1, 3));
+  // Within δ = 0.5 of the face: the vertex descends z = 2 - 2t and is within δ from t = 3/4.
+  const Decision thick = decide(PairKind::vertex_face, vertex_through(2, 0), 0.5, with_toi);
+  EXPECT_EQ(*thick.toi_floor, 0.75);
+  // An irrational time: a vertex passing a slanted moving face (a quadratic coplanarity condition).
+  std::mt19937_64 random(20261122);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  std::size_t checked = 0;
+  for (int i = 0; i < 200; ++i) {
+    std::array<Vec3, 8> rows;
+    for (Vec3& row : rows) row = Vec3(unit(random), unit(random), unit(random));
+    const Decision decision = decide(PairKind::edge_edge, rows, 0.05, with_toi);
+    if (!decision.collides) continue;
+    const double floor = *decision.toi_floor;
+    EXPECT_LE(mpq_class(floor), decision.toi->upper);
+    EXPECT_GE(mpq_class(std::nextafter(floor, 2.0)), decision.toi->lower) << "the floor must be the largest such double";
+    ++checked;
+  }
+  EXPECT_GT(checked, 20u);
+}
+
+}  // namespace
+}  // namespace ccd::reference
