@@ -46,7 +46,7 @@ json load_cell(const std::filesystem::path& file) {
 json CellKey::to_json() const {
   return {{"format", kCellFormat},   {"scene", scene},       {"scene_content", scene_content},
           {"steps", steps},          {"thickness", thickness}, {"strategy", strategy},
-          {"verify", verify},        {"repeats", repeats},   {"threads", threads},
+          {"verify", verify},        {"toi", toi},           {"repeats", repeats},   {"threads", threads},
           {"executable", executable}};
 }
 

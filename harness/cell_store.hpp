@@ -29,6 +29,7 @@ struct CellKey {
   double thickness = 0.0;
   std::string strategy;
   bool verify = true;
+  bool toi = false;
   int repeats = 1;
   std::size_t threads = 1;
   std::string executable;

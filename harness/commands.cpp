@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 
@@ -52,9 +53,19 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
                                           "FP shown as '-'");
     }
   }
+  double thickness = options.thickness;
+  if (options.scale_exponent != 0) {
+    // δ scales with the queries; rounded up where it loses bits (a larger δ only adds contacts).
+    thickness = std::ldexp(options.thickness, options.scale_exponent);
+    if (std::ldexp(thickness, -options.scale_exponent) < options.thickness) thickness = std::nextafter(thickness, INFINITY);
+    const std::size_t left_out = scale_query_files(files, options.scale_exponent, thickness);
+    out << "scaled every query by 2^" << options.scale_exponent << " (δ " << thickness << ")";
+    if (left_out > 0) out << "; " << left_out << " queries left out: a coordinate overflows at this scale";
+    out << "\n";
+  }
   Progress progress("queries: files", files.size());
   const std::vector<QueryScore> scores = score_query_files(
-      files, {methods, options.thickness, options.repeats},
+      files, {methods, thickness, options.repeats, options.toi},
       [&](std::size_t done, std::size_t) { progress.update(done); });
   print_query_scores(scores, out);
   if (const QueryScore& total = scores.back(); total.unlabeled > 0) {

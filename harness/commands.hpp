@@ -28,6 +28,10 @@ struct QueriesOptions {
   bool extremes = false;
   /// Score files without truth labels (their FN and FP are unknown, shown as '-'); otherwise such a file is an error.
   bool allow_unlabelled = false;
+  /// Compare TOIs with the exact earliest contact.
+  bool toi = false;
+  /// Rescale every query (and δ) by 2^scale_exponent first.
+  int scale_exponent = 0;
   /// Write README.md and scores.json into this folder, with `command_line` above the table.
   std::optional<std::filesystem::path> report;
   std::string command_line;

@@ -84,6 +84,13 @@ int main(int argc, char** argv) {
   queries->add_option("--repeat", queries_options.repeats, "timing passes per file (1 to 1000); ns/query is their median")
       ->check(CLI::Range(1, kMaxRepeats))
       ->capture_default_str();
+  queries->add_flag("--toi", queries_options.toi,
+                    "also compare each method's time of impact with the exact earliest contact on the queries that\n"
+                    "collide: TOI late (a defect for conservative methods), error max and mean");
+  queries->add_option("--scale-exponent", queries_options.scale_exponent,
+                      "multiply every query (and δ) by 2^K first, K in [-1074, 1023]: exact on the rationals; a query\n"
+                      "whose doubles are no longer exact is labelled again by the reference, one that overflows left out")
+      ->check(CLI::Range(-1074, 1023));
   queries->add_flag("--allow-unlabelled", queries_options.allow_unlabelled,
                     "score files without truth labels too: their FN and FP show as '-' (unlabelled), never as 0, and\n"
                     "the total says how many queries had no label (without this flag such a file is an error)");
@@ -167,6 +174,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   run->add_option("--json", run_options.json, "write the summaries (one per scene and strategy) as a JSON array");
   run->add_option("--report", run_options.report, "write a Markdown page (table, steps.json for the plots) here");
+  run->add_flag("--toi", run_options.toi,
+                "also compare every reported time of impact with the exact earliest contact (exact TOIs are computed\n"
+                "once and cached with the truth): toi_late (later than exact: a defect for conservative methods),\n"
+                "toi_error_max and toi_error_mean; needs --verify exact");
   run->add_option("--max-steps", run_options.max_steps, "only the first N steps of each scene (0: all)")
       ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 40));
   run->add_flag("--fresh", run_options.fresh, "rerun cells kept from an earlier run");
@@ -252,6 +263,7 @@ int main(int argc, char** argv) {
         }
       }
       run_options.verify = run_verify == "exact";
+      if (run_options.toi && !run_options.verify) return refuse("--toi", "TOIs are compared with the exact truth: it needs --verify exact");
       run_options.command_line = "build/release/bin/ccdbench";
       for (int i = 1; i < argc; ++i) run_options.command_line += std::string(" ") + argv[i];
       ccd::harness::run_benchmark(run_options, std::cout);

@@ -1,6 +1,7 @@
 #include "harness/query_scoring.hpp"
 
 #include "datasets/atomic_file.hpp"
+#include "datasets/rational.hpp"
 #include "harness/json_output.hpp"
 #include "harness/statistics.hpp"
 #include "reference/elementary_pair.hpp"
@@ -23,15 +24,20 @@
 namespace ccd::harness {
 namespace {
 
+/// The reference on the query's exact rationals (with its exact TOI floor when asked).
+reference::Decision decide_exactly(const datasets::Query& query, datasets::QueryKind kind, double thickness, bool toi) {
+  reference::ExactPair pair;
+  pair.kind = kind == datasets::QueryKind::vertex_face ? reference::PairKind::vertex_face : reference::PairKind::edge_edge;
+  pair.rows = query.exact;
+  return reference::decide(pair, mpq_class(thickness), {true, toi, 64});
+}
+
 /// The reference on the query's exact rationals: the harness calling the oracle, not a strategy's narrow phase.
 class ExactQueryMethod final : public QueryMethod {
  public:
   std::string name() const override { return "exact"; }
-  bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
-    reference::ExactPair pair;
-    pair.kind = reference_kind(kind);
-    pair.rows = query.exact;
-    return reference::decide(pair, mpq_class(thickness)).collides;
+  QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
+    return {decide_exactly(query, kind, thickness, false).collides, std::numeric_limits<double>::quiet_NaN()};
   }
 };
 
@@ -41,9 +47,11 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
   explicit NarrowPhaseQueryMethod(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase)
       : narrow_phase_(std::move(narrow_phase)) {}
   std::string name() const override { return narrow_phase_->name(); }
-  bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
-    return kind == datasets::QueryKind::vertex_face ? narrow_phase_->vertex_face(query.rounded, thickness).collides
-                                                    : narrow_phase_->edge_edge(query.rounded, thickness).collides;
+  QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
+    const narrowphase::NarrowPhaseResult result = kind == datasets::QueryKind::vertex_face
+                                                      ? narrow_phase_->vertex_face(query.rounded, thickness)
+                                                      : narrow_phase_->edge_edge(query.rounded, thickness);
+    return {result.collides, result.collides ? result.toi : std::numeric_limits<double>::quiet_NaN()};
   }
 
  private:
@@ -55,10 +63,11 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
 class FclQueryMethod final : public QueryMethod {
  public:
   std::string name() const override { return "fcl"; }
-  bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
+  QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
     if (thickness > 0) throw std::invalid_argument("method fcl has no thickness: run it with --thickness 0");
-    return kind == datasets::QueryKind::vertex_face ? strategies::fcl_vertex_face(query.rounded)
-                                                    : strategies::fcl_edge_edge(query.rounded);
+    return {kind == datasets::QueryKind::vertex_face ? strategies::fcl_vertex_face(query.rounded)
+                                                     : strategies::fcl_edge_edge(query.rounded),
+            std::numeric_limits<double>::quiet_NaN()};  // FCL's time is not reported through its bool tests
   }
 };
 #endif
@@ -105,7 +114,7 @@ std::string labelled_text(const QueryScore& s, std::size_t count) {
 }  // namespace
 
 nlohmann::json to_json(const QueryScore& s) {
-  return {{"method", s.method},
+  nlohmann::json row = {{"method", s.method},
           {"file", s.file},
           {"thickness", s.thickness},
           {"queries", s.queries},
@@ -116,6 +125,13 @@ nlohmann::json to_json(const QueryScore& s) {
           {"unlabeled", s.unlabeled},
           {"ns_per_query", s.ns_per_query},
           {"false_negative_lines", s.false_negative_lines}};
+  if (s.with_toi) {
+    row["toi_checked"] = s.toi_checked;
+    row["toi_late"] = s.toi_late;
+    row["toi_error_max"] = s.toi_error_max;
+    row["toi_error_mean"] = s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0;
+  }
+  return row;
 }
 
 std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files,
@@ -128,24 +144,42 @@ std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>
   std::map<std::string, double> total_nanoseconds;
   for (std::size_t index = 0; index < files.size(); ++index) {
     const datasets::QueryFile& file = files[index];
+    // Exact TOI floors of the colliding queries, once per file for every method, outside the timed passes.
+    std::vector<double> exact_toi(file.queries.size(), std::numeric_limits<double>::quiet_NaN());
+    if (request.toi) {
+      for (std::size_t q = 0; q < file.queries.size(); ++q) {
+        if (file.queries[q].truth == false) continue;
+        const reference::Decision decision = decide_exactly(file.queries[q], file.kind, request.thickness, true);
+        if (decision.toi_floor) exact_toi[q] = *decision.toi_floor;
+      }
+    }
     for (const auto& method : methods) {
       QueryScore score;
       score.method = method->name();
       score.file = file.path.string();
       score.thickness = request.thickness;
+      score.with_toi = request.toi;
       std::vector<double> per_query;
       for (int repeat = 0; repeat < std::max(1, request.repeats); ++repeat) {
-        std::vector<char> answers(file.queries.size());
+        std::vector<QueryAnswer> answers(file.queries.size());
         const auto start = std::chrono::steady_clock::now();
         for (std::size_t q = 0; q < file.queries.size(); ++q) {
-          answers[q] = method->collides(file.queries[q], file.kind, request.thickness) ? 1 : 0;
+          answers[q] = method->answer(file.queries[q], file.kind, request.thickness);
         }
         const std::chrono::duration<double, std::nano> elapsed = std::chrono::steady_clock::now() - start;
         per_query.push_back(file.queries.empty() ? 0.0 : elapsed.count() / static_cast<double>(file.queries.size()));
         if (repeat > 0) continue;  // verdicts from the first pass; later passes only time
         for (std::size_t q = 0; q < file.queries.size(); ++q) {
           const datasets::Query& query = file.queries[q];
-          const bool reported = answers[q] != 0;
+          const bool reported = answers[q].collides;
+          // Lateness is exact: exact_toi is the largest double not after the earliest contact.
+          if (request.toi && reported && !std::isnan(exact_toi[q]) && !std::isnan(answers[q].toi)) {
+            const double error = std::abs(answers[q].toi - exact_toi[q]);
+            score.toi_checked += 1;
+            score.toi_late += answers[q].toi > exact_toi[q] ? 1 : 0;
+            score.toi_error_max = std::max(score.toi_error_max, error);
+            score.toi_error_sum += error;
+          }
           score.queries += 1;
           score.reported += reported ? 1 : 0;
           if (!query.truth) {
@@ -171,6 +205,11 @@ std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>
       total.false_negatives += score.false_negatives;
       total.false_positives += score.false_positives;
       total.unlabeled += score.unlabeled;
+      total.with_toi = score.with_toi;
+      total.toi_checked += score.toi_checked;
+      total.toi_late += score.toi_late;
+      total.toi_error_max = std::max(total.toi_error_max, score.toi_error_max);
+      total.toi_error_sum += score.toi_error_sum;
       total_nanoseconds[score.method] += score.ns_per_query * static_cast<double>(score.queries);
       scores.push_back(std::move(score));
     }
@@ -193,15 +232,63 @@ void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out
   const int method_column = static_cast<int>(method_width) + 2, file_column = static_cast<int>(file_width) + 2;
   out << std::left << std::setw(method_column) << "method" << std::setw(file_column) << "file" << std::right
       << std::setw(9) << "queries" << std::setw(10) << "positive" << std::setw(10) << "reported" << std::setw(8)
-      << "FN" << std::setw(8) << "FP" << std::setw(14) << "ns/query" << '\n';
+      << "FN" << std::setw(8) << "FP" << std::setw(14) << "ns/query";
+  const bool with_toi = !scores.empty() && scores.front().with_toi;
+  if (with_toi) out << std::setw(10) << "TOI late" << std::setw(16) << "TOI error max" << std::setw(16) << "TOI error mean";
+  out << '\n';
   for (const QueryScore& s : scores) {
     out << std::left << std::setw(method_column) << s.method << std::setw(file_column) << s.file << std::right
         << std::setw(9) << s.queries << std::setw(10) << labelled_text(s, s.positives) << std::setw(10) << s.reported
         << std::setw(8) << labelled_text(s, s.false_negatives) << std::setw(8) << labelled_text(s, s.false_positives)
         << std::setw(14) << std::fixed
-        << std::setprecision(0) << s.ns_per_query << '\n';
+        << std::setprecision(0) << s.ns_per_query;
     out.unsetf(std::ios::fixed);
+    if (with_toi) {
+      out << std::setw(10) << s.toi_late << std::setw(16) << std::setprecision(3) << s.toi_error_max << std::setw(16)
+          << (s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0);
+    }
+    out << '\n';
   }
+}
+
+std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent, double thickness) {
+  std::size_t left_out = 0;
+  for (datasets::QueryFile& file : files) {
+    std::vector<datasets::Query> kept;
+    for (datasets::Query& query : file.queries) {
+      bool finite = true, exact = true;
+      for (int r = 0; r < 8; ++r) {
+        for (int k = 0; k < 3; ++k) {
+          mpq_class& value = query.exact[r][k];
+          if (exponent >= 0) {
+            mpq_mul_2exp(value.get_mpq_t(), value.get_mpq_t(), static_cast<mp_bitcnt_t>(exponent));
+          } else {
+            mpq_div_2exp(value.get_mpq_t(), value.get_mpq_t(), static_cast<mp_bitcnt_t>(-exponent));
+          }
+          const datasets::RoundedRational rounded = datasets::round_to_double(value);
+          finite = finite && std::isfinite(rounded.value);
+          exact = exact && rounded.exact;
+          query.rounded[r][k] = rounded.value;
+        }
+      }
+      if (!finite) {
+        ++left_out;
+        continue;
+      }
+      if (query.exactly_double && !exact) {
+        // The doubles are now another question than the rationals: ask that one, and label it exactly.
+        for (int r = 0; r < 8; ++r) {
+          for (int k = 0; k < 3; ++k) query.exact[r][k] = mpq_class(query.rounded[r][k]);
+        }
+        if (query.truth) query.truth = decide_exactly(query, file.kind, thickness, false).collides;
+      } else {
+        query.exactly_double = exact;
+      }
+      kept.push_back(std::move(query));
+    }
+    file.queries = std::move(kept);
+  }
+  return left_out;
 }
 
 std::vector<std::string> sweep_methods(const std::vector<std::string>& methods) {
@@ -231,11 +318,19 @@ void write_query_report(const std::filesystem::path& directory, const std::vecto
       << "divided by its queries; FN are missed collisions (truth positive, answer no), FP false alarms. Narrow phases\n"
       << "get the doubles the query's rationals round to; `exact` is the reference on the rationals. The truth labels are\n"
       << "for zero thickness. Reproduce every number with:\n\n```sh\n" << command << "\n```\n\n"
-      << "| method | file | queries | positives | reported | FN | FP | ns/query |\n|---|---|---:|---:|---:|---:|---:|---:|\n";
+      << "| method | file | queries | positives | reported | FN | FP | ns/query |";
+  const bool with_toi = !scores.empty() && scores.front().with_toi;
+  out << (with_toi ? " TOI late | TOI error max | TOI error mean |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+                   : "\n|---|---|---:|---:|---:|---:|---:|---:|\n");
   for (const QueryScore& s : scores) {
     out << "| `" << s.method << "` | " << s.file << " | " << s.queries << " | " << labelled_text(s, s.positives) << " | "
         << s.reported << " | " << labelled_text(s, s.false_negatives) << " | " << labelled_text(s, s.false_positives)
-        << " | " << static_cast<long long>(s.ns_per_query) << " |\n";
+        << " | " << static_cast<long long>(s.ns_per_query) << " |";
+    if (with_toi) {
+      out << ' ' << s.toi_late << " | " << std::setprecision(3) << s.toi_error_max << " | "
+          << (s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0) << " |";
+    }
+    out << '\n';
   }
   out << "\nThe trade, per variant over all files (`(all)` rows): `tradeoff.png`, drawn by `scripts/plot_narrowphase.py`.\n";
   file.commit();

@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,6 +19,13 @@ namespace ccd::harness {
 /// The reference's name for a query file's kind.
 reference::PairKind reference_kind(datasets::QueryKind kind);
 
+/// A method's answer to one query: whether it collides and, when the method reports one, the time of impact.
+struct QueryAnswer {
+  bool collides = false;
+  /// NaN when the method reports no time.
+  double toi = std::numeric_limits<double>::quiet_NaN();
+};
+
 /// A way of answering "do these primitives come within δ during the step?" for one query.
 class QueryMethod {
  public:
@@ -25,7 +33,7 @@ class QueryMethod {
   virtual std::string name() const = 0;
   /// The answer for `query` at thickness δ (the method decides whether it uses the exact rationals or the
   /// doubles they round to).
-  virtual bool collides(const datasets::Query& query, datasets::QueryKind kind, double thickness) const = 0;
+  virtual QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const = 0;
 };
 
 /// Methods by spec: `exact` (the reference: certified filter, then exact root isolation, on the rationals) or a
@@ -50,6 +58,13 @@ struct QueryScore {
   bool any_labelled() const { return unlabeled < queries; }
   /// Median over repeats of (time for the file / queries).
   double ns_per_query = 0.0;
+  /// With TOIs (QueryScoringRequest::toi), over the queries that collide and that the method reports with a time:
+  /// how many, how many later than the exact earliest contact (decided exactly), the largest and summed error.
+  bool with_toi = false;
+  std::size_t toi_checked = 0;
+  std::size_t toi_late = 0;
+  double toi_error_max = 0.0;
+  double toi_error_sum = 0.0;
   /// First lines of the missed queries (for the regression library), at most 20.
   std::vector<std::size_t> false_negative_lines;
 };
@@ -60,7 +75,16 @@ struct QueryScoringRequest {
   std::vector<std::string> methods;
   double thickness = 0.0;
   int repeats = 1;
+  /// Compare each reported TOI with the exact earliest contact (computed by the reference for every colliding
+  /// query, outside the timed passes).
+  bool toi = false;
 };
+
+/// The files with every query multiplied by 2^exponent (δ is scaled by the caller). Exact on the rationals, so a
+/// labelled query keeps its label; a query whose doubles no longer equal its rationals (subnormal) takes the
+/// doubles as the question and is labelled again by the reference at `thickness`; one that overflows is left out.
+/// @return the number of queries left out.
+std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent, double thickness);
 
 /// Scores every method on every file; returns per-file scores followed by one "(all)" score per method.
 /// `on_file(index, count)` is called after each file (progress).

@@ -90,10 +90,47 @@ std::string utc_now() {
   return text;
 }
 
+/// TOI accuracy over the truth pairs a strategy reported: `checked` carried a TOI, `missing` did not.
+struct ToiVerdict {
+  std::size_t checked = 0, late = 0, missing = 0;
+  double error_max = 0, error_sum = 0;
+
+  void add(const ToiVerdict& other) {
+    checked += other.checked;
+    late += other.late;
+    missing += other.missing;
+    error_max = std::max(error_max, other.error_max);
+    error_sum += other.error_sum;
+  }
+};
+
 /// Misses and false alarms of one step; misses split by whether the strategy tested the pair.
 struct Verdict {
   std::size_t missed = 0, culled = 0, tested = 0, false_alarms = 0;
+  ToiVerdict toi;
 };
+
+/// Compares the reported TOIs with the truth's exact ones (both lists sorted by pair). The truth holds the largest
+/// double not after the exact earliest contact, so a reported double is later than the exact time exactly when it
+/// is greater; the error |reported - truth| is the error to within one ulp of the exact time.
+template <class Contact>
+void compare_tois(const std::vector<Contact>& truth, const std::vector<Contact>& reported, ToiVerdict& verdict) {
+  auto at = reported.begin();
+  for (const Contact& exact : truth) {
+    at = std::lower_bound(at, reported.end(), exact.pair, [](const Contact& c, const auto& pair) { return c.pair < pair; });
+    if (at == reported.end()) break;
+    if (at->pair != exact.pair) continue;
+    if (std::isnan(at->toi)) {
+      ++verdict.missing;
+      continue;
+    }
+    ++verdict.checked;
+    verdict.late += at->toi > exact.toi ? 1 : 0;
+    const double error = std::abs(at->toi - exact.toi);
+    verdict.error_max = std::max(verdict.error_max, error);
+    verdict.error_sum += error;
+  }
+}
 
 template <class Pair>
 bool in_sorted(const std::vector<Pair>& pairs, const Pair& p) {
@@ -117,9 +154,13 @@ std::size_t triangle_pair_false_alarms(const Scene& scene, const CollisionSet& t
 /// Judges one step (DESIGN.md §1, §3). A strategy judged by triangle pairs reports in `collisions` every
 /// elementary pair its triangle pairs contain, so misses are computed alike; its false alarms are triangle pairs.
 Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::StepResult& result,
-              strategies::Judging judging, const strategies::TestedPairs* tested) {
+              strategies::Judging judging, const strategies::TestedPairs* tested, bool toi) {
   Verdict verdict;
   const CollisionSet& reported = result.collisions;
+  if (toi && judging == strategies::Judging::elementary_pairs) {
+    compare_tois(truth.vertex_face(), reported.vertex_face(), verdict.toi);
+    compare_tois(truth.edge_edge(), reported.edge_edge(), verdict.toi);
+  }
   const CollisionSet missed = set_difference(truth, reported);
   verdict.missed = missed.size();
   verdict.false_alarms = judging == strategies::Judging::triangle_pairs
@@ -231,7 +272,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   if (options.verify) {
     bool any_missed = false;
     for (std::size_t k = 0; k < steps; ++k) {
-      verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, nullptr);
+      verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, nullptr, options.toi);
       any_missed = any_missed || verdicts[k].missed > 0;
     }
     if (any_missed) {
@@ -244,7 +285,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
           throw std::runtime_error(resolved + " gave different answers on two runs of step " + std::to_string(k) +
                                    " of " + data.label + ": the strategy is not deterministic");
         }
-        verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, &*audit.tested);
+        verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, &*audit.tested, options.toi);
         audited.push_back(std::move(*audit.tested));
       }
       const bool fcl = resolved.rfind("fcl:", 0) == 0;
@@ -256,6 +297,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   json step_records = json::array();
   std::vector<double> medians;
   std::size_t colliding = 0, reported = 0, missed = 0, culled = 0, tested = 0, false_alarms = 0;
+  ToiVerdict toi_total;
   double candidates = 0, tests = 0, history = 0;
   for (std::size_t k = 0; k < steps; ++k) {
     const strategies::StepResult& r = first_pass[k];
@@ -280,7 +322,13 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
       record["missed_culled"] = verdicts[k].culled;
       record["missed_tested"] = verdicts[k].tested;
       record["false_alarms"] = verdicts[k].false_alarms;
+      if (options.toi) {
+        record["toi_checked"] = verdicts[k].toi.checked;
+        record["toi_late"] = verdicts[k].toi.late;
+        record["toi_error_max"] = verdicts[k].toi.error_max;
+      }
       colliding += data.truth[k].size();
+      toi_total.add(verdicts[k].toi);
     }
     reported += reported_count(r, judging);
     missed += verdicts[k].missed;
@@ -320,6 +368,13 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                         {"missed_tested", tested},
                         {"false_alarms", false_alarms},
                         {"miss_causes", miss_causes}});
+    if (options.toi) {
+      summary.update(json{{"toi_checked", toi_total.checked},
+                          {"toi_late", toi_total.late},
+                          {"toi_missing", toi_total.missing},
+                          {"toi_error_max", toi_total.error_max},
+                          {"toi_error_mean", toi_total.checked ? toi_total.error_sum / static_cast<double>(toi_total.checked) : 0.0}});
+    }
   }
   summary.update(environment());
   return {{"summary", summary}, {"steps", step_records}};
@@ -345,8 +400,10 @@ std::string table_notes(const std::vector<std::vector<std::string>>& rows) {
 /// The table rows, speed-ups only between cells of this invocation (DESIGN.md §5).
 std::vector<std::vector<std::string>> table_rows(const std::vector<json>& summaries) {
   std::vector<std::vector<std::string>> rows;
+  const bool with_toi = std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s.contains("toi_late"); });
   rows.push_back({"scene", "triangles", "steps", "strategy", "ms/step", "stages (ms)", "vs full", "candidates/step",
                   "tests/step", "colliding", "missed (culled/tested)", "false alarms"});
+  if (with_toi) rows.back().push_back("TOI late (error max / mean)");
   for (const json& s : summaries) {
     const std::string strategy = s["strategy"];
     std::string speedup = "-";
@@ -382,6 +439,16 @@ std::vector<std::vector<std::string>> table_rows(const std::vector<json>& summar
                                    "/" + std::to_string(s["missed_tested"].get<std::size_t>()) + ")"
                              : "-",
                     verified ? std::to_string(s["false_alarms"].get<std::size_t>()) : "-"});
+    if (with_toi) {
+      std::ostringstream toi;
+      if (s.contains("toi_late")) {
+        toi << s["toi_late"].get<std::size_t>() << " of " << s["toi_checked"].get<std::size_t>() << " (" << std::setprecision(3)
+            << s["toi_error_max"].get<double>() << " / " << s["toi_error_mean"].get<double>() << ")";
+      } else {
+        toi << "-";
+      }
+      rows.back().push_back(toi.str());
+    }
   }
   return rows;
 }
@@ -495,7 +562,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     std::vector<Pending> pending;
     for (const std::string& spec : options.strategies) {
       CellKey key{source.label, content, steps, scene.thickness(), strategies::make_strategy(spec)->name(),
-                  options.verify, options.repeats, worker_threads(), executable_digest()};
+                  options.verify, options.toi, options.repeats, worker_threads(), executable_digest()};
       const auto file = options.out / "cells" / cell_file_name(key);
       std::optional<json> kept;
       if (!options.fresh) {
@@ -520,7 +587,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     if (options.verify) {
       for (std::size_t k = 0; k < steps; ++k) {
         bool computed = false;
-        data.truth.push_back(truth_cache.truth(scene, data.frames[k], data.frames[k + 1], computed));
+        data.truth.push_back(truth_cache.truth(scene, data.frames[k], data.frames[k + 1], computed, options.toi));
         std::cerr << "run: " << source.label << ": truth of step " << k + 1 << "/" << steps << (computed ? " computed" : " cached") << "\n";
       }
     }

@@ -37,6 +37,9 @@ struct RunOptions {
   std::optional<double> thickness;
   /// Verify every step against the exact truth.
   bool verify = true;
+  /// Also compare every reported TOI with the exact earliest contact (DESIGN.md §5; needs verify): toi_late
+  /// (reported later than exact, a defect for conservative methods), toi_error_max and toi_error_mean.
+  bool toi = false;
   /// Timed passes over the whole sequence; ms per step is the median over them.
   int repeats = 1;
   std::filesystem::path out = "results";

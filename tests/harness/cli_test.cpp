@@ -1,6 +1,7 @@
 // End-to-end tests of the ccdbench executable: what a user types, what a script reads.
 
 #include "ccd/config.hpp"
+#include "datasets/procedural_scenes.hpp"
 #include "tests/support/cli.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -232,6 +233,56 @@ TEST(Cli, RunJudgesFclByTrianglePairsAndRefusesItAtPositiveThickness) {
       EXPECT_EQ(s["missed"], 0) << s["scene"];
     }
   }
+  ::unsetenv("CCDBENCH_CACHE_DIR");
+}
+
+}  // namespace
+}  // namespace ccd
+
+namespace ccd {
+namespace {
+
+// TOI accuracy is part of the verdict: the conservative narrow phase is never late, decided exactly against the
+// reference's earliest contact, while cubic64 (which rounds its roots either way) is; so the count can fire.
+TEST(CliToi, QueriesAndRunsCountLateTimesOfImpact) {
+  CCD_REQUIRE_EXTERNAL_DATA(data);
+  testing::TempDir dir;
+  const CommandResult queries = testing::run_ccdbench("queries " + testing::quoted(data / "sample-queries") +
+                                                      " --extremes --toi --method conservative,cubic64 --json " +
+                                                      testing::quoted(dir / "q.json"));
+  ASSERT_EQ(queries.exit_code, 0) << queries.output;
+  EXPECT_NE(queries.output.find("TOI late"), std::string::npos) << queries.output;
+  std::size_t cubic_late = 0;
+  for (const auto& row : testing::read_json(dir / "q.json")) {
+    if (row["file"] != "(all)") continue;
+    ASSERT_TRUE(row.contains("toi_late")) << row.dump();
+    const bool conservative = row["method"].get<std::string>().rfind("conservative", 0) == 0;
+    if (conservative) {
+      EXPECT_EQ(row["toi_late"], 0) << row.dump();
+      EXPECT_GT(row["toi_checked"].get<int>(), 100) << row.dump();
+    } else {
+      cubic_late = row["toi_late"].get<std::size_t>();
+    }
+  }
+  EXPECT_GT(cubic_late, 0u) << "cubic64 is late on some queries: the count must be able to fire";
+
+  ::setenv("CCDBENCH_CACHE_DIR", (dir / "cache").c_str(), 1);
+  datasets::generate_procedural_scene({"fold", {{"resolution", 6}, {"frames", 12}}, dir / "s", {}, {}});
+  const CommandResult run = testing::run_ccdbench("run --toi --thickness 0 --strategy full,full+cubic64,apccd --scene " +
+                                                  testing::quoted(dir / "s") + " --out " + testing::quoted(dir / "out") +
+                                                  " --json " + testing::quoted(dir / "r.json"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("TOI late (error max / mean)"), std::string::npos) << run.output;
+  for (const auto& summary : testing::read_json(dir / "r.json")) {
+    const std::string strategy = summary["strategy"];
+    ASSERT_TRUE(summary.contains("toi_late")) << summary.dump();
+    if (strategy.find("conservative") != std::string::npos) {
+      EXPECT_EQ(summary["toi_late"], 0) << strategy;
+      EXPECT_GT(summary["toi_checked"].get<int>(), 0) << strategy;
+    }
+  }
+  EXPECT_EQ(testing::run_ccdbench("run --toi --verify none --scene " + testing::quoted(dir / "s") + " --out " +
+                                  testing::quoted(dir / "out2")).exit_code, 2);
   ::unsetenv("CCDBENCH_CACHE_DIR");
 }
 
