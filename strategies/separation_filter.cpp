@@ -19,7 +19,8 @@ using narrowphase::PairRows;
 // and Stability of Numerical Algorithms", 3.1): a dot product of n terms errs by at most γ(n)·Σ|x_i·y_i| when
 // nothing underflows, and each rounding to a subnormal result adds at most half the smallest subnormal. Pairs
 // arrive rescaled so that every |coordinate| is below 1 (exact_scaling.hpp), which keeps products far from
-// overflow; subnormal results are covered by the absolute terms.
+// overflow; subnormal results are covered by the absolute terms. Only a pair spanning more than about 2^1021
+// keeps larger coordinates (the smallest must stay a normal double); the plane test then declines (see there).
 constexpr double kUnit = 0x1p-53;
 constexpr double gamma(int k) { return k * kUnit / (1 - k * kUnit); }
 constexpr double kTiny = std::numeric_limits<double>::denorm_min();
@@ -128,7 +129,10 @@ bool apart_by_motion_bound(const PairRows& r, bool vertex_face, double thickness
 /// its negative), the pair never comes within δ. Each f_i is the same expression evaluated on absolute values
 /// (F_i) times at most γ(16) in error: 1 rounding of each difference, 2 of a cross product, 2 of the sum of
 /// two, 3 of a dot product, and 2 of the final combination, with room.
-bool apart_from_plane(const PairRows& r, bool vertex_face, double thickness) {
+bool apart_from_plane(const PairRows& r, bool vertex_face, double thickness, double largest) {
+  // Its absolute (subnormal) terms hold for |coordinates| < 1: a cross-product entry rounded into the subnormal
+  // range is later multiplied by |P| < 2. A pair spanning more than 2^1021 keeps larger coordinates: not proven.
+  if (!(largest < 1)) return false;
   auto difference = [&](int to, int from, int instant) { return Vec3(r[instant + to] - r[instant + from]); };
   const int b_to = vertex_face ? 2 : 1, b_from = vertex_face ? 1 : 0, c_from = vertex_face ? 1 : 2;
   const int p_to = vertex_face ? 0 : 2, p_from = vertex_face ? 1 : 0;
@@ -188,7 +192,7 @@ bool provably_apart(const PairRows& original, bool vertex_face, double thickness
       if (separates(r, (x[3] - x[2]).cross(normal), first_count, thickness, largest)) return true;
     }
   }
-  return apart_from_plane(r, vertex_face, thickness) || apart_by_motion_bound(r, vertex_face, thickness, largest);
+  return apart_from_plane(r, vertex_face, thickness, largest) || apart_by_motion_bound(r, vertex_face, thickness, largest);
 }
 
 }  // namespace ccd::strategies

@@ -28,9 +28,10 @@ namespace {
 // and stays below M(1 + 5.01u). S, X, Y are one rounded difference of two such values: error < 12.03 uM,
 // magnitude < 2.01 M. fl(u·X), fl(v·Y) with u, v in [0, 1] add one rounding: < 14.04 uM. The two sums add
 // 12.03 + 14.04 + 4.02 (rounding of a value < 4.02 M) and then 14.04 + 6.03: the computed F errs by less than
-// 51 uM. We use 64 uM, plus 64 smallest subnormals for products that underflow. Pairs arrive rescaled to
-// M < 1 (exact_scaling.hpp), so the bound is the same at every scale, and no square below underflows unless the
-// pair itself spans more than 2^500.
+// 51 uM. We use 64 uM, plus 64 smallest subnormals for products that underflow (added, never multiplied, so
+// they hold whatever M is). Pairs arrive rescaled to M < 1 (exact_scaling.hpp; only a pair spanning more than
+// about 2^1021 keeps a larger M, below 2^300), so the bound is the same at every scale, and no square below
+// underflows unless the pair itself spans more than 2^500.
 constexpr double kUnitRoundoff = 0x1p-53;
 constexpr double kCornerErrorUnits = 64;      // of u·M, covering the 51 derived above
 constexpr double kCornerErrorSubnormals = 64;  // smallest subnormals, for products that underflow
