@@ -45,7 +45,8 @@ json load_cell(const std::filesystem::path& file) {
 
 json CellKey::to_json() const {
   return {{"format", kCellFormat},   {"scene", scene},       {"scene_content", scene_content},
-          {"steps", steps},          {"thickness", thickness}, {"strategy", strategy},
+          {"steps", steps},          {"thickness", thickness}, {"thickness_from", thickness_from},
+          {"strategy", strategy},
           {"verify", verify},        {"toi", toi},           {"repeats", repeats},   {"threads", threads},
           {"executable", executable}};
 }
@@ -107,7 +108,8 @@ void rebuild_results_log(const std::filesystem::path& out, std::ostream& warning
     if (!entry.is_regular_file() || entry.path().extension() != ".json" || name.find(".tmp.") != std::string::npos) continue;
     try {
       json cell = load_cell(entry.path());
-      std::string finished = cell["summary"].value("finished_at", "");
+      const json& summary = cell["summary"];
+      std::string finished = summary.contains("finished_at") && summary["finished_at"].is_string() ? summary["finished_at"].get<std::string>() : "";
       cells.push_back({std::move(finished), name, std::move(cell)});
     } catch (const InputError& bad) {
       warnings << "ccdbench: warning: " << bad.what() << "; left out of results.jsonl\n";

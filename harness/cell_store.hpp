@@ -27,6 +27,8 @@ struct CellKey {
   std::string scene_content;
   std::size_t steps = 0;
   double thickness = 0.0;
+  /// "scene" or "command line": where δ came from (the gate matches on it).
+  std::string thickness_from;
   std::string strategy;
   bool verify = true;
   bool toi = false;

@@ -57,8 +57,11 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
   if (options.scale_exponent != 0) {
     // δ scales with the queries; rounded up where it loses bits (a larger δ only adds contacts).
     thickness = std::ldexp(options.thickness, options.scale_exponent);
+    if (!std::isfinite(thickness)) {
+      throw InputError("command line", "--thickness", "δ times 2^" + std::to_string(options.scale_exponent) + " overflows");
+    }
     if (std::ldexp(thickness, -options.scale_exponent) < options.thickness) thickness = std::nextafter(thickness, INFINITY);
-    const std::size_t left_out = scale_query_files(files, options.scale_exponent, thickness);
+    const std::size_t left_out = scale_query_files(files, options.scale_exponent);
     out << "scaled every query by 2^" << options.scale_exponent << " (δ " << thickness << ")";
     if (left_out > 0) out << "; " << left_out << " queries left out: a coordinate overflows at this scale";
     out << "\n";

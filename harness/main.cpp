@@ -288,6 +288,10 @@ int main(int argc, char** argv) {
   } catch (const std::invalid_argument& error) {
     // Options that only the command's own code can judge (an unknown method, a generator parameter).
     return refuse({}, error.what());
+  } catch (const std::filesystem::filesystem_error& error) {
+    // A folder that cannot be listed or a path too long: the path and the system's reason, as bad input.
+    std::cerr << "ccdbench: error: " << error.path1().string() << ": " << error.code().message() << '\n';
+    return 2;
   } catch (const std::bad_alloc&) {
     std::cerr << "ccdbench: error: out of memory: the input or a parameter asks for more than this machine has\n";
     return 2;

@@ -144,12 +144,14 @@ std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>
   std::map<std::string, double> total_nanoseconds;
   for (std::size_t index = 0; index < files.size(); ++index) {
     const datasets::QueryFile& file = files[index];
-    // Exact TOI floors of the colliding queries, once per file for every method, outside the timed passes.
+    // Exact TOI floors, once per file for every method, outside the timed passes: of the doubles the narrow phases
+    // are given (for a query that is not exactly doubles, its rationals are another question).
     std::vector<double> exact_toi(file.queries.size(), std::numeric_limits<double>::quiet_NaN());
     if (request.toi) {
       for (std::size_t q = 0; q < file.queries.size(); ++q) {
         if (file.queries[q].truth == false) continue;
-        const reference::Decision decision = decide_exactly(file.queries[q], file.kind, request.thickness, true);
+        const reference::Decision decision =
+            reference::decide(reference_kind(file.kind), file.queries[q].rounded, request.thickness, {true, true, 64});
         if (decision.toi_floor) exact_toi[q] = *decision.toi_floor;
       }
     }
@@ -251,7 +253,7 @@ void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out
   }
 }
 
-std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent, double thickness) {
+std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent) {
   std::size_t left_out = 0;
   for (datasets::QueryFile& file : files) {
     std::vector<datasets::Query> kept;
@@ -280,7 +282,8 @@ std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int expon
         for (int r = 0; r < 8; ++r) {
           for (int k = 0; k < 3; ++k) query.exact[r][k] = mpq_class(query.rounded[r][k]);
         }
-        if (query.truth) query.truth = decide_exactly(query, file.kind, thickness, false).collides;
+        // Labels are for δ = 0 (DESIGN.md §7), whatever δ the methods are scored at.
+        if (query.truth) query.truth = decide_exactly(query, file.kind, 0.0, false).collides;
       } else {
         query.exactly_double = exact;
       }

@@ -82,9 +82,9 @@ struct QueryScoringRequest {
 
 /// The files with every query multiplied by 2^exponent (δ is scaled by the caller). Exact on the rationals, so a
 /// labelled query keeps its label; a query whose doubles no longer equal its rationals (subnormal) takes the
-/// doubles as the question and is labelled again by the reference at `thickness`; one that overflows is left out.
-/// @return the number of queries left out.
-std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent, double thickness);
+/// doubles as the question and is labelled again by the reference at δ = 0 (what labels mean); one that overflows
+/// is left out. @return the number of queries left out.
+std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent);
 
 /// Scores every method on every file; returns per-file scores followed by one "(all)" score per method.
 /// `on_file(index, count)` is called after each file (progress).

@@ -561,8 +561,9 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     };
     std::vector<Pending> pending;
     for (const std::string& spec : options.strategies) {
-      CellKey key{source.label, content, steps, scene.thickness(), strategies::make_strategy(spec)->name(),
-                  options.verify, options.toi, options.repeats, worker_threads(), executable_digest()};
+      CellKey key{source.label, content, steps, scene.thickness(), options.thickness ? "command line" : "scene",
+                  strategies::make_strategy(spec)->name(), options.verify, options.toi, options.repeats,
+                  worker_threads(), executable_digest()};
       const auto file = options.out / "cells" / cell_file_name(key);
       std::optional<json> kept;
       if (!options.fresh) {
@@ -575,7 +576,8 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
       if (kept) {
         (*kept)["summary"]["resumed"] = true;
         std::cerr << "run: " << source.label << " / " << key.strategy << ": kept from an earlier run with the same inputs, "
-                  << "strategy, steps, δ, repeats, threads and executable (--fresh reruns it)\n";
+                  << "strategy, steps, δ, repeats, threads and executable (--fresh reruns it)"
+                  << (options.misses ? "; its misses are not written to --misses again" : "") << "\n";
         cells.push_back(std::move(*kept));
       } else {
         pending.push_back({spec, file, std::move(key)});
@@ -632,6 +634,9 @@ struct GateKey {
 struct BaselineEntry {
   GateKey key;
   std::uint64_t max_missed = 0;
+  /// Optional pins: the cell must have exactly these steps and colliding pairs (a shorter run or a shrunken truth
+  /// must not pass), and at most max_toi_late late TOIs (the results must then come from a run with --toi).
+  std::optional<std::uint64_t> steps, colliding, max_toi_late;
 };
 
 std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::filesystem::path& file) {
@@ -641,9 +646,11 @@ std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::files
     const json& entry = baseline[i];
     const std::string where = "entry " + std::to_string(i);
     if (!entry.is_object()) throw InputError(file, where, "must be an object");
+    static const std::vector<std::string> kKeys = {"scene", "strategy", "thickness", "max_missed", "steps", "colliding", "max_toi_late"};
     for (const auto& item : entry.items()) {
-      if (item.key() != "scene" && item.key() != "strategy" && item.key() != "thickness" && item.key() != "max_missed") {
-        throw InputError(file, where, "unknown key '" + item.key() + "' (allowed: scene, strategy, thickness, max_missed)");
+      if (std::find(kKeys.begin(), kKeys.end(), item.key()) == kKeys.end()) {
+        throw InputError(file, where, "unknown key '" + item.key() +
+                                          "' (allowed: scene, strategy, thickness, max_missed, steps, colliding, max_toi_late)");
       }
     }
     BaselineEntry parsed;
@@ -664,6 +671,11 @@ std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::files
       throw InputError(file, where + ".max_missed", "must be an integer >= 0, got " + (entry.contains("max_missed") ? entry["max_missed"].dump() : std::string("nothing")));
     }
     parsed.max_missed = entry["max_missed"].get<std::uint64_t>();
+    for (auto [name, field] : {std::pair{"steps", &parsed.steps}, {"colliding", &parsed.colliding}, {"max_toi_late", &parsed.max_toi_late}}) {
+      if (!entry.contains(name)) continue;
+      if (!entry[name].is_number_unsigned()) throw InputError(file, where + "." + name, "must be an integer >= 0");
+      *field = entry[name].get<std::uint64_t>();
+    }
     for (const BaselineEntry& other : entries) {
       if (other.key.scene == parsed.key.scene && other.key.strategy == parsed.key.strategy && other.key.thickness == parsed.key.thickness) {
         throw InputError(file, where, "repeats the entry for " + parsed.key.describe());
@@ -708,18 +720,26 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
     const GateKey key{result["scene"], result["strategy"], result["thickness"].get<double>()};
     const bool scene_thickness = result["thickness_from"] == "scene";
     const BaselineEntry* entry = nullptr;
+    std::size_t entries_matched = 0;
     for (std::size_t e = 0; e < entries.size(); ++e) {
       const GateKey& gate = entries[e].key;
       const bool same_thickness = gate.thickness ? *gate.thickness == *key.thickness : scene_thickness;
       if (gate.scene == key.scene && gate.strategy == key.strategy && same_thickness) {
         entry = &entries[e];
         ++matches[e];
+        ++entries_matched;
       }
     }
     const std::string name = key.scene + " / " + key.strategy + " / δ " + (scene_thickness ? "scene's " : "") +
                              [&] { std::ostringstream t; t << std::setprecision(17) << *key.thickness; return t.str(); }();
     if (!entry) {
       out << "FAIL " << name << ": not in the baseline (every gated cell needs an entry)\n";
+      ok = false;
+      continue;
+    }
+    if (entries_matched > 1) {
+      // The scene's own δ equals a numeric entry's: which entry gates it would be an accident of order.
+      out << "FAIL " << name << ": matches " << entries_matched << " baseline entries (make them distinct)\n";
       ok = false;
       continue;
     }
@@ -730,7 +750,21 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
     }
     const std::uint64_t missed = result_count(result, "missed", results_file, where);
     const std::uint64_t colliding = result_count(result, "colliding", results_file, where);
-    if (colliding == 0) {
+    if (entry->steps && result_count(result, "steps", results_file, where) != *entry->steps) {
+      out << "FAIL " << name << ": " << result["steps"].dump() << " steps, the baseline pins " << *entry->steps << "\n";
+      ok = false;
+    } else if (entry->colliding && colliding != *entry->colliding) {
+      out << "FAIL " << name << ": " << colliding << " colliding pairs, the baseline pins " << *entry->colliding
+          << " (the scene or the truth changed: check why before updating the baseline)\n";
+      ok = false;
+    } else if (entry->max_toi_late && !result.contains("toi_late")) {
+      out << "FAIL " << name << ": the baseline gates late TOIs but the results have none (run with --toi)\n";
+      ok = false;
+    } else if (entry->max_toi_late && result_count(result, "toi_late", results_file, where) > *entry->max_toi_late) {
+      out << "FAIL " << name << ": " << result["toi_late"].dump() << " TOIs later than the exact earliest contact, "
+          << "baseline allows " << *entry->max_toi_late << "\n";
+      ok = false;
+    } else if (colliding == 0) {
       out << "FAIL " << name << ": no colliding pair in any step, so it cannot miss: this cell gates nothing\n";
       ok = false;
     } else if (missed > entry->max_missed) {

@@ -57,9 +57,10 @@ struct RunOptions {
 std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostream& out);
 
 /// The CI gate (`ccdbench check`). The baseline is a JSON array of {scene, strategy, thickness, max_missed}:
-/// thickness is "scene" (the scene's own δ) or the number a cell ran at; max_missed an integer >= 0. `results` is
+/// thickness is "scene" (the scene's own δ) or the number a cell ran at; max_missed an integer >= 0; optional pins
+/// steps and colliding (exactly equal) and max_toi_late (results from a run with --toi). `results` is
 /// a `ccdbench run --json` array (several are taken as one). It passes only when the results are not empty, every result has exactly one
-/// baseline entry and every entry exactly one result, every result was verified and has at least one colliding
+/// baseline entry (and only one) and every entry exactly one result, every result was verified and has at least one colliding
 /// pair (a cell that cannot miss proves nothing), and none misses more than its entry allows. Prints one line per
 /// result and per unmatched entry.
 /// @throws InputError (the file, the entry) for a malformed baseline or results.

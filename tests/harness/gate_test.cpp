@@ -80,6 +80,37 @@ TEST_F(Gate, EntriesNameTheThickness) {
   EXPECT_EQ(both.exit_code, 0) << both.output;
 }
 
+// Pins: a shorter run (--max-steps) or a truth that shrank must not pass, nor late TOIs beyond the baseline; and a
+// result two entries match (a scene whose own δ is 0 beside an entry for δ = 0) is ambiguous, not judged by one.
+TEST_F(Gate, PinsStepsCollidingAndLateToisAndRefusesAmbiguousEntries) {
+  nlohmann::json result = summary("full", 0, 10);
+  result["steps"] = 7;
+  nlohmann::json pinned = entry("full", 0);
+  pinned["steps"] = 7;
+  pinned["colliding"] = 10;
+  EXPECT_EQ(check({pinned}, {result}).exit_code, 0);
+  result["steps"] = 1;
+  const auto shorter = check({pinned}, {result});
+  EXPECT_EQ(shorter.exit_code, 1);
+  EXPECT_NE(shorter.output.find("1 steps, the baseline pins 7"), std::string::npos) << shorter.output;
+  result["steps"] = 7;
+  result["colliding"] = 9;
+  EXPECT_EQ(check({pinned}, {result}).exit_code, 1) << "a truth that shrank must not pass";
+  result["colliding"] = 10;
+  pinned["max_toi_late"] = 0;
+  const auto no_toi = check({pinned}, {result});
+  EXPECT_EQ(no_toi.exit_code, 1);
+  EXPECT_NE(no_toi.output.find("run with --toi"), std::string::npos) << no_toi.output;
+  result["toi_late"] = 2;
+  EXPECT_EQ(check({pinned}, {result}).exit_code, 1);
+  result["toi_late"] = 0;
+  EXPECT_EQ(check({pinned}, {result}).exit_code, 0);
+  const nlohmann::json zero_scene = summary("full", 0, 10, "scene", 0.0);
+  const auto ambiguous = check({entry("full", 0), entry("full", 5, 0.0)}, {zero_scene});
+  EXPECT_EQ(ambiguous.exit_code, 1);
+  EXPECT_NE(ambiguous.output.find("matches 2 baseline entries"), std::string::npos) << ambiguous.output;
+}
+
 // max_missed: -1 used to wrap to 2^64 - 1 and pass any number of misses.
 TEST_F(Gate, RefusesBaselineValuesOutOfRangeAsMalformed) {
   const std::vector<nlohmann::json> results = {summary("full", 5, 10)};
