@@ -2,12 +2,14 @@
 
 #include "core/error.hpp"
 #include "datasets/atomic_file.hpp"
+#include "datasets/content_hash.hpp"
 #include "datasets/input_file.hpp"
 
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <vector>
 
 namespace ccd::datasets {
 namespace {
@@ -16,7 +18,10 @@ static_assert(std::endian::native == std::endian::little,
               "the frame cache stores little-endian values and is read with memcpy; add byte swapping to port it");
 
 constexpr char kMagic[8] = {'C', 'C', 'D', 'B', 'F', 'R', 'M', '1'};
-constexpr std::uint32_t kVersion = 1;
+/// Version 2 ends with a checksum: the hex ContentHash of the header (without the frame count), the faces and the
+/// frames, then the frame count.
+constexpr std::uint32_t kVersion = 2;
+constexpr std::size_t kDigestBytes = 32;
 
 template <class T>
 void put(std::ostream& out, T value) {
@@ -37,6 +42,30 @@ struct CacheHeader {
   std::uint64_t faces_offset = 0;
   std::uint64_t frames_offset = 0;
 };
+
+/// Reads the whole file once and compares its checksum (a cache is verified before it is used, DESIGN.md §6).
+void verify_checksum(const std::filesystem::path& path, const CacheHeader& header, std::uint64_t size) {
+  std::ifstream in = open_input_file(path, "frame cache", std::ios::in | std::ios::binary);
+  ContentHash hash;
+  std::vector<char> buffer(1 << 20);
+  auto hash_range = [&](std::uint64_t from, std::uint64_t to) {
+    in.seekg(static_cast<std::streamoff>(from));
+    for (std::uint64_t left = to - from; left > 0;) {
+      const auto chunk = static_cast<std::streamsize>(std::min<std::uint64_t>(left, buffer.size()));
+      if (!in.read(buffer.data(), chunk)) throw InputError(path, "checksum", "cannot read the cache");
+      hash.bytes(buffer.data(), static_cast<std::size_t>(chunk));
+      left -= static_cast<std::uint64_t>(chunk);
+    }
+  };
+  hash_range(0, header.frame_count_offset);
+  hash_range(header.frame_count_offset + 8, size - kDigestBytes);
+  hash.value(header.num_frames);
+  std::string stored(kDigestBytes, '\0');
+  in.seekg(static_cast<std::streamoff>(size - kDigestBytes));
+  if (!in.read(stored.data(), static_cast<std::streamsize>(kDigestBytes)) || stored != hash.hex()) {
+    throw InputError(path, "checksum", "does not match the content (the frame cache is corrupt)");
+  }
+}
 
 CacheHeader read_header(const std::filesystem::path& path, std::istream& in) {
   char magic[8];
@@ -71,8 +100,9 @@ CacheHeader read_header(const std::filesystem::path& path, std::istream& in) {
                                          std::to_string(header.num_frames) + " frames do not fit in " +
                                          std::to_string(actual) + " bytes");
   }
+  if (header.num_frames == 0) throw InputError(path, "header", "a frame cache with no frames");
   header.frames_offset = header.faces_offset + header.num_faces * kFaceBytes;
-  const std::uint64_t expected = header.frames_offset + header.num_frames * header.num_vertices * kVertexBytes;
+  const std::uint64_t expected = header.frames_offset + header.num_frames * header.num_vertices * kVertexBytes + kDigestBytes;
   if (actual < expected) {
     const std::uint64_t frame_bytes = std::max<std::uint64_t>(1, header.num_vertices * 3 * sizeof(double));
     const std::uint64_t complete = actual < header.frames_offset ? 0 : (actual - header.frames_offset) / frame_bytes;
@@ -81,6 +111,7 @@ CacheHeader read_header(const std::filesystem::path& path, std::istream& in) {
                          " expected for " + std::to_string(header.num_frames) + " frames");
   }
   if (actual > expected) throw InputError(path, "end", "frame cache has trailing bytes");
+  verify_checksum(path, header, actual);
   return header;
 }
 
@@ -94,6 +125,9 @@ class CachedFrameSource final : public FrameSource {
   std::size_t num_frames() const override { return header_.num_frames; }
 
   std::vector<Vec3> frame(std::size_t k) const override {
+    if (k >= header_.num_frames) {
+      throw InputError(path_, "frame " + std::to_string(k), "the cache has " + std::to_string(header_.num_frames) + " frames");
+    }
     std::ifstream in(path_, std::ios::binary);
     const std::uint64_t frame_bytes = header_.num_vertices * 3 * sizeof(double);
     in.seekg(static_cast<std::streamoff>(header_.frames_offset + k * frame_bytes));
@@ -141,23 +175,34 @@ struct FrameCacheWriter::Impl {
   std::size_t num_vertices = 0;
   std::uint64_t frames = 0;
   bool finished = false;
+  /// Of everything written but the frame count, in file order (the count is hashed last, at finish).
+  ContentHash hash;
+
+  void write(const void* data, std::size_t size, bool hashed = true) {
+    file.stream().write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+    if (hashed) hash.bytes(data, size);
+  }
+  template <class T>
+  void put_value(T value, bool hashed = true) {
+    write(&value, sizeof value, hashed);
+  }
 };
 
 FrameCacheWriter::FrameCacheWriter(const std::filesystem::path& path, const std::string& key,
                                    std::size_t num_vertices, const std::vector<Face>& faces)
-    : impl_(new Impl{AtomicFile(path), 0, num_vertices, 0, false}) {
-  std::ofstream& out = impl_->file.stream();
-  out.write(kMagic, 8);
-  put(out, kVersion);
-  put(out, std::uint32_t{0});
-  put(out, std::uint64_t{key.size()});
-  out.write(key.data(), static_cast<std::streamsize>(key.size()));
-  put(out, std::uint64_t{num_vertices});
-  put(out, std::uint64_t{faces.size()});
-  impl_->frame_count_offset = static_cast<std::uint64_t>(out.tellp());
-  put(out, std::uint64_t{0});
+    : impl_(new Impl{AtomicFile(path), 0, num_vertices, 0, false, {}}) {
+  Impl& w = *impl_;
+  w.write(kMagic, 8);
+  w.put_value(kVersion);
+  w.put_value(std::uint32_t{0});
+  w.put_value(std::uint64_t{key.size()});
+  w.write(key.data(), key.size());
+  w.put_value(std::uint64_t{num_vertices});
+  w.put_value(std::uint64_t{faces.size()});
+  w.frame_count_offset = static_cast<std::uint64_t>(w.file.stream().tellp());
+  w.put_value(std::uint64_t{0}, false);
   for (const Face& face : faces) {
-    for (VertexId v : face) put(out, v);
+    for (VertexId v : face) w.put_value(v);
   }
 }
 
@@ -165,13 +210,15 @@ FrameCacheWriter::~FrameCacheWriter() = default;
 
 void FrameCacheWriter::append(std::span<const Vec3> positions) {
   if (positions.size() != impl_->num_vertices) throw std::invalid_argument("FrameCacheWriter: wrong vertex count");
-  impl_->file.stream().write(reinterpret_cast<const char*>(positions.data()),
-                             static_cast<std::streamsize>(positions.size() * sizeof(Vec3)));
+  impl_->write(positions.data(), positions.size() * sizeof(Vec3));
   ++impl_->frames;
 }
 
 void FrameCacheWriter::finish() {
   std::ofstream& out = impl_->file.stream();
+  impl_->hash.value(impl_->frames);
+  const std::string digest = impl_->hash.hex();
+  out.write(digest.data(), static_cast<std::streamsize>(digest.size()));
   out.seekp(static_cast<std::streamoff>(impl_->frame_count_offset));
   put(out, impl_->frames);
   impl_->file.commit();

@@ -2,8 +2,10 @@
 /// @file
 /// A binary frame cache, so that a generated or parsed sequence is produced once and then read back fast.
 ///
-/// Layout (all little-endian): "CCDBFRM1", u32 version, u32 reserved, u64 key length, the key bytes,
-/// u64 vertices, u64 faces, u64 frames, faces as 3 u32 each, then each frame's positions as 3 f64 per vertex.
+/// Layout (all little-endian): "CCDBFRM1", u32 version (2), u32 reserved, u64 key length, the key bytes,
+/// u64 vertices, u64 faces, u64 frames, faces as 3 u32 each, then each frame's positions as 3 f64 per vertex, and
+/// a 32-hex-digit checksum (ContentHash of everything before it but the frame count, then the count). The checksum
+/// is verified when a cache is opened; a corrupt cache is an InputError, never used.
 /// The key is any text that identifies what was cached (a generator's name and parameters); a reader that
 /// expects another key treats the cache as absent.
 

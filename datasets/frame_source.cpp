@@ -156,6 +156,7 @@ FramePattern parse_frame_pattern(const std::filesystem::path& pattern_path) {
     }
     while (j < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[j]))) {
       parsed.width = parsed.width * 10 + static_cast<std::size_t>(pattern[j] - '0');
+      if (parsed.width > 32) throw InputError(pattern_path, {}, "frame pattern: a width above 32 digits");
       ++j;
     }
     if (j >= pattern.size() || (pattern[j] != 'd' && pattern[j] != 'u' && pattern[j] != 'i') || parsed.width > 32) {

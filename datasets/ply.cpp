@@ -106,7 +106,11 @@ PlyHeader parse_header(const std::filesystem::path& path, std::istream& in) {
       saw_format = true;
     } else if (words[0] == "element") {
       std::size_t count = 0;
-      if (words.size() != 3 || std::from_chars(words[2].data(), words[2].data() + words[2].size(), count).ec != std::errc{}) {
+      const bool whole_number = words.size() == 3 && [&] {
+        const auto parsed = std::from_chars(words[2].data(), words[2].data() + words[2].size(), count);
+        return parsed.ec == std::errc{} && parsed.ptr == words[2].data() + words[2].size();
+      }();
+      if (!whole_number) {
         throw InputError(path, line_at(line_number), "malformed element line: '" + line + "'");
       }
       header.elements.push_back({words[1], count, {}});

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iomanip>
+#include <iostream>
 #include <numbers>
 #include <random>
 #include <sstream>
@@ -637,7 +638,13 @@ void write_scene_json(const std::filesystem::path& out, const std::string& name,
 bool complete_in(const std::filesystem::path& out, const Setup& setup, const std::string& key, std::size_t frames) {
   if (!std::filesystem::exists(out / "scene.json")) return false;
   for (const OutputObject& object : setup.objects) {
-    if (!open_frame_cache(out / "cache" / (object.name + ".frames"), key)) return false;
+    try {
+      if (!open_frame_cache(out / "cache" / (object.name + ".frames"), key)) return false;
+    } catch (const InputError& corrupt) {
+      // A corrupt or old cache is never used: the scene is generated again over it.
+      std::cerr << "ccdbench: warning: " << corrupt.what() << "; the scene is generated again\n";
+      return false;
+    }
     const std::size_t count = frames_of(object, frames);
     if (!std::filesystem::exists(frame_file(out, object.name, count - 1)) ||
         std::filesystem::exists(frame_file(out, object.name, count))) {

@@ -54,7 +54,8 @@ TEST(FrameCacheBadInput, TruncatedAndForeignFilesAreErrors) {
     for (int k = 0; k < 3; ++k) writer.append(testing::grid_positions(3, k));
     writer.finish();
   }
-  std::filesystem::resize_file(dir / "c.frames", std::filesystem::file_size(dir / "c.frames") - 8);
+  // Cut into the last frame (the 32-byte checksum and 8 bytes of frame 2).
+  std::filesystem::resize_file(dir / "c.frames", std::filesystem::file_size(dir / "c.frames") - 40);
   try {
     open_frame_cache(dir / "c.frames", "k");
     FAIL() << "truncated cache accepted";
@@ -64,6 +65,26 @@ TEST(FrameCacheBadInput, TruncatedAndForeignFilesAreErrors) {
   }
   testing::write_text(dir / "x.frames", "not a cache at all");
   EXPECT_THROW(open_frame_cache(dir / "x.frames", "k"), InputError);
+}
+
+// A flipped bit anywhere (a position, a face, the frame count, the checksum) makes the cache an error, never used.
+TEST(FrameCacheBadInput, EveryFlippedBitIsDetected) {
+  testing::TempDir dir;
+  {
+    FrameCacheWriter writer(dir / "c.frames", "k", 4, testing::grid_faces(2));
+    for (int k = 0; k < 2; ++k) writer.append(testing::grid_positions(2, k));
+    writer.finish();
+  }
+  ASSERT_TRUE(open_frame_cache(dir / "c.frames", "k"));
+  std::ifstream in(dir / "c.frames", std::ios::binary);
+  const std::string original((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  for (std::size_t byte = 0; byte < original.size(); ++byte) {
+    std::string flipped = original;
+    flipped[byte] = static_cast<char>(flipped[byte] ^ 0x10);
+    testing::write_text(dir / "c.frames", flipped);
+    EXPECT_THROW(open_frame_cache(dir / "c.frames"), InputError) << "byte " << byte;
+  }
 }
 
 // A corrupt count must not wrap around 2^64 into a small expected size and then be allocated.
