@@ -9,8 +9,8 @@ scripts/build.sh "$preset"
 export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-$PWD/build/cache}
 ctest --preset "$preset" -j "$(nproc)"
 out=build/$preset/ci-results
-# The gate: full and apccd (conservative) and full+cubic64 at the scenes' δ and at δ = 0, every step verified. Every
+# The gate: full and apccd (conservative) and full+cubic64 at the scenes' δ and at δ = 0, every step verified, TOIs too. Every
 # gated cell has colliding pairs (check fails a cell that has none), and every cell needs its baseline entry.
-"build/$preset/bin/ccdbench" run --suite ci --strategy full,full+cubic64,apccd --out "$out" --json "$out/summary.json" --fresh
-"build/$preset/bin/ccdbench" run --suite ci --thickness 0 --strategy full,full+cubic64,apccd --out "$out-0" --json "$out-0/summary.json" --fresh
+"build/$preset/bin/ccdbench" run --suite ci --toi --strategy full,full+cubic64,apccd --out "$out" --json "$out/summary.json" --fresh
+"build/$preset/bin/ccdbench" run --suite ci --toi --thickness 0 --strategy full,full+cubic64,apccd --out "$out-0" --json "$out-0/summary.json" --fresh
 "build/$preset/bin/ccdbench" check --baseline tests/baselines/ci.json "$out/summary.json" "$out-0/summary.json"
