@@ -88,7 +88,8 @@ TEST(Conservative, SameAnswerAndToiAtEveryExactScale) {
   for (const testing::ScalePair& pair : testing::scale_test_pairs()) {
     for (double thickness : {0.0, pair.positive_thickness}) {
       const NarrowPhaseResult unit = run(*conservative, pair.kind, pair.rows, thickness);
-      for (int exponent : {-1000, -960, -530, -515, 500, 960, 1000}) {
+      // Four scales far apart (the extremes suite itself holds the others, checked for misses).
+      for (int exponent : {-1000, -530, 500, 1000}) {
         const auto scaled = datasets::scaled_exactly(pair.rows, exponent);
         const double scaled_thickness = std::ldexp(thickness, exponent);
         if (!scaled || (thickness > 0 && (!std::isnormal(scaled_thickness) || std::ldexp(scaled_thickness, -exponent) != thickness))) continue;
