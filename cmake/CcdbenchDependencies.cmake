@@ -41,7 +41,21 @@ if(CCDBENCH_WITH_FCL AND NOT (fcl_FOUND AND CCD_FOUND))
                       "(scripts/setup.sh does), or configure with -DCCDBENCH_WITH_FCL=OFF")
 endif()
 
-foreach(_feature OPENCL FCL)
+# MPI spreads run, truth and queries over ranks (harness/work_queue.hpp); without it the program is the same,
+# single-process one.
+find_package(MPI QUIET COMPONENTS CXX)
+if(NOT DEFINED CCDBENCH_WITH_MPI)
+  set(_ccd_mpi_default ${MPI_CXX_FOUND})
+else()
+  set(_ccd_mpi_default ${CCDBENCH_WITH_MPI})
+endif()
+option(CCDBENCH_WITH_MPI "Spread run, truth and queries over MPI ranks (mpirun -n N ccdbench ...)" ${_ccd_mpi_default})
+if(CCDBENCH_WITH_MPI AND NOT MPI_CXX_FOUND)
+  message(FATAL_ERROR "CCDBENCH_WITH_MPI=ON but MPI was not found: install libopenmpi-dev openmpi-bin "
+                      "(scripts/setup.sh does), or configure with -DCCDBENCH_WITH_MPI=OFF")
+endif()
+
+foreach(_feature OPENCL FCL MPI)
   if(CCDBENCH_WITH_${_feature})
     message(STATUS "ccdbench: CCDBENCH_WITH_${_feature} = ON")
   else()

@@ -12,9 +12,12 @@
 namespace ccd::datasets {
 
 AtomicFile::AtomicFile(std::filesystem::path path, std::ios::openmode mode) : path_(std::move(path)) {
-  // The pid keeps two processes writing the same target from sharing a temporary.
+  // Host and pid keep two processes writing the same target from sharing a temporary, also on a folder shared
+  // by the nodes of a cluster (MPI ranks writing one truth cache).
+  char host[256] = {};
+  ::gethostname(host, sizeof host - 1);
   temporary_ = path_;
-  temporary_ += ".tmp." + std::to_string(::getpid());
+  temporary_ += ".tmp." + std::string(host) + "." + std::to_string(::getpid());
   if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path());
   stream_.open(temporary_, mode | std::ios::out | std::ios::trunc);
   if (!stream_) throw std::runtime_error("cannot write " + temporary_.string());

@@ -11,6 +11,8 @@
 #include "harness/query_scoring.hpp"
 #include "harness/sample_comparison.hpp"
 #include "harness/stress.hpp"
+#include "harness/truth_cache.hpp"
+#include "harness/work_queue.hpp"
 #include "reference/step_truth.hpp"
 
 #include <nlohmann/json.hpp>
@@ -61,15 +63,50 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
       throw InputError("command line", "--thickness", "δ times 2^" + std::to_string(options.scale_exponent) + " overflows");
     }
     if (std::ldexp(thickness, -options.scale_exponent) < options.thickness) thickness = std::nextafter(thickness, INFINITY);
-    const std::size_t left_out = scale_query_files(files, options.scale_exponent);
+  }
+  const QueryScoringRequest request{methods, thickness, options.repeats, options.toi};
+  std::size_t left_out = 0;
+  std::vector<QueryScore> scores;
+  if (rank_info().size == 1) {
+    if (options.scale_exponent != 0) left_out = scale_query_files(files, options.scale_exponent);
+  } else {
+    // One work item per file (harness/work_queue.hpp): every rank has read the files; each scales and scores the
+    // ones it is handed, and rank 0 puts the scores back in file order.
+    const WorkFunction work = [&](const std::string& payload) {
+      std::vector<datasets::QueryFile> one{files.at(std::stoull(payload))};
+      const std::size_t left = options.scale_exponent != 0 ? scale_query_files(one, options.scale_exponent) : 0;
+      nlohmann::json message = {{"left_out", left}, {"scores", nlohmann::json::array()}};
+      for (const QueryScore& score : score_query_file(one.front(), request)) message["scores"].push_back(to_message(score));
+      return message.dump();
+    };
+    if (rank_info().rank != 0) {
+      distribute({}, work, {});
+      return 0;
+    }
+    std::vector<WorkItem> items;
+    for (std::size_t i = 0; i < files.size(); ++i) items.push_back({std::to_string(i), {}});
+    std::vector<nlohmann::json> results(files.size());
+    Progress progress("queries: files", files.size());
+    std::size_t finished = 0;
+    distribute(items, work, [&](std::size_t index, const std::string& result, int) {
+      results[index] = nlohmann::json::parse(result);
+      progress.update(++finished);
+    });
+    for (const nlohmann::json& result : results) {
+      left_out += result.at("left_out").get<std::size_t>();
+      for (const nlohmann::json& score : result.at("scores")) scores.push_back(from_message(score));
+    }
+    append_query_totals(scores, methods);
+  }
+  if (options.scale_exponent != 0) {
     out << "scaled every query by 2^" << options.scale_exponent << " (δ " << thickness << ")";
     if (left_out > 0) out << "; " << left_out << " queries left out: a coordinate overflows at this scale";
     out << "\n";
   }
-  Progress progress("queries: files", files.size());
-  const std::vector<QueryScore> scores = score_query_files(
-      files, {methods, thickness, options.repeats, options.toi},
-      [&](std::size_t done, std::size_t) { progress.update(done); });
+  if (rank_info().size == 1) {
+    Progress progress("queries: files", files.size());
+    scores = score_query_files(files, request, [&](std::size_t done, std::size_t) { progress.update(done); });
+  }
   print_query_scores(scores, out);
   if (const QueryScore& total = scores.back(); total.unlabeled > 0) {
     out << "note: " << total.unlabeled << " of " << total.queries
@@ -132,7 +169,107 @@ LoadedStep load_step(const TruthOptions& options) {
 
 }  // namespace
 
+namespace {
+
+/// A truth statistics record, as `truth --json` writes it.
+nlohmann::json truth_record(const std::string& name, double thickness, const Scene& scene, const reference::StepTruth& truth) {
+  const reference::TruthStatistics& s = truth.statistics;
+  return {{"step", name},
+          {"thickness", thickness},
+          {"vertices", scene.topology().num_vertices()},
+          {"faces", scene.topology().num_faces()},
+          {"vf", truth.collisions.vertex_face().size()},
+          {"ee", truth.collisions.edge_edge().size()},
+          {"vf_pairs_enumerated", s.vertex_face_pairs},
+          {"ee_pairs_enumerated", s.edge_edge_pairs},
+          {"time_slices", s.time_slices},
+          {"decided_by_filter", s.decided_by_filter},
+          {"decided_exactly", s.decided_exactly},
+          {"enumeration_ms", s.enumeration_milliseconds},
+          {"decision_ms", s.decision_milliseconds}};
+}
+
+/// `truth --scene S --step K --steps N`: one work item per step (harness/work_queue.hpp), each computed by the
+/// reference and stored in the truth cache; a table of every step in order, then the totals.
+int run_truth_steps(const TruthOptions& options, std::ostream& out) {
+  if (!options.scene || !options.frames.empty() || options.sample) {
+    throw std::invalid_argument("--steps (and truth under mpirun) takes --scene FILE --step K: a scene's steps");
+  }
+  const bool planner = rank_info().rank == 0;
+  if (planner && options.json) datasets::require_writable_file(*options.json);
+  std::optional<datasets::SceneSequence> sequence;
+  auto load = [&]() -> datasets::SceneSequence& {
+    if (!sequence) {
+      sequence = datasets::load_scene_file(*options.scene);
+      if (options.thickness) sequence->set_thickness(*options.thickness);
+    }
+    return *sequence;
+  };
+  const TruthCache cache(datasets::procedural_cache_root() / "truth");
+  const WorkFunction work = [&](const std::string& payload) {
+    const std::size_t k = std::stoull(payload);
+    datasets::SceneSequence& scene = load();
+    const std::vector<Vec3> x0 = scene.frame(k), x1 = scene.frame(k + 1);
+    reference::TruthRequest request;
+    request.thickness = scene.scene().thickness();
+    request.with_toi = options.toi;
+    const reference::StepTruth truth = reference::compute_step_truth(scene.scene(), x0, x1, request);
+    write_truth_file(cache.file_for(scene.scene(), x0, x1), truth.collisions, options.toi);
+    nlohmann::json record = truth_record(options.scene->string() + " step " + std::to_string(k), request.thickness, scene.scene(), truth);
+    record["index"] = k;
+    record["rank"] = rank_info().rank;
+    return record.dump();
+  };
+  if (!planner) {
+    distribute({}, work, {});
+    return 0;
+  }
+  const std::size_t available = load().num_steps();
+  if (options.step >= available) {
+    throw InputError(*options.scene, "step " + std::to_string(options.step),
+                     "the scene has " + std::to_string(available) + " steps (0.." +
+                         std::to_string(available == 0 ? 0 : available - 1) + ")");
+  }
+  const std::size_t last = options.steps == 0 ? available : std::min(available, options.step + options.steps);
+  std::vector<WorkItem> items;
+  for (std::size_t k = options.step; k < last; ++k) items.push_back({std::to_string(k), {}});
+  std::vector<nlohmann::json> records(items.size());
+  std::size_t finished = 0;
+  distribute(items, work, [&](std::size_t index, const std::string& result, int rank) {
+    records[index] = nlohmann::json::parse(result);
+    std::cerr << "truth: step " << options.step + index << " done (" << ++finished << " of " << items.size() << ")"
+              << (rank_info().size > 1 ? " on rank " + std::to_string(rank) : std::string()) << "\n";
+  });
+  out << "truth for " << options.scene->string() << " steps " << options.step << ".." << last - 1 << " (thickness "
+      << records.front()["thickness"].get<double>() << "), stored in the truth cache\n"
+      << std::setw(6) << "step" << std::setw(10) << "vf" << std::setw(10) << "ee" << std::setw(14) << "vf enum."
+      << std::setw(14) << "ee enum." << std::setw(8) << "slices" << std::setw(12) << "filter" << std::setw(10)
+      << "exactly" << std::setw(12) << "ms" << "\n";
+  std::size_t vf = 0, ee = 0;
+  double ms = 0;
+  for (const nlohmann::json& r : records) {
+    const double step_ms = r["enumeration_ms"].get<double>() + r["decision_ms"].get<double>();
+    out << std::setw(6) << r["index"].get<std::size_t>() << std::setw(10) << r["vf"].get<std::size_t>() << std::setw(10)
+        << r["ee"].get<std::size_t>() << std::setw(14) << r["vf_pairs_enumerated"].get<std::size_t>() << std::setw(14)
+        << r["ee_pairs_enumerated"].get<std::size_t>() << std::setw(8) << r["time_slices"].get<std::size_t>()
+        << std::setw(12) << r["decided_by_filter"].get<std::size_t>() << std::setw(10)
+        << r["decided_exactly"].get<std::size_t>() << std::setw(12) << std::fixed << std::setprecision(1) << step_ms << "\n";
+    out.unsetf(std::ios::fixed);
+    vf += r["vf"].get<std::size_t>();
+    ee += r["ee"].get<std::size_t>();
+    ms += step_ms;
+  }
+  out << "total: " << records.size() << " steps, colliding pairs vertex-face " << vf << ", edge-edge " << ee
+      << std::fixed << std::setprecision(1) << ", " << ms << " ms of truth computation\n";
+  out.unsetf(std::ios::fixed);
+  if (options.json) write_json_file(*options.json, nlohmann::json(records));
+  return 0;
+}
+
+}  // namespace
+
 int run_truth(const TruthOptions& options, std::ostream& out) {
+  if (options.steps != 1 || rank_info().size > 1) return run_truth_steps(options, out);
   if (options.json) datasets::require_writable_file(*options.json);
   const LoadedStep step = load_step(options);
   reference::TruthRequest request;
@@ -143,19 +280,7 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
   const reference::StepTruth truth = reference::compute_step_truth(step.scene, step.x0, step.x1, request);
   const reference::TruthStatistics& s = truth.statistics;
 
-  nlohmann::json result = {{"step", step.name},
-                           {"thickness", request.thickness},
-                           {"vertices", step.scene.topology().num_vertices()},
-                           {"faces", step.scene.topology().num_faces()},
-                           {"vf", truth.collisions.vertex_face().size()},
-                           {"ee", truth.collisions.edge_edge().size()},
-                           {"vf_pairs_enumerated", s.vertex_face_pairs},
-                           {"ee_pairs_enumerated", s.edge_edge_pairs},
-                           {"time_slices", s.time_slices},
-                           {"decided_by_filter", s.decided_by_filter},
-                           {"decided_exactly", s.decided_exactly},
-                           {"enumeration_ms", s.enumeration_milliseconds},
-                           {"decision_ms", s.decision_milliseconds}};
+  nlohmann::json result = truth_record(step.name, request.thickness, step.scene, truth);
   out << "truth for " << step.name << " (thickness " << request.thickness << ")\n"
       << "  colliding pairs: vertex-face " << truth.collisions.vertex_face().size() << ", edge-edge "
       << truth.collisions.edge_edge().size() << "\n"

@@ -44,6 +44,9 @@ struct TruthOptions {
   std::vector<std::filesystem::path> frames;
   std::optional<std::filesystem::path> scene;
   std::size_t step = 0;
+  /// With a scene: steps step .. step+steps-1 (0: to the last), one work item each (spread over MPI ranks), each
+  /// step's truth also stored in the truth cache that `run` reads.
+  std::size_t steps = 1;
   std::optional<std::filesystem::path> sample;
   std::optional<double> thickness;
   bool toi = false;

@@ -8,6 +8,7 @@
 #include "harness/json_output.hpp"
 #include "harness/query_scoring.hpp"
 #include "harness/run.hpp"
+#include "harness/work_queue.hpp"
 #include "strategies/strategy.hpp"
 
 
@@ -41,12 +42,23 @@ int refuse(const std::string& where, const std::string& reason) {
 
 std::string version_text() {
   return std::string("ccdbench ") + CCDBENCH_VERSION + " (" + CCDBENCH_BUILD_TYPE + "; OpenCL " +
-         (CCDBENCH_WITH_OPENCL ? "on" : "off") + ", FCL " + (CCDBENCH_WITH_FCL ? "on" : "off") + ")";
+         (CCDBENCH_WITH_OPENCL ? "on" : "off") + ", FCL " + (CCDBENCH_WITH_FCL ? "on" : "off") + ", MPI " + (CCDBENCH_WITH_MPI ? "on" : "off") + ")";
 }
 
 }  // namespace
 
+int run_command_line(int argc, char** argv);
+
 int main(int argc, char** argv) {
+  // Under mpirun every rank parses the same command line; rank 0 plans and prints, the others work
+  // (harness/work_queue.hpp). A failure that one rank alone sees ends every rank, never leaves them waiting.
+  const ccd::harness::RankSession ranks(argc, argv);
+  const int status = run_command_line(argc, argv);
+  if (status != 0) ccd::harness::RankSession::end_all_ranks(status);
+  return status;
+}
+
+int run_command_line(int argc, char** argv) {
   CLI::App app(kDescription, "ccdbench");
   app.set_version_flag("--version", version_text());
   app.require_subcommand(1);
@@ -112,6 +124,11 @@ int main(int argc, char** argv) {
       ->expected(2);
   truth->add_option("--scene", truth_options.scene, "a scene file (or folder with scene.json)");
   truth->add_option("--step", truth_options.step, "step K of the scene: frame K -> K+1")->capture_default_str();
+  truth->add_option("--steps", truth_options.steps,
+                    "with --scene: N steps from --step on (0: to the last), each stored in the truth cache that `run`\n"
+                    "reads; prints a table of every step (under mpirun, the steps are spread over the ranks)")
+      ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 40))
+      ->capture_default_str();
   truth->add_option("--sample", truth_options.sample,
                     "a Scalable-CCD sample step folder: also compare with its own truth");
   truth->add_option("--thickness", truth_options.thickness,
@@ -135,8 +152,8 @@ int main(int argc, char** argv) {
                      "also write the suite as rational query files (zero-thickness truth) under this folder");
 
   ccd::harness::RunOptions run_options;
-  std::string run_suite, run_scene, run_strategies = "full", run_verify = "exact";
-  std::vector<std::string> run_frames;
+  std::string run_suite, run_strategies = "full", run_verify = "exact";
+  std::vector<std::string> run_frames, run_scenes;
   CLI::App* run = app.add_subcommand(
       "run",
       "Run strategies over every step of the scenes, verify every step against the exact truth, and print per\n"
@@ -156,7 +173,7 @@ int main(int argc, char** argv) {
       "the session's inflated trees). Narrow-phase keys go after the strategy's: apccd+cubic64:nf_max=4:eta=1e-5.\n"
       "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
   run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper");
-  run->add_option("--scene", run_scene, "a scene file (or folder with scene.json)");
+  run->add_option("--scene", run_scenes, "scene files (or folders with scene.json); repeat or list several");
   run->add_option("--frames", run_frames, "mesh files: one deformable self-colliding object, one step per pair")
       ->expected(2, 100000);
   run->add_option("--strategy", run_strategies, "comma-separated strategy specs")->capture_default_str();
@@ -229,6 +246,12 @@ int main(int argc, char** argv) {
   std::optional<tbb::global_control> thread_limit;
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, threads);
 
+  if (ccd::harness::rank_info().size > 1 && !*run && !*truth && !*queries) {
+    return ccd::harness::rank_info().rank == 0
+               ? refuse({}, "only run, truth and queries are spread over MPI ranks: run this command without mpirun")
+               : 2;
+  }
+
   try {
     if (*inspect) return ccd::harness::run_inspect(inspect_options, std::cout);
     if (*queries) {
@@ -240,10 +263,10 @@ int main(int argc, char** argv) {
     if (*truth) return ccd::harness::run_truth(truth_options, std::cout);
     if (*scenes) return ccd::harness::run_scenes(std::cout);
     if (*run) {
-      const int sources = (run_suite.empty() ? 0 : 1) + (run_scene.empty() ? 0 : 1) + (run_frames.empty() ? 0 : 1);
+      const int sources = (run_suite.empty() ? 0 : 1) + (run_scenes.empty() ? 0 : 1) + (run_frames.empty() ? 0 : 1);
       if (sources != 1) return refuse({}, "give exactly one of --suite, --scene, --frames");
       if (!run_suite.empty()) run_options.scenes = ccd::harness::suite_scenes(run_suite);
-      if (!run_scene.empty()) {
+      for (const std::string& run_scene : run_scenes) {
         run_options.scenes.push_back({ccd::harness::scene_file_label(run_scene),
                                       [run_scene] { return ccd::datasets::load_scene_file(run_scene); }});
       }

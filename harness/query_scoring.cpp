@@ -134,95 +134,139 @@ nlohmann::json to_json(const QueryScore& s) {
   return row;
 }
 
-std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files,
-                                          const QueryScoringRequest& request,
-                                          const std::function<void(std::size_t, std::size_t)>& on_file) {
+std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const QueryScoringRequest& request) {
   std::vector<std::unique_ptr<QueryMethod>> methods;
   for (const std::string& name : request.methods) methods.push_back(make_query_method(name));
   std::vector<QueryScore> scores;
-  std::map<std::string, QueryScore> totals;
-  std::map<std::string, double> total_nanoseconds;
-  for (std::size_t index = 0; index < files.size(); ++index) {
-    const datasets::QueryFile& file = files[index];
-    // Exact TOI floors, once per file for every method, outside the timed passes: of the doubles the narrow phases
-    // are given (for a query that is not exactly doubles, its rationals are another question).
-    std::vector<double> exact_toi(file.queries.size(), std::numeric_limits<double>::quiet_NaN());
-    if (request.toi) {
-      for (std::size_t q = 0; q < file.queries.size(); ++q) {
-        if (file.queries[q].truth == false) continue;
-        const reference::Decision decision =
-            reference::decide(reference_kind(file.kind), file.queries[q].rounded, request.thickness, {true, true, 64});
-        if (decision.toi_floor) exact_toi[q] = *decision.toi_floor;
-      }
+  // Exact TOI floors, once per file for every method, outside the timed passes: of the doubles the narrow phases
+  // are given (for a query that is not exactly doubles, its rationals are another question).
+  std::vector<double> exact_toi(file.queries.size(), std::numeric_limits<double>::quiet_NaN());
+  if (request.toi) {
+    for (std::size_t q = 0; q < file.queries.size(); ++q) {
+      if (file.queries[q].truth == false) continue;
+      const reference::Decision decision =
+          reference::decide(reference_kind(file.kind), file.queries[q].rounded, request.thickness, {true, true, 64});
+      if (decision.toi_floor) exact_toi[q] = *decision.toi_floor;
     }
-    for (const auto& method : methods) {
-      QueryScore score;
-      score.method = method->name();
-      score.file = file.path.string();
-      score.thickness = request.thickness;
-      score.with_toi = request.toi;
-      std::vector<double> per_query;
-      for (int repeat = 0; repeat < std::max(1, request.repeats); ++repeat) {
-        std::vector<QueryAnswer> answers(file.queries.size());
-        const auto start = std::chrono::steady_clock::now();
-        for (std::size_t q = 0; q < file.queries.size(); ++q) {
-          answers[q] = method->answer(file.queries[q], file.kind, request.thickness);
-        }
-        const std::chrono::duration<double, std::nano> elapsed = std::chrono::steady_clock::now() - start;
-        per_query.push_back(file.queries.empty() ? 0.0 : elapsed.count() / static_cast<double>(file.queries.size()));
-        if (repeat > 0) continue;  // verdicts from the first pass; later passes only time
-        for (std::size_t q = 0; q < file.queries.size(); ++q) {
-          const datasets::Query& query = file.queries[q];
-          const bool reported = answers[q].collides;
-          // Lateness is exact: exact_toi is the largest double not after the earliest contact.
-          if (request.toi && reported && !std::isnan(exact_toi[q]) && !std::isnan(answers[q].toi)) {
-            const double error = std::abs(answers[q].toi - exact_toi[q]);
-            score.toi_checked += 1;
-            score.toi_late += answers[q].toi > exact_toi[q] ? 1 : 0;
-            score.toi_error_max = std::max(score.toi_error_max, error);
-            score.toi_error_sum += error;
-          }
-          score.queries += 1;
-          score.reported += reported ? 1 : 0;
-          if (!query.truth) {
-            score.unlabeled += 1;
-            continue;
-          }
-          score.positives += *query.truth ? 1 : 0;
-          if (*query.truth && !reported) {
-            score.false_negatives += 1;
-            if (score.false_negative_lines.size() < 20) score.false_negative_lines.push_back(query.first_line);
-          }
-          if (!*query.truth && reported) score.false_positives += 1;
-        }
-      }
-      score.ns_per_query = median(per_query);
-      QueryScore& total = totals[score.method];
-      total.method = score.method;
-      total.file = "(all)";
-      total.thickness = request.thickness;
-      total.queries += score.queries;
-      total.positives += score.positives;
-      total.reported += score.reported;
-      total.false_negatives += score.false_negatives;
-      total.false_positives += score.false_positives;
-      total.unlabeled += score.unlabeled;
-      total.with_toi = score.with_toi;
-      total.toi_checked += score.toi_checked;
-      total.toi_late += score.toi_late;
-      total.toi_error_max = std::max(total.toi_error_max, score.toi_error_max);
-      total.toi_error_sum += score.toi_error_sum;
-      total_nanoseconds[score.method] += score.ns_per_query * static_cast<double>(score.queries);
-      scores.push_back(std::move(score));
-    }
-    if (on_file) on_file(index + 1, files.size());
   }
   for (const auto& method : methods) {
-    QueryScore& total = totals.at(method->name());
-    total.ns_per_query = total.queries == 0 ? 0.0 : total_nanoseconds[method->name()] / static_cast<double>(total.queries);
-    scores.push_back(total);
+    QueryScore score;
+    score.method = method->name();
+    score.file = file.path.string();
+    score.thickness = request.thickness;
+    score.with_toi = request.toi;
+    std::vector<double> per_query;
+    for (int repeat = 0; repeat < std::max(1, request.repeats); ++repeat) {
+      std::vector<QueryAnswer> answers(file.queries.size());
+      const auto start = std::chrono::steady_clock::now();
+      for (std::size_t q = 0; q < file.queries.size(); ++q) {
+        answers[q] = method->answer(file.queries[q], file.kind, request.thickness);
+      }
+      const std::chrono::duration<double, std::nano> elapsed = std::chrono::steady_clock::now() - start;
+      per_query.push_back(file.queries.empty() ? 0.0 : elapsed.count() / static_cast<double>(file.queries.size()));
+      if (repeat > 0) continue;  // verdicts from the first pass; later passes only time
+      for (std::size_t q = 0; q < file.queries.size(); ++q) {
+        const datasets::Query& query = file.queries[q];
+        const bool reported = answers[q].collides;
+        // Lateness is exact: exact_toi is the largest double not after the earliest contact.
+        if (request.toi && reported && !std::isnan(exact_toi[q]) && !std::isnan(answers[q].toi)) {
+          const double error = std::abs(answers[q].toi - exact_toi[q]);
+          score.toi_checked += 1;
+          score.toi_late += answers[q].toi > exact_toi[q] ? 1 : 0;
+          score.toi_error_max = std::max(score.toi_error_max, error);
+          score.toi_error_sum += error;
+        }
+        score.queries += 1;
+        score.reported += reported ? 1 : 0;
+        if (!query.truth) {
+          score.unlabeled += 1;
+          continue;
+        }
+        score.positives += *query.truth ? 1 : 0;
+        if (*query.truth && !reported) {
+          score.false_negatives += 1;
+          if (score.false_negative_lines.size() < 20) score.false_negative_lines.push_back(query.first_line);
+        }
+        if (!*query.truth && reported) score.false_positives += 1;
+      }
+    }
+    score.ns_per_query = median(per_query);
+    scores.push_back(std::move(score));
   }
   return scores;
+}
+
+void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std::string>& methods) {
+  std::map<std::string, QueryScore> totals;
+  std::map<std::string, double> total_nanoseconds;
+  for (const QueryScore& score : scores) {
+    QueryScore& total = totals[score.method];
+    total.method = score.method;
+    total.file = "(all)";
+    total.thickness = score.thickness;
+    total.queries += score.queries;
+    total.positives += score.positives;
+    total.reported += score.reported;
+    total.false_negatives += score.false_negatives;
+    total.false_positives += score.false_positives;
+    total.unlabeled += score.unlabeled;
+    total.with_toi = score.with_toi;
+    total.toi_checked += score.toi_checked;
+    total.toi_late += score.toi_late;
+    total.toi_error_max = std::max(total.toi_error_max, score.toi_error_max);
+    total.toi_error_sum += score.toi_error_sum;
+    total_nanoseconds[score.method] += score.ns_per_query * static_cast<double>(score.queries);
+  }
+  for (const std::string& name : methods) {
+    const std::string method = make_query_method(name)->name();
+    QueryScore total = totals[method];
+    total.method = method;
+    total.file = "(all)";
+    total.ns_per_query = total.queries == 0 ? 0.0 : total_nanoseconds[method] / static_cast<double>(total.queries);
+    scores.push_back(std::move(total));
+  }
+}
+
+std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files,
+                                          const QueryScoringRequest& request,
+                                          const std::function<void(std::size_t, std::size_t)>& on_file) {
+  std::vector<QueryScore> scores;
+  for (std::size_t index = 0; index < files.size(); ++index) {
+    for (QueryScore& score : score_query_file(files[index], request)) scores.push_back(std::move(score));
+    if (on_file) on_file(index + 1, files.size());
+  }
+  append_query_totals(scores, request.methods);
+  return scores;
+}
+
+nlohmann::json to_message(const QueryScore& s) {
+  return {{"method", s.method}, {"file", s.file}, {"thickness", s.thickness}, {"queries", s.queries},
+          {"positives", s.positives}, {"reported", s.reported}, {"false_negatives", s.false_negatives},
+          {"false_positives", s.false_positives}, {"unlabeled", s.unlabeled}, {"ns_per_query", s.ns_per_query},
+          {"with_toi", s.with_toi}, {"toi_checked", s.toi_checked}, {"toi_late", s.toi_late},
+          {"toi_error_max", s.toi_error_max}, {"toi_error_sum", s.toi_error_sum},
+          {"false_negative_lines", s.false_negative_lines}};
+}
+
+QueryScore from_message(const nlohmann::json& m) {
+  QueryScore s;
+  s.method = m.at("method");
+  s.file = m.at("file");
+  s.thickness = m.at("thickness");
+  s.queries = m.at("queries");
+  s.positives = m.at("positives");
+  s.reported = m.at("reported");
+  s.false_negatives = m.at("false_negatives");
+  s.false_positives = m.at("false_positives");
+  s.unlabeled = m.at("unlabeled");
+  s.ns_per_query = m.at("ns_per_query");
+  s.with_toi = m.at("with_toi");
+  s.toi_checked = m.at("toi_checked");
+  s.toi_late = m.at("toi_late");
+  s.toi_error_max = m.at("toi_error_max");
+  s.toi_error_sum = m.at("toi_error_sum");
+  s.false_negative_lines = m.at("false_negative_lines").get<std::vector<std::size_t>>();
+  return s;
 }
 
 void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out) {

@@ -86,6 +86,17 @@ struct QueryScoringRequest {
 /// is left out. @return the number of queries left out.
 std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent);
 
+/// Scores every method of `request` on one file, one score per method in the request's order.
+std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const QueryScoringRequest& request);
+
+/// Appends one "(all)" score per method (in the order of `methods`, specs as given) summed over `scores`; ns per
+/// query is weighted by each file's queries.
+void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std::string>& methods);
+
+/// A score whole (sums, not means), for sending between MPI ranks; from_message reads it back.
+nlohmann::json to_message(const QueryScore& score);
+QueryScore from_message(const nlohmann::json& message);
+
 /// Scores every method on every file; returns per-file scores followed by one "(all)" score per method.
 /// `on_file(index, count)` is called after each file (progress).
 std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files,

@@ -10,6 +10,7 @@
 #include "harness/json_output.hpp"
 #include "harness/statistics.hpp"
 #include "harness/truth_cache.hpp"
+#include "harness/work_queue.hpp"
 #include "datasets/query_file.hpp"
 #include "strategies/elementary_tests.hpp"
 #if CCDBENCH_WITH_FCL
@@ -27,7 +28,9 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <list>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <tuple>
 #include <unistd.h>
@@ -74,6 +77,7 @@ json environment() {
   }();
   json env = cached;
   env["threads"] = worker_threads();
+  env["rank"] = rank_info().rank;
   return env;
 }
 
@@ -183,6 +187,8 @@ struct SceneData {
   datasets::SceneSequence sequence;
   std::vector<std::vector<Vec3>> frames;
   std::vector<CollisionSet> truth;  // per step, when verifying
+  std::vector<bool> has_truth;      // which steps' truth this rank holds
+  std::size_t steps = 0;            // the steps run (--max-steps may cut the scene's)
 };
 
 datasets::Query as_query(const std::array<Vec3, 8>& rows) {
@@ -418,7 +424,10 @@ std::vector<std::vector<std::string>> table_rows(const std::vector<json>& summar
         const std::string name = other["strategy"];
         // A strategy without a narrow phase of ours (fcl) is compared with the first `full` cell.
         const bool same_narrow = narrow_token(strategy).empty() || narrow_token(name) == narrow_token(strategy);
-        if (other["scene"] == s["scene"] && !other.value("resumed", false) && name.rfind("full+", 0) == 0 && same_narrow && !full) {
+        // Timings compare only on one rank of one machine (MPI spreads cells over ranks and hosts).
+        const bool same_place = other.value("rank", 0) == s.value("rank", 0) && other.value("machine", "") == s.value("machine", "");
+        if (other["scene"] == s["scene"] && !other.value("resumed", false) && name.rfind("full+", 0) == 0 && same_narrow &&
+            same_place && !full) {
           full = &other;
         }
       }
@@ -534,30 +543,120 @@ std::vector<SceneSource> suite_scenes(const std::string& suite) {
   throw std::invalid_argument("unknown suite '" + suite + "' (known: ci, default, paper)");
 }
 
+namespace {
+
+/// The scenes this rank has loaded, by index in RunOptions::scenes: loaded when a work item first needs one, and
+/// at most kKept at once (a rank may alternate between scenes when the work queue hands out cells of several).
+class SceneStore {
+ public:
+  explicit SceneStore(const RunOptions& options) : options_(options) {}
+
+  SceneData& get(std::size_t index) {
+    for (auto it = loaded_.begin(); it != loaded_.end(); ++it) {
+      if (it->first != index) continue;
+      loaded_.splice(loaded_.begin(), loaded_, it);
+      return *loaded_.front().second;
+    }
+    const SceneSource& source = options_.scenes.at(index);
+    auto data = std::make_unique<SceneData>(SceneData{source.label, source.load(), {}, {}, {}, 0});
+    if (options_.thickness) data->sequence.set_thickness(*options_.thickness);
+    data->steps = data->sequence.num_steps();
+    if (options_.max_steps > 0) data->steps = std::min(data->steps, options_.max_steps);
+    if (data->steps == 0) throw InputError(source.label, {}, "the scene has no steps (one frame)");
+    for (std::size_t k = 0; k <= data->steps; ++k) data->frames.push_back(data->sequence.frame(k));
+    data->truth.resize(data->steps);
+    data->has_truth.assign(data->steps, false);
+    loaded_.emplace_front(index, std::move(data));
+    if (loaded_.size() > kKept) loaded_.pop_back();
+    return *loaded_.front().second;
+  }
+
+ private:
+  static constexpr std::size_t kKept = 2;
+  const RunOptions& options_;
+  std::list<std::pair<std::size_t, std::unique_ptr<SceneData>>> loaded_;
+};
+
+/// What rank 0 knows of a work item beside its payload: for whom it prints progress and where a cell goes.
+struct PlannedItem {
+  std::string label;
+  std::size_t step = 0, steps = 0;
+  bool cell = false;
+  std::size_t slot = 0;  // the cell's place in the output
+  std::filesystem::path file;
+  CellKey key;
+};
+
+std::string on_rank(int rank) {
+  return rank_info().size > 1 ? " (rank " + std::to_string(rank) + ")" : std::string();
+}
+
+}  // namespace
+
 std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   for (const std::string& spec : options.strategies) strategies::make_strategy(spec);  // unknown names fail first
-  // Every output is checked before any work: a run must not compute for an hour and then fail to write.
-  datasets::require_writable_directory(options.out);
-  datasets::require_writable_directory(options.out / "cells");
-  if (options.json) datasets::require_writable_file(*options.json);
-  if (options.report) datasets::require_writable_directory(*options.report);
-  if (options.misses) datasets::require_writable_directory(*options.misses);
+  const bool planner = rank_info().rank == 0;
+  if (planner) {
+    // Every output is checked before any work: a run must not compute for an hour and then fail to write.
+    datasets::require_writable_directory(options.out);
+    datasets::require_writable_directory(options.out / "cells");
+    if (options.json) datasets::require_writable_file(*options.json);
+    if (options.report) datasets::require_writable_directory(*options.report);
+    if (options.misses) datasets::require_writable_directory(*options.misses);
+  }
   const TruthCache truth_cache(datasets::procedural_cache_root() / "truth");
-  std::vector<json> cells;
-  for (const SceneSource& source : options.scenes) {
+  SceneStore store(options);
+  std::size_t cells_finished_here = 0;
+
+  // Work items (harness/work_queue.hpp): {"truth", scene, step} computes or reads one step's truth into the cache
+  // (and this rank's memory); {"cell", scene, spec, file} runs a cell. Steps of a cell are never split: strategies
+  // keep state from step to step.
+  const WorkFunction work = [&](const std::string& payload) -> std::string {
+    const json task = json::parse(payload);
+    SceneData& data = store.get(task.at("scene").get<std::size_t>());
+    const Scene& scene = data.sequence.scene();
+    auto load_truth = [&](std::size_t k) {
+      bool computed = false;
+      data.truth[k] = truth_cache.truth(scene, data.frames[k], data.frames[k + 1], computed, options.toi);
+      data.has_truth[k] = true;
+      return computed;
+    };
+    if (task.at("kind") == "truth") {
+      const std::size_t k = task.at("step");
+      const bool computed = load_truth(k);
+      return json{{"computed", computed}}.dump();
+    }
+    if (rank_info().rank != 0) test_hook_rank_exit(cells_finished_here);
+    if (options.verify) {
+      // Truth steps computed on other ranks are in the cache by now (they finished before this cell was handed out).
+      for (std::size_t k = 0; k < data.steps; ++k) {
+        if (!data.has_truth[k]) load_truth(k);
+      }
+    }
+    json result = run_cell(data, task.at("spec"), options, data.steps, task.at("file"));
+    ++cells_finished_here;
+    return result.dump();
+  };
+  if (!planner) {
+    distribute({}, work, {});
+    return {};
+  }
+
+  std::vector<std::optional<json>> cells;
+  std::vector<WorkItem> items;
+  std::vector<PlannedItem> planned;
+  for (std::size_t s = 0; s < options.scenes.size(); ++s) {
+    const SceneSource& source = options.scenes[s];
     std::cerr << "run: loading " << source.label << "\n";
-    SceneData data{source.label, source.load(), {}, {}};
-    if (options.thickness) data.sequence.set_thickness(*options.thickness);
-    std::size_t steps = data.sequence.num_steps();
-    if (options.max_steps > 0) steps = std::min(steps, options.max_steps);
-    if (steps == 0) throw InputError(source.label, {}, "the scene has no steps (one frame)");
-    for (std::size_t k = 0; k <= steps; ++k) data.frames.push_back(data.sequence.frame(k));
+    const SceneData& data = store.get(s);
+    const std::size_t steps = data.steps;
     const Scene& scene = data.sequence.scene();
     const std::string content = scene_content_digest(scene, data.frames);
     struct Pending {
       std::string spec;
       std::filesystem::path file;
       CellKey key;
+      std::size_t slot;  // cells keep the order of --strategy, kept or computed
     };
     std::vector<Pending> pending;
     for (const std::string& spec : options.strategies) {
@@ -580,35 +679,65 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
                   << (options.misses ? "; its misses are not written to --misses again" : "") << "\n";
         cells.push_back(std::move(*kept));
       } else {
-        pending.push_back({spec, file, std::move(key)});
+        pending.push_back({spec, file, std::move(key), cells.size()});
+        cells.emplace_back();
       }
     }
     if (pending.empty()) continue;
     // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
     for (const Pending& cell : pending) strategies::make_strategy(cell.spec)->check_scene(scene);
+    std::vector<std::size_t> truth_items;
     if (options.verify) {
       for (std::size_t k = 0; k < steps; ++k) {
-        bool computed = false;
-        data.truth.push_back(truth_cache.truth(scene, data.frames[k], data.frames[k + 1], computed, options.toi));
-        std::cerr << "run: " << source.label << ": truth of step " << k + 1 << "/" << steps << (computed ? " computed" : " cached") << "\n";
+        truth_items.push_back(items.size());
+        items.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}}.dump(), {}});
+        planned.push_back({source.label, k, steps, false, 0, {}, {}});
       }
     }
-    for (const Pending& cell : pending) {
-      json result = run_cell(data, cell.spec, options, steps, cell.file.filename().string());
-      result["key"] = cell.key.to_json();
-      result["summary"]["key"] = result["key"];
-      write_cell(cell.file, result);
-      rebuild_results_log(options.out, std::cerr);
-      cells.push_back(std::move(result));
+    for (Pending& cell : pending) {
+      const std::string file = cell.file.filename().string();
+      items.push_back({json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"file", file}}.dump(), truth_items});
+      planned.push_back({source.label, 0, steps, true, cell.slot, std::move(cell.file), std::move(cell.key)});
     }
   }
+  const std::size_t cell_count = static_cast<std::size_t>(std::count_if(planned.begin(), planned.end(), [](const PlannedItem& p) { return p.cell; }));
+  std::size_t cells_done = 0;
+  const DoneFunction done = [&](std::size_t index, const std::string& text, int rank) {
+    PlannedItem& item = planned.at(index);
+    json result = json::parse(text);
+    if (!item.cell) {
+      std::cerr << "run: " << item.label << ": truth of step " << item.step + 1 << "/" << item.steps
+                << (result.at("computed").get<bool>() ? " computed" : " cached") << on_rank(rank) << "\n";
+      return;
+    }
+    // The key holds the threads the cell ran with on its rank (timings depend on them).
+    item.key.threads = result.at("summary").at("threads");
+    result["key"] = item.key.to_json();
+    result["summary"]["key"] = result["key"];
+    write_cell(item.file, result);
+    rebuild_results_log(options.out, std::cerr);
+    ++cells_done;
+    test_hook_rank_exit(cells_done);
+    if (rank_info().size > 1) {
+      std::cerr << "run: " << item.label << " / " << item.key.strategy << ": cell " << cells_done << " of " << cell_count
+                << " done" << on_rank(rank) << "\n";
+    }
+    cells[item.slot] = std::move(result);
+  };
+  say_on_termination("run: stopped before every cell finished (a rank died, or the run was interrupted): finished cells "
+                     "are kept in " + (options.out / "cells").string() +
+                     "; the same command again, with any number of ranks, runs only the rest\n");
+  distribute(items, work, done);
+
   std::vector<json> summaries;
-  for (const json& cell : cells) summaries.push_back(cell["summary"]);
+  for (const std::optional<json>& cell : cells) summaries.push_back(cell->at("summary"));
   const auto rows = table_rows(summaries);
   print_table(rows, out);
   if (options.json) write_json_file(*options.json, summaries);
   if (options.report) {
-    write_report(*options.report, rows, cells, options.command_line);
+    std::vector<json> finished;
+    for (const std::optional<json>& cell : cells) finished.push_back(*cell);
+    write_report(*options.report, rows, finished, options.command_line);
     out << "report: " << (*options.report / "README.md").string() << "\n";
   }
   out << "results: " << (options.out / "results.jsonl").string() << " (every finished cell of every run into "
