@@ -19,6 +19,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include <tbb/task_arena.h>
+
 #include <csignal>
 #include <unistd.h>
 
@@ -351,6 +353,12 @@ void say_on_termination(const std::string& message) {
 void distribute(const std::vector<WorkItem>& items, const WorkFunction& work, const DoneFunction& done) {
 #if CCDBENCH_WITH_MPI
   if (g_ranks.size > 1) {
+    // OpenMPI binds each rank to one core unless told otherwise, and TBB then runs one thread in it.
+    if (tbb::this_task_arena::max_concurrency() == 1 && ::sysconf(_SC_NPROCESSORS_ONLN) > 1) {
+      std::cerr << "ccdbench: warning: rank " << g_ranks.rank << " may use one core of "
+                << ::sysconf(_SC_NPROCESSORS_ONLN) << " (mpirun binds ranks to cores by default): launch with "
+                << "--bind-to none to give each rank its --threads\n";
+    }
     if (g_ranks.rank == 0) {
       coordinate(items, work, done);
     } else {

@@ -1,0 +1,182 @@
+// `mpirun -n N ccdbench run|truth|queries` (harness/work_queue.hpp): the same verdicts and counts as one process,
+// work really spread over the ranks, and a run whose rank dies completed by a rerun with the same results.
+// OpenMPI refuses root without the two OMPI_ALLOW_* variables: they are set here, for these commands only.
+
+#include "ccd/config.hpp"
+#include "tests/support/cli.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <set>
+
+namespace ccd {
+namespace {
+
+using testing::quoted;
+using testing::read_json;
+using testing::run_command;
+
+/// `mpirun -n RANKS ccdbench --threads 1 ARGUMENTS`, more ranks than cores allowed; `environment` goes before it.
+/// LeakSanitizer is told to ignore what OpenMPI's own libraries keep at exit (tests/lsan_openmpi.supp; only ASan
+/// builds read it). For it to see those libraries in a leak's stack, OpenMPI and PMIx keep their plugins loaded
+/// (a plugin closed before exit is an "<unknown module>" no suppression can name) and LeakSanitizer unwinds
+/// without frame pointers, which OpenMPI's libraries are built without.
+testing::CommandResult mpirun(int ranks, const std::string& arguments, const std::string& environment = {}) {
+  const std::string command = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                              "OMPI_MCA_mca_base_component_disable_dlclose=1 PMIX_MCA_mca_base_component_disable_dlclose=1 "
+                              "LSAN_OPTIONS=fast_unwind_on_malloc=0:suppressions=" +
+                              quoted(std::filesystem::path(CCDBENCH_SOURCE_DIR) / "tests" / "lsan_openmpi.supp") + " " +
+                              environment + " " CCDBENCH_MPIEXEC " -n " + std::to_string(ranks) +
+                              " --oversubscribe --bind-to none " CCDBENCH_EXECUTABLE " --threads 1 " + arguments;
+  return run_command(command);
+}
+
+/// Every field of a summary that must not depend on where and how fast a cell ran (README "MPI": the rest are
+/// timings, host, rank, threads and when it finished).
+nlohmann::json verdict(const nlohmann::json& summary) {
+  nlohmann::json kept;
+  for (const char* field : {"scene", "strategy", "triangles", "steps", "thickness", "thickness_from", "verified",
+                            "colliding", "missed", "missed_culled", "missed_tested", "false_alarms", "miss_causes",
+                            "reported", "candidate_pairs", "elementary_tests", "history_bytes", "judged_by",
+                            "toi_checked", "toi_late", "toi_missing", "toi_error_max", "toi_error_mean"}) {
+    if (summary.contains(field)) kept[field] = summary[field];
+  }
+  return kept;
+}
+
+/// These tests keep the truth cache of the environment (scripts/test.sh sets build/cache): the ci suite's truth
+/// they compute is the truth the CI gate's own run of the suite reads afterwards, so CI computes it once.
+class Mpi : public ::testing::Test {
+ protected:
+
+  /// The ci suite's summaries from `ranks` ranks into OUT (0: a plain process, without mpirun); `environment` may
+  /// set the test hook. Each test starts with a plain run: it fills the truth cache, so that the runs under mpirun,
+  /// whose LeakSanitizer unwinds slowly in the ASan build, read their truth instead of computing it.
+  testing::CommandResult run_suite(int ranks, const std::string& out, const std::string& extra = {},
+                                   const std::string& environment = {}) {
+    const std::string arguments = "run --suite ci --toi --strategy full,apccd,full+cubic64 " + extra + " --out " +
+                                  quoted(dir_ / out) + " --json " + quoted(dir_ / (out + ".json"));
+    if (ranks == 0) return run_command(std::string(CCDBENCH_EXECUTABLE) + " --threads 1 " + arguments);
+    return mpirun(ranks, arguments, environment);
+  }
+
+  nlohmann::json summaries(const std::string& out) { return read_json(dir_ / (out + ".json")); }
+
+  std::size_t cell_files(const std::string& out) {
+    std::size_t count = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(dir_ / out / "cells")) count += entry.is_regular_file() ? 1 : 0;
+    return count;
+  }
+
+  testing::TempDir dir_;
+};
+
+TEST_F(Mpi, TwoRanksGiveEveryVerdictAndCountOfOne) {
+  const auto plain = run_suite(0, "plain");
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  const auto one = run_suite(1, "one");
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  const auto two = run_suite(2, "two");
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  const nlohmann::json p = summaries("plain"), a = summaries("one"), b = summaries("two");
+  ASSERT_EQ(a.size(), 6u);
+  ASSERT_EQ(p.size(), a.size());
+  ASSERT_EQ(b.size(), a.size());
+  std::set<int> ranks;
+  std::size_t colliding = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(verdict(p[i]), verdict(a[i])) << "cell " << i;
+    EXPECT_EQ(verdict(a[i]), verdict(b[i])) << "cell " << i;
+    colliding += a[i]["colliding"].get<std::size_t>();
+    ranks.insert(b[i]["rank"].get<int>());
+    EXPECT_EQ(a[i]["rank"], 0);
+  }
+  EXPECT_GT(colliding, 0u) << "cells without colliding pairs would compare nothing";
+  EXPECT_EQ(ranks, (std::set<int>{0, 1})) << "the work was not spread over both ranks:\n" << two.output;
+}
+
+TEST_F(Mpi, TruthAndQueriesOverRanksAreThoseOfOneProcess) {
+  CCD_REQUIRE_EXTERNAL_DATA(data_dir);
+  const std::filesystem::path data = data_dir / "sample-queries";
+  const auto one = mpirun(1, "queries " + quoted(data) + " --method cubic64,conservative --json " + quoted(dir_ / "q1.json"));
+  const auto two = mpirun(2, "queries " + quoted(data) + " --method cubic64,conservative --json " + quoted(dir_ / "q2.json"));
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  nlohmann::json a = read_json(dir_ / "q1.json"), b = read_json(dir_ / "q2.json");
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 2u);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    a[i].erase("ns_per_query");
+    b[i].erase("ns_per_query");
+    EXPECT_EQ(a[i], b[i]) << "row " << i;
+  }
+  EXPECT_EQ(a.back()["queries"].get<std::size_t>(), testing::shared_query_count("sample-queries"));
+  EXPECT_GT(a.back()["positives"].get<std::size_t>(), 0u);
+
+  const auto generated = run_command(std::string(CCDBENCH_EXECUTABLE) + " generate fold --resolution 6 --frames 8 --out " + quoted(dir_ / "fold"));
+  ASSERT_EQ(generated.exit_code, 0) << generated.output;
+  const auto t1 = mpirun(1, "truth --scene " + quoted(dir_ / "fold") + " --steps 0 --json " + quoted(dir_ / "t1.json"));
+  const auto t2 = mpirun(2, "truth --scene " + quoted(dir_ / "fold") + " --steps 0 --json " + quoted(dir_ / "t2.json"));
+  ASSERT_EQ(t1.exit_code, 0) << t1.output;
+  ASSERT_EQ(t2.exit_code, 0) << t2.output;
+  const nlohmann::json s1 = read_json(dir_ / "t1.json"), s2 = read_json(dir_ / "t2.json");
+  ASSERT_EQ(s1.size(), 7u);
+  ASSERT_EQ(s2.size(), s1.size());
+  std::size_t colliding = 0;
+  for (std::size_t k = 0; k < s1.size(); ++k) {
+    for (const char* field : {"index", "vf", "ee", "vf_pairs_enumerated", "ee_pairs_enumerated", "decided_by_filter", "decided_exactly"}) {
+      EXPECT_EQ(s1[k][field], s2[k][field]) << "step " << k << " " << field;
+    }
+    colliding += s1[k]["vf"].get<std::size_t>() + s1[k]["ee"].get<std::size_t>();
+  }
+  EXPECT_GT(colliding, 0u);
+}
+
+// A worker rank dies (the hook exits it, as a kill would) when it is handed its first cell: the run fails, mpirun
+// names the rank, rank 0 says where the finished cells are, and a rerun on two ranks completes with the results of
+// an undisturbed run.
+TEST_F(Mpi, ARerunCompletesWhatADeadWorkerRankLeft) {
+  const auto reference = run_suite(0, "reference", "--max-steps 3");
+  ASSERT_EQ(reference.exit_code, 0) << reference.output;
+  const auto failed = run_suite(2, "out", "--max-steps 3", "CCDBENCH_TEST_RANK_EXIT=1:0");
+  EXPECT_NE(failed.exit_code, 0) << failed.output;
+  EXPECT_NE(failed.output.find("rank 1: exiting after 0 finished units"), std::string::npos) << failed.output;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "out.json")) << "a failed run must not write its summary";
+  const std::size_t kept = cell_files("out");
+  EXPECT_LT(kept, 6u);
+  const auto rerun = run_suite(2, "out", "--max-steps 3");
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.output;
+  std::size_t said_kept = 0;
+  for (std::size_t at = 0; (at = rerun.output.find("kept from an earlier run", at)) != std::string::npos; ++at) ++said_kept;
+  EXPECT_EQ(said_kept, kept) << rerun.output;
+  const nlohmann::json a = summaries("reference"), b = summaries("out");
+  ASSERT_EQ(b.size(), a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(verdict(a[i]), verdict(b[i])) << "cell " << i;
+}
+
+// Rank 0 dies after recording two cells (deterministic: it counts every rank's cells): exactly those two are kept,
+// and a rerun on one process reuses them and runs the other four.
+TEST_F(Mpi, ARerunOnOneProcessCompletesWhatADeadRankZeroLeft) {
+  const auto reference = run_suite(0, "reference", "--max-steps 3");
+  ASSERT_EQ(reference.exit_code, 0) << reference.output;
+  const auto failed = run_suite(2, "out", "--max-steps 3", "CCDBENCH_TEST_RANK_EXIT=0:2");
+  EXPECT_NE(failed.exit_code, 0) << failed.output;
+  EXPECT_EQ(cell_files("out"), 2u) << failed.output;
+  const auto rerun = run_suite(1, "out", "--max-steps 3");
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.output;
+  const nlohmann::json a = summaries("reference"), b = summaries("out");
+  ASSERT_EQ(b.size(), a.size());
+  std::size_t resumed = 0, colliding = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(verdict(a[i]), verdict(b[i])) << "cell " << i;
+    resumed += b[i].value("resumed", false) ? 1 : 0;
+    colliding += a[i]["colliding"].get<std::size_t>();
+  }
+  EXPECT_EQ(resumed, 2u);
+  EXPECT_GT(colliding, 0u);
+}
+
+}  // namespace
+}  // namespace ccd
