@@ -38,8 +38,10 @@ int run_inspect(const InspectOptions& options, std::ostream& out) {
 int run_queries(const QueriesOptions& options, std::ostream& out) {
   const std::vector<std::string> methods = options.sweep ? sweep_methods(options.methods) : options.methods;
   for (const std::string& method : methods) make_query_method(method);  // unknown names fail before work
-  if (options.json) datasets::require_writable_file(*options.json);
-  if (options.report) datasets::require_writable_directory(*options.report);
+  if (rank_info().rank == 0) {  // only rank 0 writes
+    if (options.json) datasets::require_writable_file(*options.json);
+    if (options.report) datasets::require_writable_directory(*options.report);
+  }
   std::vector<datasets::QueryFile> files;
   for (const auto& path : datasets::discover_query_files(options.paths)) files.push_back(datasets::read_query_file(path));
   if (options.extremes) {
@@ -193,7 +195,7 @@ nlohmann::json truth_record(const std::string& name, double thickness, const Sce
 /// reference and stored in the truth cache; a table of every step in order, then the totals.
 int run_truth_steps(const TruthOptions& options, std::ostream& out) {
   if (!options.scene || !options.frames.empty() || options.sample) {
-    throw std::invalid_argument("--steps (and truth under mpirun) takes --scene FILE --step K: a scene's steps");
+    throw std::invalid_argument("--steps takes --scene FILE --step K: a scene's steps");
   }
   const bool planner = rank_info().rank == 0;
   if (planner && options.json) datasets::require_writable_file(*options.json);
@@ -214,7 +216,9 @@ int run_truth_steps(const TruthOptions& options, std::ostream& out) {
     request.thickness = scene.scene().thickness();
     request.with_toi = options.toi;
     const reference::StepTruth truth = reference::compute_step_truth(scene.scene(), x0, x1, request);
-    write_truth_file(cache.file_for(scene.scene(), x0, x1), truth.collisions, options.toi);
+    // Never replaces a cached file that may hold exact TOIs with one that has none.
+    const std::filesystem::path file = cache.file_for(scene.scene(), x0, x1);
+    if (options.toi || !std::filesystem::exists(file)) write_truth_file(file, truth.collisions, options.toi);
     nlohmann::json record = truth_record(options.scene->string() + " step " + std::to_string(k), request.thickness, scene.scene(), truth);
     record["index"] = k;
     record["rank"] = rank_info().rank;
@@ -269,7 +273,8 @@ int run_truth_steps(const TruthOptions& options, std::ostream& out) {
 }  // namespace
 
 int run_truth(const TruthOptions& options, std::ostream& out) {
-  if (options.steps != 1 || rank_info().size > 1) return run_truth_steps(options, out);
+  if (options.steps != 1) return run_truth_steps(options, out);
+  if (rank_info().rank != 0) return 0;  // one step under mpirun: rank 0 alone, the output of one process
   if (options.json) datasets::require_writable_file(*options.json);
   const LoadedStep step = load_step(options);
   reference::TruthRequest request;

@@ -613,6 +613,13 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   // keep state from step to step.
   const WorkFunction work = [&](const std::string& payload) -> std::string {
     const json task = json::parse(payload);
+    // A cell's key (and file name, chosen by rank 0) holds rank 0's thread count: a rank with another would write
+    // cells that no rerun can find.
+    if (task.at("threads").get<std::size_t>() != worker_threads()) {
+      throw std::invalid_argument("rank " + std::to_string(rank_info().rank) + " has " + std::to_string(worker_threads()) +
+                                  " worker threads and rank 0 " + task.at("threads").dump() +
+                                  ": give --threads so that every rank has the same (timings, and so cell keys, depend on it)");
+    }
     SceneData& data = store.get(task.at("scene").get<std::size_t>());
     const Scene& scene = data.sequence.scene();
     auto load_truth = [&](std::size_t k) {
@@ -645,7 +652,8 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   std::vector<std::optional<json>> cells;
   std::vector<WorkItem> items;
   std::vector<PlannedItem> planned;
-  for (std::size_t s = 0; s < options.scenes.size(); ++s) {
+  // Plans scene s: its kept cells go into `cells`, its truth steps and pending cells become work items.
+  auto plan_scene = [&](std::size_t s) {
     const SceneSource& source = options.scenes[s];
     std::cerr << "run: loading " << source.label << "\n";
     const SceneData& data = store.get(s);
@@ -683,25 +691,25 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
         cells.emplace_back();
       }
     }
-    if (pending.empty()) continue;
+    if (pending.empty()) return;
     // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
     for (const Pending& cell : pending) strategies::make_strategy(cell.spec)->check_scene(scene);
     std::vector<std::size_t> truth_items;
     if (options.verify) {
       for (std::size_t k = 0; k < steps; ++k) {
         truth_items.push_back(items.size());
-        items.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}}.dump(), {}});
+        items.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}, {"threads", worker_threads()}}.dump(), {}});
         planned.push_back({source.label, k, steps, false, 0, {}, {}});
       }
     }
     for (Pending& cell : pending) {
       const std::string file = cell.file.filename().string();
-      items.push_back({json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"file", file}}.dump(), truth_items});
+      items.push_back({json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"file", file}, {"threads", worker_threads()}}.dump(),
+                       truth_items});
       planned.push_back({source.label, 0, steps, true, cell.slot, std::move(cell.file), std::move(cell.key)});
     }
-  }
-  const std::size_t cell_count = static_cast<std::size_t>(std::count_if(planned.begin(), planned.end(), [](const PlannedItem& p) { return p.cell; }));
-  std::size_t cells_done = 0;
+  };
+  std::size_t cell_count = 0, cells_done = 0;
   const DoneFunction done = [&](std::size_t index, const std::string& text, int rank) {
     PlannedItem& item = planned.at(index);
     json result = json::parse(text);
@@ -710,8 +718,6 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
                 << (result.at("computed").get<bool>() ? " computed" : " cached") << on_rank(rank) << "\n";
       return;
     }
-    // The key holds the threads the cell ran with on its rank (timings depend on them).
-    item.key.threads = result.at("summary").at("threads");
     result["key"] = item.key.to_json();
     result["summary"]["key"] = result["key"];
     write_cell(item.file, result);
@@ -724,10 +730,23 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     }
     cells[item.slot] = std::move(result);
   };
-  say_on_termination("run: stopped before every cell finished (a rank died, or the run was interrupted): finished cells "
-                     "are kept in " + (options.out / "cells").string() +
-                     "; the same command again, with any number of ranks, runs only the rest\n");
-  distribute(items, work, done);
+  if (rank_info().size == 1) {
+    // One process: scene by scene, as before MPI (each scene loaded once, when its turn comes).
+    for (std::size_t s = 0; s < options.scenes.size(); ++s) {
+      items.clear();
+      planned.clear();
+      plan_scene(s);
+      distribute(items, work, done);
+    }
+  } else {
+    for (std::size_t s = 0; s < options.scenes.size(); ++s) plan_scene(s);
+    cell_count = static_cast<std::size_t>(std::count_if(planned.begin(), planned.end(), [](const PlannedItem& p) { return p.cell; }));
+    say_on_termination("run: stopped before every cell finished (a rank died, or the run was interrupted): finished "
+                       "cells are kept in " + (options.out / "cells").string() +
+                       "; the same command again, with any number of ranks, runs only the rest\n");
+    distribute(items, work, done);
+    say_on_termination({});
+  }
 
   std::vector<json> summaries;
   for (const std::optional<json>& cell : cells) summaries.push_back(cell->at("summary"));

@@ -14,6 +14,7 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -95,6 +96,9 @@ std::uint64_t get_u64(const std::string& buffer, std::size_t at) {
 }
 
 void send(int destination, int tag, const std::string& buffer) {
+  if (buffer.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw std::runtime_error("MPI work queue: a message of " + std::to_string(buffer.size()) + " bytes exceeds MPI's int count");
+  }
   MPI_Send(buffer.data(), static_cast<int>(buffer.size()), MPI_BYTE, destination, tag, MPI_COMM_WORLD);
 }
 
@@ -278,7 +282,13 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
       if (!progressed) std::this_thread::sleep_for(kPollInterval);
     }
   } catch (...) {
-    if (local.joinable()) stop_local();
+    // Rank 0 cannot go on handing out work. Joining the local worker would wait for its item (hours, on a large
+    // cell) before anyone hears of the error: say it now and end every rank.
+    std::string text;
+    const int code = exit_code_of(std::current_exception(), text);
+    std::cerr << "ccdbench: error: " << text << '\n';
+    RankSession::end_all_ranks(code);
+    stop_local();  // not reached: end_all_ranks does not return with more than one rank
     throw;
   }
   local.join();
@@ -329,12 +339,13 @@ RankInfo rank_info() { return g_ranks; }
 
 namespace {
 char g_termination_message[4096];
-std::size_t g_termination_length = 0;
+volatile std::sig_atomic_t g_termination_length = 0;
 
 extern "C" void on_terminate_signal(int signal) {
   // Only async-signal-safe calls here: write and _exit.
   if (g_termination_length > 0) {
-    [[maybe_unused]] const auto written = ::write(STDERR_FILENO, g_termination_message, g_termination_length);
+    [[maybe_unused]] const auto written =
+        ::write(STDERR_FILENO, g_termination_message, static_cast<std::size_t>(g_termination_length));
   }
   ::_exit(128 + signal);
 }
@@ -342,8 +353,10 @@ extern "C" void on_terminate_signal(int signal) {
 
 void say_on_termination(const std::string& message) {
   if (g_ranks.size <= 1 || g_ranks.rank != 0) return;
-  g_termination_length = std::min(message.size(), sizeof g_termination_message);
-  std::memcpy(g_termination_message, message.data(), g_termination_length);
+  g_termination_length = 0;  // never half a message: the handler reads the length last written
+  const std::size_t length = std::min(message.size(), sizeof g_termination_message);
+  std::memcpy(g_termination_message, message.data(), length);
+  g_termination_length = static_cast<std::sig_atomic_t>(length);
   struct sigaction action {};
   action.sa_handler = on_terminate_signal;
   ::sigemptyset(&action.sa_mask);

@@ -43,7 +43,8 @@ class RankSession {
 RankInfo rank_info();
 
 /// What rank 0 prints (to stderr) if it is terminated while work is under way, e.g. by mpirun after another rank
-/// died: where the finished work is kept and how to do the rest. Only under MPI with more than one rank.
+/// died: where the finished work is kept and how to do the rest (at most 4 KiB; empty: nothing). Only under MPI
+/// with more than one rank.
 void say_on_termination(const std::string& message);
 
 /// One unit of work: what to do (text for `work`, the same on every rank) and the items that must finish before it
