@@ -12,53 +12,40 @@ pkg_check_modules(CCD_MPFR REQUIRED IMPORTED_TARGET mpfr)
 pkg_check_modules(CCD_XXHASH REQUIRED IMPORTED_TARGET libxxhash)
 
 # Optional backends: ON by default when the distribution's package is found, and said clearly when OFF.
+# ccd_optional_feature(NAME FOUND DESCRIPTION PACKAGES): the option CCDBENCH_WITH_NAME defaults to FOUND (a value
+# given with -D is kept, as option() keeps a cache entry); ON without the package is an error naming PACKAGES.
+function(ccd_optional_feature name found description packages)
+  option(CCDBENCH_WITH_${name} "${description}" ${found})
+  if(CCDBENCH_WITH_${name} AND NOT found)
+    message(FATAL_ERROR "CCDBENCH_WITH_${name}=ON but it was not found: install ${packages} (scripts/setup.sh does), "
+                        "or configure with -DCCDBENCH_WITH_${name}=OFF")
+  endif()
+endfunction()
+
 find_package(OpenCL QUIET)
-if(NOT DEFINED CCDBENCH_WITH_OPENCL)
-  set(_ccd_opencl_default ${OpenCL_FOUND})
-else()
-  set(_ccd_opencl_default ${CCDBENCH_WITH_OPENCL})
-endif()
-option(CCDBENCH_WITH_OPENCL "Build the OpenCL backend of apccd" ${_ccd_opencl_default})
-if(CCDBENCH_WITH_OPENCL AND NOT OpenCL_FOUND)
-  message(FATAL_ERROR "CCDBENCH_WITH_OPENCL=ON but OpenCL was not found: install ocl-icd-opencl-dev opencl-headers "
-                      "pocl-opencl-icd (scripts/setup.sh does), or configure with -DCCDBENCH_WITH_OPENCL=OFF")
-endif()
+ccd_optional_feature(OPENCL "${OpenCL_FOUND}" "Build the OpenCL backend of apccd"
+                     "ocl-icd-opencl-dev opencl-headers pocl-opencl-icd")
 
 find_package(fcl QUIET)
 pkg_check_modules(CCD QUIET IMPORTED_TARGET ccd)
-if(NOT DEFINED CCDBENCH_WITH_FCL)
-  if(fcl_FOUND AND CCD_FOUND)
-    set(_ccd_fcl_default ON)
-  else()
-    set(_ccd_fcl_default OFF)
-  endif()
+if(fcl_FOUND AND CCD_FOUND)
+  set(_ccd_fcl_found ON)
 else()
-  set(_ccd_fcl_default ${CCDBENCH_WITH_FCL})
+  set(_ccd_fcl_found OFF)
 endif()
-option(CCDBENCH_WITH_FCL "Build the FCL baseline strategies" ${_ccd_fcl_default})
-if(CCDBENCH_WITH_FCL AND NOT (fcl_FOUND AND CCD_FOUND))
-  message(FATAL_ERROR "CCDBENCH_WITH_FCL=ON but FCL or libccd was not found: install libfcl-dev libccd-dev "
-                      "(scripts/setup.sh does), or configure with -DCCDBENCH_WITH_FCL=OFF")
-endif()
+ccd_optional_feature(FCL "${_ccd_fcl_found}" "Build the FCL baseline strategies" "libfcl-dev libccd-dev (FCL and libccd)")
 
 # MPI spreads run, truth and queries over ranks (harness/work_queue.hpp); without it the program is the same,
 # single-process one.
 find_package(MPI QUIET COMPONENTS CXX)
-if(NOT DEFINED CCDBENCH_WITH_MPI)
-  set(_ccd_mpi_default ${MPI_CXX_FOUND})
-else()
-  set(_ccd_mpi_default ${CCDBENCH_WITH_MPI})
-endif()
-option(CCDBENCH_WITH_MPI "Spread run, truth and queries over MPI ranks (mpirun -n N ccdbench ...)" ${_ccd_mpi_default})
-if(CCDBENCH_WITH_MPI AND NOT MPI_CXX_FOUND)
-  message(FATAL_ERROR "CCDBENCH_WITH_MPI=ON but MPI was not found: install libopenmpi-dev openmpi-bin "
-                      "(scripts/setup.sh does), or configure with -DCCDBENCH_WITH_MPI=OFF")
-endif()
+ccd_optional_feature(MPI "${MPI_CXX_FOUND}" "Spread run, truth and queries over MPI ranks (mpirun -n N ccdbench ...)"
+                     "libopenmpi-dev openmpi-bin")
 
 foreach(_feature OPENCL FCL MPI)
   if(CCDBENCH_WITH_${_feature})
     message(STATUS "ccdbench: CCDBENCH_WITH_${_feature} = ON")
   else()
-    message(WARNING "ccdbench: CCDBENCH_WITH_${_feature} = OFF: its strategies will be reported as unavailable")
+    message(WARNING "ccdbench: CCDBENCH_WITH_${_feature} = OFF: not built (its strategies are reported as unavailable, and "
+                    "`ccdbench --version` says so)")
   endif()
 endforeach()

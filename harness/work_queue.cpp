@@ -201,14 +201,6 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
     }
     return std::nullopt;
   };
-  auto stop_local = [&] {
-    {
-      std::lock_guard lock(channel.mutex);
-      channel.stop = true;
-    }
-    channel.wake.notify_one();
-    local.join();
-  };
   try {
     while (stopped < g_ranks.size) {
       bool progressed = false;
@@ -287,9 +279,8 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
     std::string text;
     const int code = exit_code_of(std::current_exception(), text);
     std::cerr << "ccdbench: error: " << text << '\n';
-    RankSession::end_all_ranks(code);
-    stop_local();  // not reached: end_all_ranks does not return with more than one rank
-    throw;
+    RankSession::end_all_ranks(code);  // does not return: coordinate runs only with more than one rank
+    std::abort();
   }
   local.join();
 }
