@@ -1,15 +1,14 @@
 #include "strategies/narrowphase/cubic.hpp"
 
-#include "strategies/narrowphase/coplanarity.hpp"
-#include "strategies/narrowphase/primitive_distance.hpp"
+#include "strategies/narrowphase/shared.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <sstream>
 
 namespace ccd::narrowphase {
 namespace {
 
+/// shared/geometry.h's ccd_cubic_test in float (cubic32, rows rounded to float first) or double (cubic64, the
+/// OpenCL backend's kernel computes the same).
 template <class T>
 class Cubic final : public NarrowPhase {
  public:
@@ -27,35 +26,21 @@ class Cubic final : public NarrowPhase {
 
  private:
   NarrowPhaseResult test(const PairRows& rows, double thickness, bool vertex_face) const {
-    std::array<Vector3<T>, 4> x0, dx;
-    Vector3<T> lower = rows[0].cast<T>(), upper = lower;
-    for (int k = 0; k < 4; ++k) {
-      x0[k] = rows[k].cast<T>();
-      dx[k] = rows[k + 4].cast<T>() - x0[k];
-      for (const Vector3<T>& p : {x0[k], Vector3<T>(rows[k + 4].cast<T>())}) {
-        lower = lower.cwiseMin(p);
-        upper = upper.cwiseMax(p);
-      }
-    }
-    const std::array<T, 4> coefficients = coplanarity_cubic<T>(x0, dx, vertex_face);
-    std::array<T, 6> times{};
-    const int count = cubic_candidate_times(coefficients, times);
-
-    const T reach = static_cast<T>(thickness) + static_cast<T>(settings_.eta) * (upper - lower).norm();
-    const T reach2 = reach * reach;
     NarrowPhaseResult result;
-    result.achieved_tolerance = static_cast<double>(reach) - thickness;
-    for (int i = 0; i < count; ++i) {
-      const T t = times[i];
-      std::array<Vector3<T>, 4> x;
-      for (int k = 0; k < 4; ++k) x[k] = x0[k] + t * dx[k];
-      const T distance2 = vertex_face ? point_triangle_squared_distance(x[0], x[1], x[2], x[3])
-                                      : segment_segment_squared_distance(x[0], x[1], x[2], x[3]);
-      if (distance2 <= reach2) {
+    auto finish = [&](const auto& outcome) {
+      result.achieved_tolerance = static_cast<double>(outcome.reach) - thickness;
+      if (outcome.collides) {
         result.collides = true;
-        result.toi = static_cast<double>(t);
-        return result;
+        result.toi = static_cast<double>(outcome.toi);
       }
+    };
+    if constexpr (sizeof(T) == 4) {
+      shared::f32::ccd_v3 cast[8];
+      for (std::size_t i = 0; i < 8; ++i) cast[i] = shared::to_shared(Eigen::Vector3f(rows[i].cast<float>()));
+      finish(shared::f32::ccd_cubic_test(cast, static_cast<float>(thickness), static_cast<float>(settings_.eta), vertex_face));
+    } else {
+      const auto shared_rows = shared::to_shared_rows(rows);
+      finish(shared::f64::ccd_cubic_test(shared_rows.data(), thickness, settings_.eta, vertex_face));
     }
     return result;
   }
