@@ -23,7 +23,7 @@ function(ccd_optional_feature name found description packages)
 endfunction()
 
 find_package(OpenCL QUIET)
-ccd_optional_feature(OPENCL "${OpenCL_FOUND}" "Build the OpenCL backend of apccd"
+ccd_optional_feature(OPENCL "${OpenCL_FOUND}" "Build the OpenCL backend (full:backend=opencl, ccdbench devices)"
                      "ocl-icd-opencl-dev opencl-headers pocl-opencl-icd")
 
 find_package(fcl QUIET)

@@ -14,6 +14,7 @@
 #include "harness/truth_cache.hpp"
 #include "harness/work_queue.hpp"
 #include "reference/step_truth.hpp"
+#include "strategies/opencl/full_opencl.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -332,6 +333,37 @@ int run_stress_command(const StressOptions& options, std::ostream& out) {
     write_extremes_queries(suite, *options.write_queries);
     out << "wrote the suite as query files under " << options.write_queries->string() << "\n";
   }
+  return 0;
+}
+
+int run_devices(bool json, std::ostream& out) {
+  std::vector<strategies::OpenClDeviceSummary> devices;
+  try {
+    devices = strategies::opencl_devices();
+  } catch (const std::invalid_argument& unavailable) {
+    std::cerr << "ccdbench: error: " << unavailable.what() << '\n';
+    return 2;
+  }
+  if (devices.empty() && !json) {
+    out << "no OpenCL device (is an ICD such as pocl-opencl-icd installed, or OCL_ICD_VENDORS set?)\n";
+    return 0;
+  }
+  for (const auto& d : devices) {
+    const std::string verdict = d.refused_because.empty() ? "usable" : d.refused_because;
+    if (json) {
+      const nlohmann::json line = {{"index", d.index}, {"platform", d.platform}, {"name", d.name}, {"version", d.version},
+                                   {"driver", d.driver}, {"type", d.gpu ? "gpu" : "other"}, {"compute_units", d.compute_units},
+                                   {"global_memory_bytes", d.global_memory}, {"fp64", d.fp64}, {"fp64_denormals", d.fp64_denormals},
+                                   {"usable", d.refused_because.empty()}};
+      out << line.dump() << '\n';
+    } else {
+      out << d.index << ": " << d.name << " [" << d.platform << "; " << d.version << "; driver " << d.driver << "]\n"
+          << "   " << (d.gpu ? "GPU" : "not a GPU") << ", " << d.compute_units << " compute units, "
+          << d.global_memory / (1024 * 1024) << " MiB, fp64 " << (d.fp64 ? (d.fp64_denormals ? "yes (subnormals kept)" : "yes (subnormals flushed)") : "no")
+          << "\n   " << verdict << "\n";
+    }
+  }
+  if (!json) out << "choose one with --strategy full:backend=opencl:device=INDEX (default: the first GPU, else device 0)\n";
   return 0;
 }
 

@@ -67,6 +67,10 @@ int run_stress_command(const StressOptions& options, std::ostream& out);
 /// Lists the built-in procedural scenes with their parameters and defaults.
 int run_scenes(std::ostream& out);
 
+/// `ccdbench devices`: the OpenCL platforms and devices (index, name, compute units, memory, fp64), as a table or
+/// as JSON lines (one object per device). Exit 2 when this build has no OpenCL.
+int run_devices(bool json, std::ostream& out);
+
 struct GenerateOptions {
   std::string name;
   std::optional<double> resolution, frames, seed;

@@ -165,6 +165,8 @@ int run_command_line(int argc, char** argv) {
       "triangle pair; small scenes), fcl (FCL's BVH and its own continuous tests; judged by triangle pairs) and\n"
       "fcl-bvh (FCL's BVH as the broad phase, then NARROW); both take bv=aabb|obbrss|kdop24 (default aabb) and\n"
       "run at δ = 0 only (--thickness 0). NARROW is conservative (default), cubic64, cubic32 or advancement.\n"
+      "full takes backend=cpu|opencl and device=INDEX|NAME-SUBSTRING: full:backend=opencl runs every stage on an\n"
+      "OpenCL device (see `ccdbench devices`) with the CPU's answers bit for bit (narrow phases conservative, cubic64).\n"
       "apccd knobs (defaults): skip=on, nf_min=1, nf_max=8 (session length bounds), local=1.0 and global=0.25\n"
       "(inflation by a vertex's own speed and by its object's mean speed, per frame left in the session),\n"
       "dangling_max=0.05 (fraction of dangling vertices that ends a session), pending_max=4 (pending pairs per\n"
@@ -218,6 +220,14 @@ int run_command_line(int argc, char** argv) {
 
   CLI::App* scenes = app.add_subcommand("scenes", "List the built-in procedural scenes, their parameters and defaults.");
 
+  bool devices_json = false;
+  CLI::App* devices = app.add_subcommand(
+      "devices",
+      "List the OpenCL platforms and devices: index (for full:backend=opencl:device=INDEX), name, compute units,\n"
+      "memory, and fp64 (required: the narrow phases are double precision, subnormals kept). Without device=, the\n"
+      "first GPU is used, else device 0. PoCL's CPU device is always there once pocl-opencl-icd is installed.");
+  devices->add_flag("--json", devices_json, "one JSON object per device, one per line");
+
   ccd::harness::GenerateOptions generate_options;
   CLI::App* generate = app.add_subcommand(
       "generate",
@@ -263,6 +273,7 @@ int run_command_line(int argc, char** argv) {
     }
     if (*truth) return ccd::harness::run_truth(truth_options, std::cout);
     if (*scenes) return ccd::harness::run_scenes(std::cout);
+    if (*devices) return ccd::harness::run_devices(devices_json, std::cout);
     if (*run) {
       const int sources = (run_suite.empty() ? 0 : 1) + (run_scenes.empty() ? 0 : 1) + (run_frames.empty() ? 0 : 1);
       if (sources != 1) return refuse({}, "give exactly one of --suite, --scene, --frames");

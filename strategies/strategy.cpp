@@ -4,6 +4,7 @@
 
 #include "strategies/apccd/cpu/apccd.hpp"
 #include "strategies/full_traversal/full_traversal.hpp"
+#include "strategies/opencl/full_opencl.hpp"
 
 #include "ccd/config.hpp"
 #if CCDBENCH_WITH_FCL
@@ -59,16 +60,29 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
   if (parsed.name != "fcl" && std::find(narrow_names.begin(), narrow_names.end(), parsed.narrow_phase) == narrow_names.end()) {
     throw std::invalid_argument("unknown narrow phase '" + parsed.narrow_phase + "' in '" + spec + "' (known: " + joined(narrow_names) + ")");
   }
-  if (parsed.name == "full" || parsed.name == "brute") reject_unknown_keys(parsed, {});
-  if (parsed.name == "apccd") reject_unknown_keys(parsed, apccd_parameter_names());
+  if (parsed.name == "full") reject_unknown_keys(parsed, backend_parameter_names());
+  if (parsed.name == "brute") reject_unknown_keys(parsed, {});
+  if (parsed.name == "apccd") {
+    std::vector<std::string> own = apccd_parameter_names();
+    const std::vector<std::string> backend = backend_parameter_names();
+    own.insert(own.end(), backend.begin(), backend.end());
+    reject_unknown_keys(parsed, own);
+  }
   if (parsed.name == "fcl-bvh") reject_unknown_keys(parsed, {"bv"});
-  // `full` and `brute` have no parameters of their own: every key is the narrow phase's.
+  // `full` has only the backend keys of its own and `brute` none: every other key is the narrow phase's.
   if (parsed.name == "full" || parsed.name == "brute") {
-    auto narrow_phase = narrowphase::make_narrow_phase(parsed.narrow_phase, parsed.parameters);
+    std::map<std::string, std::string> parameters = parsed.parameters;
+    const auto [backend, device] = parsed.name == "full" ? take_backend(parameters) : std::pair<std::string, std::string>{"cpu", ""};
+    auto narrow_phase = narrowphase::make_narrow_phase(parsed.narrow_phase, parameters);
+    if (backend == "opencl") return make_full_opencl(std::move(narrow_phase), parsed.narrow_phase, device);
     return parsed.name == "full" ? make_full_traversal(std::move(narrow_phase)) : make_brute_force(std::move(narrow_phase));
   }
   if (parsed.name == "apccd") {
     std::map<std::string, std::string> parameters = parsed.parameters;
+    if (take_backend(parameters).first == "opencl") {
+      throw std::invalid_argument("apccd:backend=opencl is not built yet: apccd runs on the CPU backend (full:backend=opencl "
+                                  "runs on OpenCL)");
+    }
     const ApccdSettings settings = take_apccd_settings(parameters);
     return make_apccd(settings, narrowphase::make_narrow_phase(parsed.narrow_phase, parameters));
   }

@@ -1,0 +1,53 @@
+#pragma once
+/// @file
+/// `full:backend=opencl`: the full-traversal strategy with every stage on an OpenCL device (kernels/full.cl), giving
+/// the CPU `full`'s collision set and TOIs bit for bit for the same narrow phase (conservative or cubic64).
+///
+/// The hierarchy: each object's tree is built once on the host, exactly as the CPU's (a median split), and refitted
+/// on the device every step, level by level. Cloth keeps its topology, so a refit tree stays as valid as the CPU's;
+/// and the candidate set does not depend on the tree at all (it is every face pair whose leaf boxes overlap), so
+/// the choice is about speed only. An LBVH rebuilt per step from Morton codes would need a radix sort on the
+/// device each step for no change in the answer; a refit is a few level launches. Traversal is one work item per
+/// face against a whole tree, which needs no synchronisation and fills the GPU at cloth sizes.
+
+#include "strategies/narrowphase/narrow_phase.hpp"
+#include "strategies/strategy.hpp"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+namespace ccd::strategies {
+
+/// A device as `ccdbench devices` lists it (no OpenCL types, so the harness needs no OpenCL header).
+struct OpenClDeviceSummary {
+  std::size_t index = 0;
+  std::string platform, name, version, driver;
+  bool gpu = false;
+  unsigned compute_units = 0;
+  std::uint64_t global_memory = 0;
+  bool fp64 = false;
+  bool fp64_denormals = false;
+  /// Whether full:backend=opencl accepts it (fp64 that keeps subnormals); else why not.
+  std::string refused_because;
+};
+
+/// Every OpenCL device, in device=INDEX order. @throws std::invalid_argument when this build has no OpenCL.
+std::vector<OpenClDeviceSummary> opencl_devices();
+
+/// The keys every OpenCL-capable strategy takes: backend=cpu|opencl and device=INDEX|NAME-SUBSTRING.
+std::vector<std::string> backend_parameter_names();
+
+/// Removes backend= and device= from `parameters`; returns the backend ("cpu" by default) and the device selector.
+/// @throws std::invalid_argument for another backend, or device= without backend=opencl.
+std::pair<std::string, std::string> take_backend(std::map<std::string, std::string>& parameters);
+
+/// Chooses the device (listing them) and checks it has what the kernels need, so a bad device is refused when the
+/// run is planned. The context, the program and the device's arithmetic self-test come at init().
+/// @throws std::invalid_argument for a narrow phase other than conservative and cubic64, a missing device, or a
+///         device without (denormal-keeping) fp64; OpenClError when this build has no OpenCL.
+std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase,
+                                           const std::string& narrow_phase_name, const std::string& device_selector);
+
+}  // namespace ccd::strategies

@@ -1,0 +1,295 @@
+#include "strategies/opencl/runtime.hpp"
+
+#include "strategies/opencl/kernel_source.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <map>
+#include <mutex>
+
+namespace ccd::opencl {
+namespace {
+
+const char* error_name(cl_int code) {
+  switch (code) {
+    case CL_DEVICE_NOT_FOUND: return "CL_DEVICE_NOT_FOUND";
+    case CL_DEVICE_NOT_AVAILABLE: return "CL_DEVICE_NOT_AVAILABLE";
+    case CL_COMPILER_NOT_AVAILABLE: return "CL_COMPILER_NOT_AVAILABLE";
+    case CL_MEM_OBJECT_ALLOCATION_FAILURE: return "CL_MEM_OBJECT_ALLOCATION_FAILURE";
+    case CL_OUT_OF_RESOURCES: return "CL_OUT_OF_RESOURCES";
+    case CL_OUT_OF_HOST_MEMORY: return "CL_OUT_OF_HOST_MEMORY";
+    case CL_PROFILING_INFO_NOT_AVAILABLE: return "CL_PROFILING_INFO_NOT_AVAILABLE";
+    case CL_BUILD_PROGRAM_FAILURE: return "CL_BUILD_PROGRAM_FAILURE";
+    case CL_INVALID_VALUE: return "CL_INVALID_VALUE";
+    case CL_INVALID_DEVICE: return "CL_INVALID_DEVICE";
+    case CL_INVALID_BINARY: return "CL_INVALID_BINARY";
+    case CL_INVALID_BUILD_OPTIONS: return "CL_INVALID_BUILD_OPTIONS";
+    case CL_INVALID_KERNEL_NAME: return "CL_INVALID_KERNEL_NAME";
+    case CL_INVALID_ARG_INDEX: return "CL_INVALID_ARG_INDEX";
+    case CL_INVALID_ARG_VALUE: return "CL_INVALID_ARG_VALUE";
+    case CL_INVALID_ARG_SIZE: return "CL_INVALID_ARG_SIZE";
+    case CL_INVALID_KERNEL_ARGS: return "CL_INVALID_KERNEL_ARGS";
+    case CL_INVALID_WORK_GROUP_SIZE: return "CL_INVALID_WORK_GROUP_SIZE";
+    case CL_INVALID_BUFFER_SIZE: return "CL_INVALID_BUFFER_SIZE";
+    case CL_INVALID_MEM_OBJECT: return "CL_INVALID_MEM_OBJECT";
+    case -1001: return "CL_PLATFORM_NOT_FOUND_KHR";
+    default: return "OpenCL error";
+  }
+}
+
+std::string device_string(cl_device_id device, cl_device_info what) {
+  std::size_t size = 0;
+  if (clGetDeviceInfo(device, what, 0, nullptr, &size) != CL_SUCCESS || size == 0) return "";
+  std::string text(size, '\0');
+  check(clGetDeviceInfo(device, what, size, text.data(), nullptr), "clGetDeviceInfo");
+  text.resize(std::strlen(text.c_str()));
+  return text;
+}
+
+template <class T>
+T device_value(cl_device_id device, cl_device_info what) {
+  T value{};
+  check(clGetDeviceInfo(device, what, sizeof(T), &value, nullptr), "clGetDeviceInfo");
+  return value;
+}
+
+/// Program binaries already built, per device and build options: a second context on the same device loads the
+/// binary instead of compiling again (PoCL compiles through LLVM, seconds per program).
+struct BinaryCache {
+  std::mutex mutex;
+  std::map<std::pair<cl_device_id, std::string>, std::vector<unsigned char>> binaries;
+};
+BinaryCache& binary_cache() {
+  static BinaryCache cache;
+  return cache;
+}
+
+std::string build_log(cl_program program, cl_device_id device) {
+  std::size_t size = 0;
+  clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &size);
+  std::string log(size, '\0');
+  if (size > 0) clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, size, log.data(), nullptr);
+  log.resize(std::strlen(log.c_str()));
+  return log;
+}
+
+}  // namespace
+
+void check(cl_int status, const char* call) {
+  if (status != CL_SUCCESS) {
+    throw OpenClError(std::string("OpenCL: ") + call + " failed: " + error_name(status) + " (" + std::to_string(status) + ")");
+  }
+}
+
+std::vector<DeviceInfo> list_devices() {
+  cl_uint platform_count = 0;
+  // No ICD, or an ICD loader without platforms, answers an error here: that is "no devices", not a failure.
+  if (clGetPlatformIDs(0, nullptr, &platform_count) != CL_SUCCESS || platform_count == 0) return {};
+  std::vector<cl_platform_id> platforms(platform_count);
+  check(clGetPlatformIDs(platform_count, platforms.data(), nullptr), "clGetPlatformIDs");
+  std::vector<DeviceInfo> devices;
+  for (cl_platform_id platform : platforms) {
+    std::size_t size = 0;
+    std::string platform_name;
+    if (clGetPlatformInfo(platform, CL_PLATFORM_NAME, 0, nullptr, &size) == CL_SUCCESS && size > 0) {
+      platform_name.assign(size, '\0');
+      clGetPlatformInfo(platform, CL_PLATFORM_NAME, size, platform_name.data(), nullptr);
+      platform_name.resize(std::strlen(platform_name.c_str()));
+    }
+    cl_uint device_count = 0;
+    if (clGetDeviceIDs(platform, CL_DEVICE_TYPE_ALL, 0, nullptr, &device_count) != CL_SUCCESS || device_count == 0) continue;
+    std::vector<cl_device_id> ids(device_count);
+    check(clGetDeviceIDs(platform, CL_DEVICE_TYPE_ALL, device_count, ids.data(), nullptr), "clGetDeviceIDs");
+    for (cl_device_id id : ids) {
+      DeviceInfo info;
+      info.index = devices.size();
+      info.platform = platform_name;
+      info.name = device_string(id, CL_DEVICE_NAME);
+      info.vendor = device_string(id, CL_DEVICE_VENDOR);
+      info.version = device_string(id, CL_DEVICE_VERSION);
+      info.driver = device_string(id, CL_DRIVER_VERSION);
+      info.is_gpu = (device_value<cl_device_type>(id, CL_DEVICE_TYPE) & CL_DEVICE_TYPE_GPU) != 0;
+      info.compute_units = device_value<cl_uint>(id, CL_DEVICE_MAX_COMPUTE_UNITS);
+      info.global_memory = device_value<cl_ulong>(id, CL_DEVICE_GLOBAL_MEM_SIZE);
+      info.max_allocation = device_value<cl_ulong>(id, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
+      info.max_work_group_size = device_value<std::size_t>(id, CL_DEVICE_MAX_WORK_GROUP_SIZE);
+      const cl_device_fp_config fp64 = device_value<cl_device_fp_config>(id, CL_DEVICE_DOUBLE_FP_CONFIG);
+      const std::string extensions = device_string(id, CL_DEVICE_EXTENSIONS);
+      info.fp64 = fp64 != 0 && extensions.find("cl_khr_fp64") != std::string::npos;
+      info.fp64_denormals = (fp64 & CL_FP_DENORM) != 0;
+      info.id = id;
+      devices.push_back(std::move(info));
+    }
+  }
+  return devices;
+}
+
+namespace {
+
+std::string listing(const std::vector<DeviceInfo>& devices) {
+  std::string text;
+  for (const DeviceInfo& d : devices) text += (text.empty() ? "" : ", ") + std::to_string(d.index) + ": " + d.name;
+  return text.empty() ? "none (is an OpenCL ICD such as pocl-opencl-icd installed?)" : text;
+}
+
+}  // namespace
+
+DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector) {
+  if (devices.empty()) throw std::invalid_argument("no OpenCL device: " + listing(devices));
+  if (selector.empty()) {
+    const auto gpu = std::find_if(devices.begin(), devices.end(), [](const DeviceInfo& d) { return d.is_gpu; });
+    return gpu != devices.end() ? *gpu : devices.front();
+  }
+  if (std::all_of(selector.begin(), selector.end(), [](char c) { return c >= '0' && c <= '9'; }) && selector.size() < 6) {
+    const std::size_t index = std::stoul(selector);
+    if (index < devices.size()) return devices[index];
+    throw std::invalid_argument("device=" + selector + ": no device with that index (devices: " + listing(devices) + ")");
+  }
+  for (const DeviceInfo& d : devices) {
+    if (d.name.find(selector) != std::string::npos) return d;
+  }
+  throw std::invalid_argument("device=" + selector + ": no device name contains it (devices: " + listing(devices) + ")");
+}
+
+void require_double_precision(const DeviceInfo& device) {
+  if (!device.fp64) {
+    throw std::invalid_argument("OpenCL device " + std::to_string(device.index) + " (" + device.name +
+                                ") has no double precision (cl_khr_fp64), which every narrow phase of the OpenCL "
+                                "backend needs; choose another with device=INDEX (see `ccdbench devices`)");
+  }
+  if (!device.fp64_denormals) {
+    throw std::invalid_argument("OpenCL device " + std::to_string(device.index) + " (" + device.name +
+                                ") flushes subnormal doubles to zero (no CL_FP_DENORM), which the conservative "
+                                "narrow phase's error bounds do not allow; choose another with device=INDEX");
+  }
+}
+
+Context::Context(const DeviceInfo& device, const std::string& defines) : device_(device) {
+  require_double_precision(device);
+  cl_int status = CL_SUCCESS;
+  context_ = clCreateContext(nullptr, 1, &device_.id, nullptr, nullptr, &status);
+  check(status, "clCreateContext");
+  queue_ = clCreateCommandQueue(context_, device_.id, CL_QUEUE_PROFILING_ENABLE, &status);
+  check(status, "clCreateCommandQueue");
+  // Build options: the defines only, never an option that relaxes the arithmetic (mad enabling, fast or unsafe
+  // math, finite math only, denormals as zero): the kernels must compute what the host computes.
+  const std::string options = "-cl-std=CL1.2 " + defines;
+  BinaryCache& cache = binary_cache();
+  std::lock_guard lock(cache.mutex);
+  const auto key = std::make_pair(device_.id, options);
+  const auto cached = cache.binaries.find(key);
+  if (cached != cache.binaries.end()) {
+    const unsigned char* binary = cached->second.data();
+    const std::size_t size = cached->second.size();
+    cl_int binary_status = CL_SUCCESS;
+    program_ = clCreateProgramWithBinary(context_, 1, &device_.id, &size, &binary, &binary_status, &status);
+    if (status != CL_SUCCESS || binary_status != CL_SUCCESS) {
+      if (program_ != nullptr) clReleaseProgram(program_);
+      program_ = nullptr;
+    }
+  }
+  if (program_ == nullptr) {
+    const char* source = kernel_source();
+    program_ = clCreateProgramWithSource(context_, 1, &source, nullptr, &status);
+    check(status, "clCreateProgramWithSource");
+  }
+  status = clBuildProgram(program_, 1, &device_.id, options.c_str(), nullptr, nullptr);
+  if (status != CL_SUCCESS) {
+    throw OpenClError("OpenCL: the kernels do not build on device " + std::to_string(device_.index) + " (" + device_.name +
+                      "): " + error_name(status) + "\n" + build_log(program_, device_.id));
+  }
+  if (cached == cache.binaries.end()) {
+    std::size_t size = 0;
+    if (clGetProgramInfo(program_, CL_PROGRAM_BINARY_SIZES, sizeof(size), &size, nullptr) == CL_SUCCESS && size > 0) {
+      std::vector<unsigned char> binary(size);
+      unsigned char* pointer = binary.data();
+      if (clGetProgramInfo(program_, CL_PROGRAM_BINARIES, sizeof(pointer), &pointer, nullptr) == CL_SUCCESS) {
+        cache.binaries.emplace(key, std::move(binary));
+      }
+    }
+  }
+}
+
+Context::~Context() {
+  for (auto& [name, kernel] : kernels_) clReleaseKernel(kernel);
+  if (program_ != nullptr) clReleaseProgram(program_);
+  if (queue_ != nullptr) clReleaseCommandQueue(queue_);
+  if (context_ != nullptr) clReleaseContext(context_);
+}
+
+cl_kernel Context::kernel(const std::string& name) {
+  for (auto& [known, kernel] : kernels_) {
+    if (known == name) return kernel;
+  }
+  cl_int status = CL_SUCCESS;
+  cl_kernel kernel = clCreateKernel(program_, name.c_str(), &status);
+  check(status, ("clCreateKernel(" + name + ")").c_str());
+  kernels_.emplace_back(name, kernel);
+  return kernel;
+}
+
+void Context::finish() { check(clFinish(queue_), "clFinish"); }
+
+Buffer::~Buffer() {
+  if (memory_ != nullptr) clReleaseMemObject(memory_);
+}
+
+void Buffer::reserve(Context& context, std::size_t bytes) {
+  if (bytes <= bytes_ && memory_ != nullptr) return;
+  const std::size_t grown = std::max<std::size_t>({bytes, bytes_ + bytes_ / 2, 64});
+  if (grown > context.device().max_allocation) {
+    throw OpenClError("OpenCL: a buffer of " + std::to_string(grown) + " bytes is more than device " +
+                      std::to_string(context.device().index) + " (" + context.device().name + ") allocates at once (" +
+                      std::to_string(context.device().max_allocation) + ")");
+  }
+  if (memory_ != nullptr) clReleaseMemObject(memory_);
+  memory_ = nullptr;
+  bytes_ = 0;
+  cl_int status = CL_SUCCESS;
+  memory_ = clCreateBuffer(context.context(), CL_MEM_READ_WRITE, grown, nullptr, &status);
+  check(status, "clCreateBuffer");
+  bytes_ = grown;
+}
+
+StageEvents::~StageEvents() {
+  for (auto& [stage, event] : events_) {
+    if (event != nullptr) clReleaseEvent(event);
+  }
+}
+
+cl_event* StageEvents::add(const char* stage) {
+  events_.emplace_back(stage, nullptr);
+  return &events_.back().second;
+}
+
+std::vector<std::pair<std::string, double>> StageEvents::collect() {
+  std::vector<std::pair<std::string, double>> stages;
+  for (auto& [stage, event] : events_) {
+    if (event == nullptr) continue;
+    cl_ulong start = 0, end = 0;
+    check(clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr), "clGetEventProfilingInfo");
+    check(clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr), "clGetEventProfilingInfo");
+    clReleaseEvent(event);
+    event = nullptr;
+    const double milliseconds = static_cast<double>(end - start) * 1e-6;
+    const auto known = std::find_if(stages.begin(), stages.end(), [&](const auto& entry) { return entry.first == stage; });
+    if (known != stages.end()) {
+      known->second += milliseconds;
+    } else {
+      stages.emplace_back(stage, milliseconds);
+    }
+  }
+  events_.clear();
+  return stages;
+}
+
+void launch(Context& context, cl_kernel kernel, std::size_t items, std::size_t group, cl_event* event) {
+  if (items == 0) return;
+  // Without a group size the implementation chooses one (it must divide the global size: a multiple of 64).
+  const std::size_t step = group == 0 ? 64 : group;
+  const std::size_t global = (items + step - 1) / step * step;
+  check(clEnqueueNDRangeKernel(context.queue(), kernel, 1, nullptr, &global, group == 0 ? nullptr : &group, 0, nullptr, event),
+        "clEnqueueNDRangeKernel");
+}
+
+}  // namespace ccd::opencl

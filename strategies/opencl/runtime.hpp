@@ -1,0 +1,131 @@
+#pragma once
+/// @file
+/// A small runtime over the OpenCL C API (ocl-icd and the distribution's headers): device listing and choice, one
+/// context and in-order profiling queue per user, programs built from the kernels embedded at build time (and
+/// their binaries cached per device, so a second strategy on one device does not compile again), buffers that
+/// grow and are reused, and per-stage device times from events.
+///
+/// Every OpenCL failure becomes an OpenClError naming the call and the error code; a program that fails to build
+/// carries the build log.
+
+#define CL_TARGET_OPENCL_VERSION 120
+#include <CL/cl.h>
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ccd::opencl {
+
+struct OpenClError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// What `ccdbench devices` lists and what device choice reads. A plain value, so tests can make one up.
+struct DeviceInfo {
+  /// Position in the listing (platforms in order, their devices in order): what device=INDEX names.
+  std::size_t index = 0;
+  std::string platform;
+  std::string name;
+  std::string vendor;
+  std::string version;
+  std::string driver;
+  bool is_gpu = false;
+  unsigned compute_units = 0;
+  std::uint64_t global_memory = 0;
+  std::uint64_t max_allocation = 0;
+  std::size_t max_work_group_size = 0;
+  /// cl_khr_fp64 (or OpenCL 1.2+ double support): every narrow phase here is double.
+  bool fp64 = false;
+  /// CL_FP_DENORM in CL_DEVICE_DOUBLE_FP_CONFIG: subnormal doubles are kept, not flushed.
+  bool fp64_denormals = false;
+  cl_device_id id = nullptr;
+};
+
+/// Every device of every platform (empty when there is no platform, e.g. no ICD installed).
+std::vector<DeviceInfo> list_devices();
+
+/// The device `selector` names: "" for the first GPU, else the first device; a number for that index; otherwise the
+/// first device whose name contains the text (case-sensitive).
+/// @throws std::invalid_argument listing the devices when none matches, or when there are none.
+DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector);
+
+/// Refuses a device that cannot run the backend: no fp64, or fp64 that flushes subnormals (the narrow phases'
+/// error bounds count subnormals). The seam where a device's capabilities are judged, so a test can hand it a
+/// device without fp64.
+/// @throws std::invalid_argument saying what the device lacks.
+void require_double_precision(const DeviceInfo& device);
+
+/// One context and one in-order queue with profiling on a device, and the program built for it.
+class Context {
+ public:
+  /// Builds the embedded kernels for `device` with `defines` (e.g. "-DCCD_GROUP_SIZE=256"); never with flags
+  /// that change the arithmetic (shared/geometry.h).
+  Context(const DeviceInfo& device, const std::string& defines);
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  const DeviceInfo& device() const { return device_; }
+  cl_context context() const { return context_; }
+  cl_command_queue queue() const { return queue_; }
+  /// The kernel named `name` (created once).
+  cl_kernel kernel(const std::string& name);
+  /// Waits for every enqueued command.
+  void finish();
+
+ private:
+  DeviceInfo device_;
+  cl_context context_ = nullptr;
+  cl_command_queue queue_ = nullptr;
+  cl_program program_ = nullptr;
+  std::vector<std::pair<std::string, cl_kernel>> kernels_;
+};
+
+/// A device buffer that grows (never shrinks) and is reused across steps.
+class Buffer {
+ public:
+  Buffer() = default;
+  ~Buffer();
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  /// Ensures room for `bytes` (contents are lost when it grows: by half again, to spare later steps a reallocation).
+  void reserve(Context& context, std::size_t bytes);
+  cl_mem get() const { return memory_; }
+  std::size_t bytes() const { return bytes_; }
+
+ private:
+  cl_mem memory_ = nullptr;
+  std::size_t bytes_ = 0;
+};
+
+/// Events grouped by stage name; their device times are read once the queue has finished.
+class StageEvents {
+ public:
+  ~StageEvents();
+  /// A slot for the event of a command of `stage` (pass it as the command's event).
+  cl_event* add(const char* stage);
+  /// Milliseconds per stage (in first-use order), from CL_PROFILING_COMMAND_START to _END; releases the events.
+  std::vector<std::pair<std::string, double>> collect();
+
+ private:
+  std::vector<std::pair<const char*, cl_event>> events_;
+};
+
+/// Throws OpenClError "CALL failed: NAME (CODE)" unless `status` is CL_SUCCESS.
+void check(cl_int status, const char* call);
+
+/// Sets kernel arguments in order (buffers as cl_mem, scalars by value).
+template <class... Arguments>
+void set_arguments(cl_kernel kernel, const Arguments&... arguments) {
+  cl_uint index = 0;
+  (check(clSetKernelArg(kernel, index++, sizeof(Arguments), &arguments), "clSetKernelArg"), ...);
+}
+
+/// Enqueues `kernel` over `items` work items (rounded up to whole groups of `group`; group 0 lets the implementation
+/// choose); nothing for 0 items.
+void launch(Context& context, cl_kernel kernel, std::size_t items, std::size_t group, cl_event* event);
+
+}  // namespace ccd::opencl

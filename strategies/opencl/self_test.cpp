@@ -1,0 +1,128 @@
+#include "strategies/opencl/self_test.hpp"
+
+#include "strategies/narrowphase/exact_scaling.hpp"
+#include "strategies/narrowphase/shared.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <sstream>
+#include <vector>
+
+namespace ccd::opencl {
+namespace {
+
+/// Settings of the pairs' narrow phases: the defaults of conservative and cubic64.
+constexpr double kTolerance = 1e-6;
+constexpr long kMaxIterations = 20000;
+constexpr double kEta = 1e-6;
+constexpr std::size_t kPairs = 512;
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
+
+std::string hex(double value) {
+  std::ostringstream out;
+  out << std::hexfloat << value;
+  return out.str();
+}
+
+template <class T>
+void write(Context& context, Buffer& buffer, const std::vector<T>& values) {
+  buffer.reserve(context, values.size() * sizeof(T));
+  check(clEnqueueWriteBuffer(context.queue(), buffer.get(), CL_TRUE, 0, values.size() * sizeof(T), values.data(), 0, nullptr, nullptr),
+        "clEnqueueWriteBuffer");
+}
+
+std::vector<double> read(Context& context, Buffer& buffer, std::size_t count) {
+  std::vector<double> values(count);
+  check(clEnqueueReadBuffer(context.queue(), buffer.get(), CL_TRUE, 0, count * sizeof(double), values.data(), 0, nullptr, nullptr),
+        "clEnqueueReadBuffer");
+  return values;
+}
+
+[[noreturn]] void refuse(const Context& context, const std::string& what) {
+  throw std::invalid_argument("OpenCL device " + std::to_string(context.device().index) + " (" + context.device().name +
+                              ") does not compute what the host computes: " + what +
+                              "; its answers could not match the CPU backend's, so it is not used");
+}
+
+}  // namespace
+
+void check_device_arithmetic(Context& context) {
+  // a·b + c with a = 1 + 2^-30, b = 1 - 2^-30, c = -1: the product 1 - 2^-60 rounds to 1, so the sum is 0; an FMA
+  // keeps -2^-60. DBL_MIN / 2 is subnormal (0 when flushed); 3·2^-1074 - 2^-1074 = 2^-1073.
+  const std::vector<double> in{1 + 0x1p-30, 1 - 0x1p-30, -1.0, 0x1p-1022, 0x1p-1074, 2.0, 3.0};
+  const double expected[5] = {0.0, 0x1p-1023, 0x1p-1073, std::sqrt(2.0), 1.0 / 3.0};
+  const char* meaning[5] = {"a*b+c was contracted into a fused multiply-add", "a subnormal double was flushed to zero",
+                            "subnormal arithmetic is not exact", "sqrt is not correctly rounded", "division is not correctly rounded"};
+  Buffer input, output;
+  write(context, input, in);
+  output.reserve(context, 5 * sizeof(double));
+  cl_kernel arithmetic = context.kernel("self_test_arithmetic");
+  set_arguments(arithmetic, input.get(), output.get());
+  launch(context, arithmetic, 1, 1, nullptr);
+  const std::vector<double> got = read(context, output, 5);
+  for (int i = 0; i < 5; ++i) {
+    if (!same_bits(got[static_cast<std::size_t>(i)], expected[i])) {
+      refuse(context, std::string(meaning[i]) + " (got " + hex(got[static_cast<std::size_t>(i)]) + ", the host " + hex(expected[i]) + ")");
+    }
+  }
+
+  // Seeded pairs: random positions and motions at scales 2^-900..2^900, half of them nearly touching.
+  std::mt19937_64 random(kSelfTestSeed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<double> rows(kPairs * 24), thickness(kPairs);
+  std::vector<int> kinds(kPairs);
+  for (std::size_t i = 0; i < kPairs; ++i) {
+    const int exponent = static_cast<int>(i % 19) * 100 - 900;
+    const double motion = i % 3 == 0 ? 1.0 : (i % 3 == 1 ? 0.1 : 1e-3);
+    for (int k = 0; k < 12; ++k) rows[24 * i + static_cast<std::size_t>(k)] = std::ldexp(unit(random), exponent);
+    for (int k = 12; k < 24; ++k) {
+      rows[24 * i + static_cast<std::size_t>(k)] = rows[24 * i + static_cast<std::size_t>(k - 12)] + std::ldexp(motion * unit(random), exponent);
+    }
+    if (i % 2 == 0) {  // the second point onto the first: a contact or a near miss
+      for (int k = 0; k < 3; ++k) rows[24 * i + 3 + static_cast<std::size_t>(k)] = rows[24 * i + static_cast<std::size_t>(k)] * (1 + 1e-9);
+    }
+    thickness[i] = i % 4 == 0 ? 0.0 : std::ldexp(0.05 * (1 + unit(random)), exponent);
+    kinds[i] = static_cast<int>(i % 2);
+  }
+  Buffer rows_buffer, kinds_buffer, thickness_buffer, out_buffer;
+  write(context, rows_buffer, rows);
+  write(context, kinds_buffer, kinds);
+  write(context, thickness_buffer, thickness);
+  out_buffer.reserve(context, kPairs * 6 * sizeof(double));
+  cl_kernel pairs = context.kernel("self_test_pairs");
+  const cl_uint count = static_cast<cl_uint>(kPairs);
+  const cl_double tolerance = kTolerance, eta = kEta;
+  const cl_long max_iterations = kMaxIterations;
+  set_arguments(pairs, count, rows_buffer.get(), kinds_buffer.get(), thickness_buffer.get(), tolerance, max_iterations, eta, out_buffer.get());
+  launch(context, pairs, kPairs, 64, nullptr);
+  const std::vector<double> device = read(context, out_buffer, kPairs * 6);
+
+  const narrowphase::RoundToNearest rounding;
+  std::vector<narrowphase::shared::f64::ccd_sub_box> storage(1 << 16);
+  for (std::size_t i = 0; i < kPairs; ++i) {
+    narrowphase::shared::f64::ccd_v3 r[8];
+    for (int k = 0; k < 8; ++k) {
+      const std::size_t at = 24 * i + 3 * static_cast<std::size_t>(k);
+      r[k] = narrowphase::shared::f64::ccd_v3_make(rows[at], rows[at + 1], rows[at + 2]);
+    }
+    const auto c = narrowphase::shared::f64::ccd_conservative_test(r, thickness[i], kinds[i], kTolerance, kMaxIterations,
+                                                                    storage.data(), static_cast<int>(storage.size()));
+    const auto q = narrowphase::shared::f64::ccd_cubic_test(r, thickness[i], kEta, kinds[i]);
+    const double host[6] = {static_cast<double>(c.collides), c.toi, c.achieved_tolerance, static_cast<double>(q.collides), q.toi, q.reach};
+    const char* field[6] = {"conservative's answer", "conservative's TOI", "conservative's tolerance", "cubic64's answer",
+                            "cubic64's TOI", "cubic64's reach"};
+    for (int k = 0; k < 6; ++k) {
+      const double d = device[6 * i + static_cast<std::size_t>(k)];
+      if (k < 3 && device[6 * i] < 0) continue;  // the device ran out of sub-boxes: the host decides such pairs
+      const bool both_nan = std::isnan(d) && std::isnan(host[k]);
+      if (!both_nan && !same_bits(d, host[k])) {
+        refuse(context, std::string(field[k]) + " differs on self-test pair " + std::to_string(i) + " of seed " +
+                            std::to_string(kSelfTestSeed) + " (device " + hex(d) + ", host " + hex(host[k]) + ")");
+      }
+    }
+  }
+}
+
+}  // namespace ccd::opencl

@@ -1,0 +1,189 @@
+// The OpenCL backend on PoCL (or whatever device OpenCL offers first): `full:backend=opencl` must give the CPU
+// `full`'s collision set and TOIs bit for bit, step by step, for the same narrow phase; a device without fp64 is
+// refused. Every comparison asserts that its steps collide, or it would compare empty sets.
+
+#include "datasets/sample_step.hpp"
+#include "harness/run.hpp"
+#include "strategies/opencl/full_opencl.hpp"
+#include "strategies/opencl/runtime.hpp"
+#include "strategies/strategy.hpp"
+#include "tests/support/cli.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+namespace ccd {
+namespace {
+
+bool same_toi(double a, double b) { return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof(double)) == 0; }
+
+/// Runs `cpu` and `device` over every step of `frames`; fails on the first step whose sets or TOIs differ. Returns
+/// the number of colliding pairs over all steps (the caller asserts it is not 0) and adds the host-decided pairs.
+std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& device_spec, const Scene& scene,
+                                const std::vector<std::vector<Vec3>>& frames, double* host_decided = nullptr) {
+  auto cpu = strategies::make_strategy(cpu_spec);
+  auto device = strategies::make_strategy(device_spec);
+  cpu->init(scene, frames[0]);
+  device->init(scene, frames[0]);
+  std::size_t colliding = 0;
+  for (std::size_t k = 0; k + 1 < frames.size(); ++k) {
+    SCOPED_TRACE("step " + std::to_string(k));
+    const strategies::StepResult a = cpu->step({&scene, k, frames[k], frames[k + 1]}, false);
+    const strategies::StepResult b = device->step({&scene, k, frames[k], frames[k + 1]}, false);
+    EXPECT_EQ(a.counters.candidate_triangle_pairs, b.counters.candidate_triangle_pairs);
+    EXPECT_EQ(a.counters.elementary_tests, b.counters.elementary_tests);
+    EXPECT_TRUE(a.collisions.same_pairs(b.collisions)) << a.collisions.size() << " pairs on the CPU, " << b.collisions.size() << " on the device";
+    if (!a.collisions.same_pairs(b.collisions)) return colliding;
+    for (std::size_t i = 0; i < a.collisions.vertex_face().size(); ++i) {
+      EXPECT_TRUE(same_toi(a.collisions.vertex_face()[i].toi, b.collisions.vertex_face()[i].toi)) << "vertex-face TOI " << i;
+    }
+    for (std::size_t i = 0; i < a.collisions.edge_edge().size(); ++i) {
+      EXPECT_TRUE(same_toi(a.collisions.edge_edge()[i].toi, b.collisions.edge_edge()[i].toi)) << "edge-edge TOI " << i;
+    }
+    colliding += a.collisions.size();
+    for (const auto& [name, value] : b.counters.extra) {
+      if (name == "host_decided_pairs" && host_decided != nullptr) *host_decided += value;
+    }
+  }
+  return colliding;
+}
+
+std::vector<std::vector<Vec3>> all_frames(const datasets::SceneSequence& sequence) {
+  std::vector<std::vector<Vec3>> frames;
+  for (std::size_t k = 0; k < sequence.num_frames(); ++k) frames.push_back(sequence.frame(k));
+  return frames;
+}
+
+class OpenClParity : public ::testing::Test {
+ protected:
+  void SetUp() override { ::setenv("CCDBENCH_CACHE_DIR", cache_.path().c_str(), 1); }
+  void TearDown() override { ::unsetenv("CCDBENCH_CACHE_DIR"); }
+
+  /// Every scene of `suite` at its δ and at δ = 0, with `narrow` on both backends. Returns, per δ (scene's, 0)
+  /// and narrow phase, how many scenes collided: a comparison of empty sets proves nothing.
+  std::vector<std::size_t> suite_at_both_thicknesses(const std::string& suite, const std::vector<std::string>& narrow_phases) {
+    std::vector<std::size_t> colliding_scenes(2 * narrow_phases.size(), 0);
+    for (const harness::SceneSource& source : harness::suite_scenes(suite)) {
+      const datasets::SceneSequence loaded = source.load();
+      const auto frames = all_frames(loaded);
+      for (std::size_t z = 0; z < 2; ++z) {
+        const double thickness = z == 0 ? loaded.scene().thickness() : 0.0;
+        const Scene scene = loaded.scene().with_thickness(thickness);
+        for (std::size_t n = 0; n < narrow_phases.size(); ++n) {
+          const std::string& narrow = narrow_phases[n];
+          SCOPED_TRACE(source.label + ", δ = " + std::to_string(thickness) + ", " + narrow);
+          if (expect_same_answers("full+" + narrow, "full+" + narrow + ":backend=opencl", scene, frames) > 0) {
+            ++colliding_scenes[2 * n + z];
+          }
+        }
+      }
+    }
+    return colliding_scenes;
+  }
+
+  testing::TempDir cache_;
+};
+
+TEST_F(OpenClParity, TheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
+  // Both ci scenes collide at both δ (tests/harness/ci_suite_test.cpp), with either narrow phase.
+  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"})) EXPECT_EQ(scenes, 2u);
+}
+
+TEST_F(OpenClParity, TheDefaultSuiteGivesTheCpuAnswersAtBothThicknesses) {
+  // Five of its six scenes collide at both δ; the flag at resolution 16 does not fold onto itself in 20 frames.
+  for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"})) EXPECT_GE(scenes, 5u);
+}
+
+// The two public steps of ../shared/data/scalable-ccd-sample (80k and 18k faces): δ = 0 and δ = 5% of the step's
+// mean edge length.
+TEST_F(OpenClParity, ThePublicStepsGiveTheCpuAnswersAtBothThicknesses) {
+  CCD_REQUIRE_EXTERNAL_DATA(data);
+  for (const char* name : {"cloth-funnel", "rod-twist"}) {
+    const datasets::SampleStep sample = datasets::load_sample_step(data / "scalable-ccd-sample" / name);
+    double length = 0;
+    for (EdgeId e = 0; e < sample.topology.num_edges(); ++e) {
+      length += (sample.x0[sample.topology.edge(e).v1] - sample.x0[sample.topology.edge(e).v0]).norm();
+    }
+    const double mean_edge = length / static_cast<double>(sample.topology.num_edges());
+    for (const double thickness : {0.0, 0.05 * mean_edge}) {
+      ObjectDescription object{"mesh", ObjectKind::deformable, true, sample.topology.num_vertices(), sample.topology.faces()};
+      const Scene scene({object}, {}, thickness);
+      SCOPED_TRACE(std::string(name) + ", δ = " + std::to_string(thickness));
+      const std::size_t colliding = expect_same_answers("full", "full:backend=opencl", scene, {sample.x0, sample.x1});
+      EXPECT_GT(colliding, 0u);
+    }
+  }
+}
+
+// The paths a small step never takes: every list starts with room for one entry (so traversal, expansion and
+// compaction all grow and run again), and a work item holds 4 sub-boxes (so conservative queries overflow and the
+// host decides them with the same code).
+TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
+  ::setenv("CCDBENCH_OPENCL_TEST_TINY", "1", 1);
+  const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
+  double host_decided = 0;
+  const std::size_t colliding = expect_same_answers("full", "full:backend=opencl", loaded.scene(), all_frames(loaded), &host_decided);
+  ::unsetenv("CCDBENCH_OPENCL_TEST_TINY");
+  EXPECT_GT(colliding, 0u);
+  EXPECT_GT(host_decided, 0.0) << "no query overflowed its sub-boxes: the host's part was not exercised";
+}
+
+TEST(OpenClDevice, ADeviceWithoutDoublePrecisionIsRefusedSayingSo) {
+  opencl::DeviceInfo device;
+  device.name = "a float-only GPU";
+  device.fp64 = false;
+  try {
+    opencl::require_double_precision(device);
+    FAIL() << "accepted a device without fp64";
+  } catch (const std::invalid_argument& refusal) {
+    EXPECT_NE(std::string(refusal.what()).find("no double precision (cl_khr_fp64)"), std::string::npos) << refusal.what();
+  }
+  device.fp64 = true;
+  device.fp64_denormals = false;
+  EXPECT_THROW(opencl::require_double_precision(device), std::invalid_argument);
+  device.fp64_denormals = true;
+  EXPECT_NO_THROW(opencl::require_double_precision(device));
+}
+
+TEST(OpenClDevice, ChoiceByIndexOrNameAndClearErrors) {
+  std::vector<opencl::DeviceInfo> devices(2);
+  devices[0].index = 0;
+  devices[0].name = "cpu-device";
+  devices[1].index = 1;
+  devices[1].name = "Big GPU";
+  devices[1].is_gpu = true;
+  EXPECT_EQ(opencl::choose_device(devices, "").index, 1u);  // the first GPU
+  EXPECT_EQ(opencl::choose_device(devices, "0").index, 0u);
+  EXPECT_EQ(opencl::choose_device(devices, "Big").index, 1u);
+  EXPECT_THROW(opencl::choose_device(devices, "7"), std::invalid_argument);
+  EXPECT_THROW(opencl::choose_device(devices, "Tiny"), std::invalid_argument);
+  EXPECT_THROW(opencl::choose_device({}, ""), std::invalid_argument);
+}
+
+TEST(OpenClDevice, TheResolvedSpecNamesTheDeviceAndWrongKeysAreRefused) {
+  const auto devices = strategies::opencl_devices();
+  ASSERT_FALSE(devices.empty()) << "no OpenCL device: scripts/setup.sh installs PoCL";
+  const std::string name = strategies::make_strategy("full:backend=opencl:device=0")->name();
+  EXPECT_NE(name.find(":backend=opencl:device=" + devices[0].name), std::string::npos) << name;
+  EXPECT_THROW(strategies::make_strategy("full+advancement:backend=opencl"), std::invalid_argument);
+  EXPECT_THROW(strategies::make_strategy("full:backend=cuda"), std::invalid_argument);
+  EXPECT_THROW(strategies::make_strategy("full:device=0"), std::invalid_argument);
+  EXPECT_THROW(strategies::make_strategy("apccd:backend=opencl"), std::invalid_argument);
+  EXPECT_EQ(strategies::make_strategy("full:backend=cpu")->name(), strategies::make_strategy("full")->name());
+}
+
+TEST(OpenClDevice, DevicesListsThemForPeopleAndScripts) {
+  const testing::CommandResult table = testing::run_ccdbench("devices");
+  EXPECT_EQ(table.exit_code, 0) << table.output;
+  EXPECT_NE(table.output.find("compute units"), std::string::npos) << table.output;
+  const testing::CommandResult json = testing::run_ccdbench("devices --json");
+  EXPECT_EQ(json.exit_code, 0) << json.output;
+  EXPECT_NE(json.output.find("\"fp64\":true"), std::string::npos) << json.output;
+}
+
+}  // namespace
+}  // namespace ccd
