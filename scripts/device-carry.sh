@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Collects what a run on another Linux machine without ccdbench's packages needs into device-carry/ (ignored by
-# git; `run`'s carry takes it to the device): bin/ccdbench of the release build, every shared library that it,
+# git; `run`'s carry takes it to the device): bin/ccdbench (and bin/opencl_tests) of the release build, every shared library that it,
 # OpenMPI's launcher and OpenMPI's plugins need (ldd; not libc, libm or the loader, which the machine has), and
 # OpenMPI's and PMIx's plugins and help files under the paths Debian installs them to, below device-carry/root.
 # scripts/device-env.sh sets the variables that point OpenMPI and PMIx there. Builds nothing.
@@ -11,6 +11,8 @@ carry=device-carry
 rm -rf "$carry"
 mkdir -p "$carry/bin" "$carry/lib" "$carry/root"
 cp build/release/bin/ccdbench "$carry/bin/"
+# The OpenCL parity tests, for scripts/device-opencl.sh (when the build has them).
+if [ -x build/release/bin/opencl_tests ]; then cp build/release/bin/opencl_tests "$carry/bin/"; fi
 cp "$(readlink -f "$(command -v orterun)")" "$carry/bin/orterun"
 ln -s orterun "$carry/bin/mpirun"
 for tree in /usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3 /usr/share/openmpi /etc/openmpi \
@@ -18,10 +20,13 @@ for tree in /usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3 /usr/share/openmpi /e
   mkdir -p "$carry/root$(dirname "$tree")"
   cp -rL "$tree" "$carry/root$tree"
 done
-for binary in "$carry/bin/ccdbench" "$carry/bin/orterun" "$carry"/root/usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3/*.so \
+for binary in "$carry"/bin/ccdbench "$carry"/bin/opencl_tests "$carry/bin/orterun" "$carry"/root/usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3/*.so \
               "$carry"/root/usr/lib/x86_64-linux-gnu/pmix2/lib/pmix/*.so; do
+  [ -e "$binary" ] || continue
   ldd "$binary" | awk '$3 ~ /^\// {print $3}'
 done | sort -u | grep -vE '/(libc|libm|libpthread|libdl|librt)\.so|ld-linux' | while read -r library; do
   cp -L "$library" "$carry/lib/"
 done
+# The public data (../shared/data, about 10 MB) for the OpenCL parity tests and the public steps' timings.
+if [ -d ../shared/data ]; then cp -r ../shared/data "$carry/data"; fi
 du -sh "$carry"

@@ -72,14 +72,14 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
   // `full` has only the backend keys of its own and `brute` none: every other key is the narrow phase's.
   if (parsed.name == "full" || parsed.name == "brute") {
     std::map<std::string, std::string> parameters = parsed.parameters;
-    const auto [backend, device] = parsed.name == "full" ? take_backend(parameters) : std::pair<std::string, std::string>{"cpu", ""};
+    const BackendChoice backend = parsed.name == "full" ? take_backend(parameters) : BackendChoice{};
     auto narrow_phase = narrowphase::make_narrow_phase(parsed.narrow_phase, parameters);
-    if (backend == "opencl") return make_full_opencl(std::move(narrow_phase), parsed.narrow_phase, device);
+    if (backend.backend == "opencl") return make_full_opencl(std::move(narrow_phase), parsed.narrow_phase, backend);
     return parsed.name == "full" ? make_full_traversal(std::move(narrow_phase)) : make_brute_force(std::move(narrow_phase));
   }
   if (parsed.name == "apccd") {
     std::map<std::string, std::string> parameters = parsed.parameters;
-    if (take_backend(parameters).first == "opencl") {
+    if (take_backend(parameters).backend == "opencl") {
       throw std::invalid_argument("apccd:backend=opencl is not built yet: apccd runs on the CPU backend (full:backend=opencl "
                                   "runs on OpenCL)");
     }

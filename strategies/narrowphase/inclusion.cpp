@@ -36,7 +36,7 @@ class InclusionTest final : public NarrowPhase {
     int capacity = kInlineBoxes;
     while (true) {
       const shared::f64::ccd_conservative_outcome outcome = shared::f64::ccd_conservative_test(
-          rows.data(), thickness, vertex_face, settings_.tolerance, settings_.max_iterations, storage, capacity);
+          rows.data(), thickness, vertex_face, settings_.tolerance, settings_.max_iterations, 0, storage, capacity);
       if (!outcome.overflow) return {outcome.collides != 0, outcome.toi, outcome.hit_iteration_cap != 0, outcome.achieved_tolerance};
       capacity *= 4;
       more.resize(static_cast<std::size_t>(capacity));

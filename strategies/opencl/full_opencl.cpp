@@ -3,11 +3,13 @@
 #include "ccd/config.hpp"
 #include "core/assignment.hpp"
 #include "strategies/bvh/bvh.hpp"
+#include "strategies/narrowphase/narrow_phase.hpp"
 
 #if CCDBENCH_WITH_OPENCL
 #include "strategies/opencl/runtime.hpp"
 #include "strategies/opencl/self_test.hpp"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 #endif
 
@@ -17,21 +19,32 @@
 
 namespace ccd::strategies {
 
-std::vector<std::string> backend_parameter_names() { return {"backend", "device"}; }
+std::vector<std::string> backend_parameter_names() { return {"backend", "device", "device_iterations"}; }
 
-std::pair<std::string, std::string> take_backend(std::map<std::string, std::string>& parameters) {
-  std::string backend = "cpu", device;
+// device_iterations: 0 (never give up) or up to the largest iteration cap a narrow phase takes (1e9).
+constexpr narrowphase::SpecRange kDeviceIterationRange{0.0, 1e9, true};
+
+BackendChoice take_backend(std::map<std::string, std::string>& parameters) {
+  BackendChoice choice;
   if (const auto it = parameters.find("backend"); it != parameters.end()) {
-    backend = it->second;
+    choice.backend = it->second;
     parameters.erase(it);
   }
-  if (backend != "cpu" && backend != "opencl") throw std::invalid_argument("backend=" + backend + " is not a backend (cpu, opencl)");
-  if (const auto it = parameters.find("device"); it != parameters.end()) {
-    device = it->second;
-    parameters.erase(it);
-    if (backend != "opencl") throw std::invalid_argument("device=" + device + " chooses an OpenCL device: it needs backend=opencl");
+  if (choice.backend != "cpu" && choice.backend != "opencl") {
+    throw std::invalid_argument("backend=" + choice.backend + " is not a backend (cpu, opencl)");
   }
-  return {backend, device};
+  for (const char* key : {"device", "device_iterations"}) {
+    const auto it = parameters.find(key);
+    if (it == parameters.end()) continue;
+    if (choice.backend != "opencl") throw std::invalid_argument(std::string(key) + "=" + it->second + " is a key of the OpenCL backend: it needs backend=opencl");
+    if (std::string(key) == "device") {
+      choice.device = it->second;
+    } else {
+      choice.device_iterations = static_cast<long>(narrowphase::parse_spec_number("full", key, it->second, kDeviceIterationRange));
+    }
+    parameters.erase(it);
+  }
+  return choice;
 }
 
 #if CCDBENCH_WITH_OPENCL
@@ -72,11 +85,15 @@ struct DevicePair {
 
 class FullOpenCl final : public Strategy {
  public:
-  FullOpenCl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, std::string narrow_phase_name, opencl::DeviceInfo device)
+  FullOpenCl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, std::string narrow_phase_name, opencl::DeviceInfo device,
+             long device_iterations)
       : narrow_phase_(std::move(narrow_phase)), narrow_phase_name_(std::move(narrow_phase_name)), device_(std::move(device)),
-        parameters_(narrowphase::split_spec(narrow_phase_->name()).second) {}
+        parameters_(narrowphase::split_spec(narrow_phase_->name()).second), device_iterations_(device_iterations) {}
 
-  std::string name() const override { return "full+" + narrow_phase_->name() + ":backend=opencl:device=" + device_.name; }
+  std::string name() const override {
+    return "full+" + narrow_phase_->name() + ":backend=opencl:device=" + device_.name +
+           (narrow_phase_name_ == "conservative" ? ":device_iterations=" + std::to_string(device_iterations_) : "");
+  }
 
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
     scene_ = &scene;
@@ -164,8 +181,9 @@ class FullOpenCl final : public Strategy {
       cl_kernel kernel = context.kernel("narrow_conservative");
       const cl_double tolerance = std::stod(parameters_.at("tolerance"));
       const cl_long max_iterations = std::stol(parameters_.at("max_iterations"));
+      const cl_long give_up_after = device_iterations_;
       set_arguments(kernel, static_cast<cl_uint>(elementary), elementary_.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(),
-                    tolerance, max_iterations, status_.get(), toi_.get());
+                    tolerance, max_iterations, give_up_after, status_.get(), toi_.get());
       launch(context, kernel, elementary, narrow_group(kernel), events.add("narrow phase"));
     } else {
       cl_kernel kernel = context.kernel("narrow_cubic");
@@ -188,23 +206,33 @@ class FullOpenCl final : public Strategy {
     download(context, out_pairs_, pairs.data(), kept, events.add("download"));
     download(context, out_status_, status.data(), kept, events.add("download"));
     download(context, out_toi_, toi.data(), kept, events.add("download"));
-    std::size_t host_decided = 0;
+    // Queries the device handed back (out of sub-boxes or iterations): the same code on the host, in parallel.
+    std::vector<std::size_t> on_host;
     for (std::size_t i = 0; i < kept; ++i) {
-      const cl_uint4& p = pairs[i];
-      const bool vertex_face = p.s[2] == kVertexFace;
-      if (status[i] == 2) {  // more sub-boxes than a work item holds: the same code on the host, with more room
-        ++host_decided;
-        const narrowphase::NarrowPhaseResult r = vertex_face ? narrow_phase_->vertex_face(pair_rows(scene_->topology(), step.x0, step.x1, VertexFacePair{p.s[0], p.s[1]}), scene_->thickness())
-                                                             : narrow_phase_->edge_edge(pair_rows(scene_->topology(), step.x0, step.x1, edge_pair(p)), scene_->thickness());
-        if (!r.collides) continue;
+      if (status[i] == 2) on_host.push_back(i);
+    }
+    {
+      ScopedStageTimer timer(result.stages, "host narrow phase");
+      tbb::parallel_for(std::size_t{0}, on_host.size(), [&](std::size_t j) {
+        const std::size_t i = on_host[j];
+        const cl_uint4& p = pairs[i];
+        const narrowphase::NarrowPhaseResult r =
+            p.s[2] == kVertexFace ? narrow_phase_->vertex_face(pair_rows(scene_->topology(), step.x0, step.x1, VertexFacePair{p.s[0], p.s[1]}), scene_->thickness())
+                                  : narrow_phase_->edge_edge(pair_rows(scene_->topology(), step.x0, step.x1, edge_pair(p)), scene_->thickness());
+        status[i] = r.collides ? 1 : 0;
         toi[i] = r.toi;
-      }
-      if (vertex_face) {
+      });
+    }
+    for (std::size_t i = 0; i < kept; ++i) {
+      if (status[i] != 1) continue;
+      const cl_uint4& p = pairs[i];
+      if (p.s[2] == kVertexFace) {
         result.collisions.add(VertexFacePair{p.s[0], p.s[1]}, toi[i]);
       } else {
         result.collisions.add(edge_pair(p), toi[i]);
       }
     }
+    const std::size_t host_decided = on_host.size();
     result.collisions.normalize();
     for (const auto& [stage, milliseconds] : events.collect()) result.stages.add(stage, milliseconds);
     if (audit) result.tested = tested_pairs(elementary);
@@ -417,6 +445,7 @@ class FullOpenCl final : public Strategy {
   narrowphase::NarrowPhaseParameters parameters_;
   const Scene* scene_ = nullptr;
   std::unique_ptr<opencl::Context> context_;
+  long device_iterations_ = 0;
   std::size_t group_ = 256;
   bool tiny_ = false;
   std::size_t num_vertices_ = 0;
@@ -448,13 +477,13 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
 }
 
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, const std::string& narrow_phase_name,
-                                           const std::string& device_selector) {
+                                           const BackendChoice& backend) {
   if (narrow_phase_name != "conservative" && narrow_phase_name != "cubic64") {
     throw std::invalid_argument("full:backend=opencl runs the narrow phases conservative and cubic64, not " + narrow_phase_name);
   }
-  opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), device_selector);
+  opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), backend.device);
   opencl::require_double_precision(device);
-  return std::make_unique<FullOpenCl>(std::move(narrow_phase), narrow_phase_name, std::move(device));
+  return std::make_unique<FullOpenCl>(std::move(narrow_phase), narrow_phase_name, std::move(device), backend.device_iterations);
 }
 
 #else
@@ -464,7 +493,7 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
                               "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }
 
-std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const std::string&, const std::string&) {
+std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const std::string&, const BackendChoice&) {
   throw std::invalid_argument("backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
                               "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }

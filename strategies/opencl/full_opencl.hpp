@@ -36,18 +36,26 @@ struct OpenClDeviceSummary {
 /// Every OpenCL device, in device=INDEX order. @throws std::invalid_argument when this build has no OpenCL.
 std::vector<OpenClDeviceSummary> opencl_devices();
 
-/// The keys every OpenCL-capable strategy takes: backend=cpu|opencl and device=INDEX|NAME-SUBSTRING.
+/// The keys every OpenCL-capable strategy takes: backend=cpu|opencl, device=INDEX|NAME-SUBSTRING and
+/// device_iterations=N (iterations a work item spends on one conservative query before the host decides it,
+/// from the start and with the same code: the answers do not depend on it, only the time; 0: never).
 std::vector<std::string> backend_parameter_names();
 
-/// Removes backend= and device= from `parameters`; returns the backend ("cpu" by default) and the device selector.
-/// @throws std::invalid_argument for another backend, or device= without backend=opencl.
-std::pair<std::string, std::string> take_backend(std::map<std::string, std::string>& parameters);
+struct BackendChoice {
+  std::string backend = "cpu";
+  std::string device;
+  long device_iterations = 1000;
+};
+
+/// Removes the backend keys from `parameters` and returns them.
+/// @throws std::invalid_argument for another backend, an out-of-range count, or a device key without backend=opencl.
+BackendChoice take_backend(std::map<std::string, std::string>& parameters);
 
 /// Chooses the device (listing them) and checks it has what the kernels need, so a bad device is refused when the
 /// run is planned. The context, the program and the device's arithmetic self-test come at init().
 /// @throws std::invalid_argument for a narrow phase other than conservative and cubic64, a missing device, or a
 ///         device without (denormal-keeping) fp64; OpenClError when this build has no OpenCL.
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase,
-                                           const std::string& narrow_phase_name, const std::string& device_selector);
+                                           const std::string& narrow_phase_name, const BackendChoice& backend);
 
 }  // namespace ccd::strategies

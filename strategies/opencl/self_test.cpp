@@ -107,7 +107,7 @@ void check_device_arithmetic(Context& context) {
       const std::size_t at = 24 * i + 3 * static_cast<std::size_t>(k);
       r[k] = narrowphase::shared::f64::ccd_v3_make(rows[at], rows[at + 1], rows[at + 2]);
     }
-    const auto c = narrowphase::shared::f64::ccd_conservative_test(r, thickness[i], kinds[i], kTolerance, kMaxIterations,
+    const auto c = narrowphase::shared::f64::ccd_conservative_test(r, thickness[i], kinds[i], kTolerance, kMaxIterations, 0,
                                                                     storage.data(), static_cast<int>(storage.size()));
     const auto q = narrowphase::shared::f64::ccd_cubic_test(r, thickness[i], kEta, kinds[i]);
     const double host[6] = {static_cast<double>(c.collides), c.toi, c.achieved_tolerance, static_cast<double>(q.collides), q.toi, q.reach};

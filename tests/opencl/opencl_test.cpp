@@ -65,11 +65,13 @@ class OpenClParity : public ::testing::Test {
 
   /// Every scene of `suite` at its δ and at δ = 0, with `narrow` on both backends. Returns, per δ (scene's, 0)
   /// and narrow phase, how many scenes collided: a comparison of empty sets proves nothing.
-  std::vector<std::size_t> suite_at_both_thicknesses(const std::string& suite, const std::vector<std::string>& narrow_phases) {
+  std::vector<std::size_t> suite_at_both_thicknesses(const std::string& suite, const std::vector<std::string>& narrow_phases,
+                                                     std::size_t max_steps = 0) {
     std::vector<std::size_t> colliding_scenes(2 * narrow_phases.size(), 0);
     for (const harness::SceneSource& source : harness::suite_scenes(suite)) {
       const datasets::SceneSequence loaded = source.load();
-      const auto frames = all_frames(loaded);
+      auto frames = all_frames(loaded);
+      if (max_steps > 0 && frames.size() > max_steps + 1) frames.resize(max_steps + 1);
       for (std::size_t z = 0; z < 2; ++z) {
         const double thickness = z == 0 ? loaded.scene().thickness() : 0.0;
         const Scene scene = loaded.scene().with_thickness(thickness);
@@ -96,6 +98,16 @@ TEST_F(OpenClParity, TheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
 TEST_F(OpenClParity, TheDefaultSuiteGivesTheCpuAnswersAtBothThicknesses) {
   // Five of its six scenes collide at both δ; the flag at resolution 16 does not fold onto itself in 20 frames.
   for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"})) EXPECT_GE(scenes, 5u);
+}
+
+// On a GPU machine (scripts/device-opencl.sh): CCDBENCH_PARITY_SUITE=paper CCDBENCH_PARITY_STEPS=N runs the parity
+// above on a larger suite's first N steps (0: all), both narrow phases. Skipped unless asked for.
+TEST_F(OpenClParity, TheSuiteAskedForGivesTheCpuAnswersAtBothThicknesses) {
+  const char* suite = std::getenv("CCDBENCH_PARITY_SUITE");
+  if (suite == nullptr) GTEST_SKIP() << "set CCDBENCH_PARITY_SUITE (and CCDBENCH_PARITY_STEPS) to run it";
+  const char* steps = std::getenv("CCDBENCH_PARITY_STEPS");
+  const std::size_t max_steps = steps != nullptr ? std::stoul(steps) : 0;
+  for (const std::size_t scenes : suite_at_both_thicknesses(suite, {"conservative", "cubic64"}, max_steps)) EXPECT_GT(scenes, 0u);
 }
 
 // The two public steps of ../shared/data/scalable-ccd-sample (80k and 18k faces): δ = 0 and δ = 5% of the step's
@@ -130,6 +142,16 @@ TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
   ::unsetenv("CCDBENCH_OPENCL_TEST_TINY");
   EXPECT_GT(colliding, 0u);
   EXPECT_GT(host_decided, 0.0) << "no query overflowed its sub-boxes: the host's part was not exercised";
+}
+
+// Queries that run longer than device_iterations on the device are handed to the host: the same answers.
+TEST_F(OpenClParity, QueriesGivenUpByTheDeviceGetTheSameAnswersFromTheHost) {
+  const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
+  double host_decided = 0;
+  const std::size_t colliding =
+      expect_same_answers("full", "full:backend=opencl:device_iterations=8", loaded.scene(), all_frames(loaded), &host_decided);
+  EXPECT_GT(colliding, 0u);
+  EXPECT_GT(host_decided, 0.0) << "no query ran past 8 iterations: the hand-over was not exercised";
 }
 
 TEST(OpenClDevice, ADeviceWithoutDoublePrecisionIsRefusedSayingSo) {
@@ -172,6 +194,8 @@ TEST(OpenClDevice, TheResolvedSpecNamesTheDeviceAndWrongKeysAreRefused) {
   EXPECT_THROW(strategies::make_strategy("full+advancement:backend=opencl"), std::invalid_argument);
   EXPECT_THROW(strategies::make_strategy("full:backend=cuda"), std::invalid_argument);
   EXPECT_THROW(strategies::make_strategy("full:device=0"), std::invalid_argument);
+  EXPECT_THROW(strategies::make_strategy("full:backend=opencl:device_iterations=-1"), std::invalid_argument);
+  EXPECT_THROW(strategies::make_strategy("full:device_iterations=10"), std::invalid_argument);
   EXPECT_THROW(strategies::make_strategy("apccd:backend=opencl"), std::invalid_argument);
   EXPECT_EQ(strategies::make_strategy("full:backend=cpu")->name(), strategies::make_strategy("full")->name());
 }

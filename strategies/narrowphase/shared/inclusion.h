@@ -146,6 +146,10 @@ typedef struct {
   double exclusion_bound;
   long iterations;
   ccd_ulong created;
+  /* Iterations after which the search gives up and reports an overflow (0: never): the OpenCL backend hands long
+   * queries to the host, which runs them again from the start without the limit. */
+  long give_up_after;
+  int gave_up;
 } ccd_inclusion;
 
 enum { CCD_EXCLUDED = 0, CCD_ACCEPTED = 1, CCD_SPLIT = 2 };
@@ -173,9 +177,18 @@ static inline void ccd_inclusion_init(ccd_inclusion* s, const ccd_v3 rows[8], do
   s->exclusion_bound = thickness * thickness * (1 + CCD_EXCLUSION_RELATIVE_SLACK) + CCD_EXCLUSION_SUBNORMAL_SLACK;
   s->iterations = 0;
   s->created = 0;
+  s->give_up_after = 0;
+  s->gave_up = 0;
 }
 
-static inline int ccd_over_budget(ccd_inclusion* s) { return ++s->iterations > s->max_iterations; }
+static inline int ccd_over_budget(ccd_inclusion* s) {
+  ++s->iterations;
+  if (s->give_up_after > 0 && s->iterations > s->give_up_after) {
+    s->gave_up = 1;
+    return 1;
+  }
+  return s->iterations > s->max_iterations;
+}
 
 /* S, X, Y of F = S + u·X + v·Y from four points (see the top of this file). */
 static inline void ccd_split_terms(const ccd_inclusion* s, const ccd_v3 x[4], ccd_v3* S, ccd_v3* X, ccd_v3* Y) {
@@ -454,8 +467,9 @@ static inline int ccd_certify(const ccd_inclusion* s, double* earliest) {
   return found;
 }
 
-/* What a conservative test answers. overflow: the caller's sub-box storage was too small; nothing else is set, and
- * the caller reruns the test with more (the search is deterministic, so a rerun gives the answer it would have). */
+/* What a conservative test answers. overflow: the caller's sub-box storage was too small, or the search gave up
+ * after give_up_after iterations; nothing else is set, and the caller reruns the test with more room and no limit
+ * (the search is deterministic, so a rerun gives the answer it would have). */
 typedef struct {
   int collides;
   double toi;
@@ -478,7 +492,10 @@ static inline double ccd_earliest_possible(ccd_inclusion* s, double limit, long 
   root.order = s->created++;
   ccd_heap_push(storage, &size, root);
   while (size > 0) {
-    if (budget-- <= 0 || ccd_over_budget(s)) return storage[0].t0;
+    if (budget-- <= 0 || ccd_over_budget(s)) {
+      if (s->gave_up) *overflow = 1;
+      return storage[0].t0;
+    }
     const ccd_sub_box box = ccd_heap_pop(storage, &size);
     ccd_sub_box low, high;
     double achieved = 0;
@@ -534,6 +551,10 @@ static inline ccd_conservative_outcome ccd_full_search(ccd_inclusion* s, ccd_sub
     storage[size++] = high;
     storage[size++] = low;
   }
+  if (s->gave_up) {
+    result.overflow = 1;
+    return result;
+  }
   if (size == 0 && !isfinite(toi)) return result; /* every box excluded: proven no contact */
   result.collides = 1;
   ccd_heapify(storage, size);
@@ -556,6 +577,10 @@ static inline ccd_conservative_outcome ccd_full_search(ccd_inclusion* s, ccd_sub
     ccd_heap_push(storage, &size, low);
     ccd_heap_push(storage, &size, high);
   }
+  if (s->gave_up) {
+    result.overflow = 1;
+    return result;
+  }
   result.hit_iteration_cap = s->iterations > s->max_iterations;
   if (result.hit_iteration_cap) result.achieved_tolerance = INFINITY;
   result.toi = size == 0 ? toi : ccd_min(toi, storage[0].t0);
@@ -576,9 +601,10 @@ static inline int ccd_within_thickness_at_start(const ccd_v3 r[8], double thickn
 /* The whole conservative test of one pair (inclusion.hpp): rescale, stage 0, stage 1 (the whole domain at once
  * excludes far pairs), stage 2 (a cheap proof of a contact, then only a lower bound of its TOI with a small
  * budget), stage 3 (the full search). `storage` holds `capacity` sub-boxes; on overflow the caller retries with
- * more. Runs in round-to-nearest (the caller's duty on the host; the only mode on an OpenCL device). */
+ * more. give_up_after > 0 ends a long search with an overflow (the caller reruns it with 0). Runs in
+ * round-to-nearest (the caller's duty on the host; the only mode on an OpenCL device). */
 static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 original[8], double thickness_given, int vertex_face,
-                                                             double tolerance_fraction, long max_iterations,
+                                                             double tolerance_fraction, long max_iterations, long give_up_after,
                                                              ccd_sub_box* storage, int capacity) {
   ccd_conservative_outcome result;
   result.collides = 1;
@@ -595,6 +621,7 @@ static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 origin
   if (ccd_within_thickness_at_start(rows, thickness, vertex_face)) return result;
   ccd_inclusion search;
   ccd_inclusion_init(&search, rows, thickness, vertex_face, tolerance_fraction, max_iterations);
+  search.give_up_after = give_up_after;
   ccd_sub_box root, low, high;
   root.t0 = 0;
   root.t1 = 1;

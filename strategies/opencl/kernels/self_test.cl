@@ -21,7 +21,7 @@ kernel void self_test_pairs(uint count, global const double* rows, global const 
   for (int k = 0; k < 8; ++k) r[k] = ccd_v3_make(rows[24 * i + 3 * k], rows[24 * i + 3 * k + 1], rows[24 * i + 3 * k + 2]);
   ccd_sub_box storage[CCD_DEVICE_SUB_BOXES];
   const ccd_conservative_outcome c =
-      ccd_conservative_test(r, thickness[i], kinds[i], tolerance, max_iterations, storage, CCD_DEVICE_SUB_BOXES);
+      ccd_conservative_test(r, thickness[i], kinds[i], tolerance, max_iterations, 0, storage, CCD_DEVICE_SUB_BOXES);
   const ccd_cubic_outcome q = ccd_cubic_test(r, thickness[i], eta, kinds[i]);
   out[6 * i] = c.overflow ? -1.0 : (double)c.collides;
   out[6 * i + 1] = c.toi;

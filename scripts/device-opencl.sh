@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# The OpenCL report's runs on the GPU machine (reports/opencl/README.md): builds nothing, uses what
+# scripts/device-carry.sh put into device-carry/ (ccdbench, opencl_tests and the libraries they need). Registers
+# the machine's NVIDIA OpenCL driver (installed, not registered), then:
+#   1. parity: opencl_tests' OpenClParity tests on the first GPU (ci and default suites, both public steps, and
+#      the paper suite's first $PARITY_STEPS steps), every step's set and TOIs against the CPU's;
+#   2. the public steps: CPU full on 1 thread, CPU full on every core, and full:backend=opencl, conservative and
+#      cubic64, every step verified, median of 5 passes (1 for one thread);
+#   3. the paper suite's first $PAPER_STEPS steps, the same strategies, every step verified.
+# Writes every table and JSON summary to $OUT (default /tmp/ccdbench-opencl).
+# Usage (from the repository root): scripts/device-opencl.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/device-env.sh
+out=${OUT:-/tmp/ccdbench-opencl}
+mkdir -p "$out" /tmp/icd
+echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd
+export OCL_ICD_VENDORS=/tmp/icd
+export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-cache}
+threads=$(nproc)
+bin=device-carry/bin
+data=${CCDBENCH_DATA_DIR:-device-carry/data}
+PARITY_STEPS=${PARITY_STEPS:-10}
+PAPER_STEPS=${PAPER_STEPS:-20}
+
+{ nproc; lscpu | grep -E 'Model name|^CPU\(s\)'; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true; } > "$out/machine.txt" 2>&1
+"$bin/ccdbench" --version >> "$out/machine.txt"
+"$bin/ccdbench" devices | tee "$out/devices.txt"
+
+echo "== parity (opencl_tests on the first GPU)"
+start=$SECONDS
+CCDBENCH_DATA_DIR=$data CCDBENCH_REQUIRE_DATA=1 CCDBENCH_PARITY_SUITE=paper CCDBENCH_PARITY_STEPS=$PARITY_STEPS \
+  "$bin/opencl_tests" --gtest_filter='OpenClParity.*' 2>&1 | tee "$out/parity.txt" | grep -E '^\[ +(OK|FAILED|PASSED) ' || true
+echo "parity: $((SECONDS - start)) s" | tee -a "$out/parity.txt"
+
+frames() { echo "$data/scalable-ccd-sample/$1/frames/$2.ply $data/scalable-ccd-sample/$1/frames/$3.ply"; }
+gpu="full:backend=opencl,full+cubic64:backend=opencl"
+for step in "rod-twist 3036 3037" "cloth-funnel 227 228"; do
+  set -- $step
+  echo "== $1 $2 -> $3"
+  "$bin/ccdbench" --threads 1 run --frames $(frames "$1" "$2" "$3") --strategy full,full+cubic64 \
+    --out "$out/runs" --json "$out/$1-1thread.json" 2>/dev/null | tee "$out/$1-1thread.txt"
+  "$bin/ccdbench" --threads "$threads" run --frames $(frames "$1" "$2" "$3") --repeat 5 --strategy "full,full+cubic64,$gpu" \
+    --out "$out/runs" --json "$out/$1-${threads}threads.json" 2>/dev/null | tee "$out/$1-${threads}threads.txt"
+done
+
+echo "== paper suite, first $PAPER_STEPS steps"
+"$bin/ccdbench" --threads 1 run --suite paper --max-steps "$PAPER_STEPS" --strategy full \
+  --out "$out/runs" --json "$out/paper-1thread.json" 2>/dev/null | tee "$out/paper-1thread.txt"
+"$bin/ccdbench" --threads "$threads" run --suite paper --max-steps "$PAPER_STEPS" --strategy "full,full+cubic64,$gpu" \
+  --out "$out/runs" --json "$out/paper-${threads}threads.json" 2>/dev/null | tee "$out/paper-${threads}threads.txt"
+rm -rf "$out/runs"
+echo "done: $out"
