@@ -6,7 +6,9 @@
 #      the paper suite's first $PARITY_STEPS steps), every step's set and TOIs against the CPU's;
 #   2. the public steps: CPU full on 1 thread, CPU full on every core, and full:backend=opencl, conservative and
 #      cubic64, every step verified, median of 5 passes (1 for one thread);
-#   3. the paper suite's first $PAPER_STEPS steps, the same strategies, every step verified.
+#   3. the paper suite's first $PAPER_STEPS steps, the same strategies, every step verified;
+#   4. the stand-in for a step with tens of millions of elementary candidates: the kinematic fold at resolution
+#      $BIG_RESOLUTION with δ = $BIG_THICKNESS (several edge lengths), parity on its first step, then timings.
 # Writes every table and JSON summary to $OUT (default /tmp/ccdbench-opencl).
 # Usage (from the repository root): scripts/device-opencl.sh
 set -euo pipefail
@@ -22,6 +24,8 @@ bin=device-carry/bin
 data=${CCDBENCH_DATA_DIR:-device-carry/data}
 PARITY_STEPS=${PARITY_STEPS:-10}
 PAPER_STEPS=${PAPER_STEPS:-20}
+BIG_RESOLUTION=${BIG_RESOLUTION:-300}
+BIG_THICKNESS=${BIG_THICKNESS:-0.015}
 
 { nproc; lscpu | grep -E 'Model name|^CPU\(s\)'; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true; } > "$out/machine.txt" 2>&1
 "$bin/ccdbench" --version >> "$out/machine.txt"
@@ -49,5 +53,11 @@ echo "== paper suite, first $PAPER_STEPS steps"
   --out "$out/runs" --json "$out/paper-1thread.json" 2>/dev/null | tee "$out/paper-1thread.txt"
 "$bin/ccdbench" --threads "$threads" run --suite paper --max-steps "$PAPER_STEPS" --strategy "full,full+cubic64,$gpu" \
   --out "$out/runs" --json "$out/paper-${threads}threads.json" 2>/dev/null | tee "$out/paper-${threads}threads.txt"
+echo "== fold r$BIG_RESOLUTION, δ = $BIG_THICKNESS"
+"$bin/ccdbench" generate fold --resolution "$BIG_RESOLUTION" --frames 4 --out /tmp/ccdbench-fold > /dev/null
+CCDBENCH_PARITY_SCENE=/tmp/ccdbench-fold/scene.json CCDBENCH_PARITY_THICKNESS=$BIG_THICKNESS CCDBENCH_PARITY_STEPS=1 \
+  "$bin/opencl_tests" --gtest_filter='*TheSceneAskedFor*' 2>&1 | tee "$out/big-parity.txt" | grep -E '^\[ +(OK|FAILED|counts) ' || true
+"$bin/ccdbench" --threads "$threads" run --scene /tmp/ccdbench-fold --thickness "$BIG_THICKNESS" --max-steps 3 --verify none \
+  --strategy "full,full+cubic64,$gpu" --out "$out/runs" --json "$out/big-${threads}threads.json" 2>/dev/null | tee "$out/big-${threads}threads.txt"
 rm -rf "$out/runs"
 echo "done: $out"

@@ -10,6 +10,7 @@
 #include "strategies/opencl/self_test.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 #include <tbb/parallel_sort.h>
 #endif
 
@@ -206,9 +207,40 @@ class FullOpenCl final : public Strategy {
     download(context, out_pairs_, pairs.data(), kept, events.add("download"));
     download(context, out_status_, status.data(), kept, events.add("download"));
     download(context, out_toi_, toi.data(), kept, events.add("download"));
-    // Queries the device handed back (out of sub-boxes or iterations): the same code on the host, in parallel.
-    std::vector<std::size_t> on_host;
+    // Queries the device gave up on (past device_iterations, or out of sub-boxes). Many of them: a second device
+    // pass without the iteration limit, all at once, so that long queries run side by side; few: the host, whose
+    // threads run one long query many times faster than a work item does. Either way the same code decides them.
+    std::vector<std::size_t> given_up;
     for (std::size_t i = 0; i < kept; ++i) {
+      if (status[i] == 2) given_up.push_back(i);
+    }
+    const std::size_t host_threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+    std::size_t second_pass = 0;
+    if (narrow_phase_name_ == "conservative" && given_up.size() > kHostQueriesPerThread * host_threads) {
+      second_pass = given_up.size();
+      std::vector<cl_uint4> retry(given_up.size());
+      for (std::size_t j = 0; j < given_up.size(); ++j) retry[j] = pairs[given_up[j]];
+      upload(context, retry_pairs_, retry.data(), retry.size(), events.add("narrow phase"));
+      retry_status_.reserve(context, retry.size());
+      retry_toi_.reserve(context, retry.size() * sizeof(double));
+      cl_kernel kernel = context.kernel("narrow_conservative");
+      const cl_double tolerance = std::stod(parameters_.at("tolerance"));
+      const cl_long max_iterations = std::stol(parameters_.at("max_iterations"));
+      const cl_long no_limit = 0;
+      set_arguments(kernel, static_cast<cl_uint>(retry.size()), retry_pairs_.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(),
+                    tolerance, max_iterations, no_limit, retry_status_.get(), retry_toi_.get());
+      launch(context, kernel, retry.size(), narrow_group(kernel), events.add("narrow phase"));
+      std::vector<cl_uchar> retry_status(retry.size());
+      std::vector<double> retry_toi(retry.size());
+      download(context, retry_status_, retry_status.data(), retry.size(), events.add("download"));
+      download(context, retry_toi_, retry_toi.data(), retry.size(), events.add("download"));
+      for (std::size_t j = 0; j < given_up.size(); ++j) {
+        status[given_up[j]] = retry_status[j];
+        toi[given_up[j]] = retry_toi[j];
+      }
+    }
+    std::vector<std::size_t> on_host;
+    for (const std::size_t i : given_up) {
       if (status[i] == 2) on_host.push_back(i);
     }
     {
@@ -241,12 +273,19 @@ class FullOpenCl final : public Strategy {
     result.counters.candidate_triangle_pairs = candidates;
     result.counters.elementary_tests = elementary;
     result.counters.history_bytes = device_bytes();
+    result.counters.extra.emplace_back("device_given_up_pairs", static_cast<double>(given_up.size()));
+    result.counters.extra.emplace_back("device_second_pass_pairs", static_cast<double>(second_pass));
     result.counters.extra.emplace_back("host_decided_pairs", static_cast<double>(host_decided));
     return result;
   }
 
  private:
   static constexpr cl_uint kVertexFace = 0xFFFFFFFFu;
+  /// Given-up queries per host thread below which the host decides them, above which a second device pass does:
+  /// a long query (up to the 20,000-iteration cap) takes a host thread about 1 ms and a work item about 10, so the
+  /// host wins while it has fewer than some tens per thread (measured on the H100 machine: cloth-funnel hands back
+  /// a few hundred, rod-twist thousands; reports/opencl).
+  static constexpr std::size_t kHostQueriesPerThread = 64;
   /// Each candidate yields at most 15 elementary pairs (6 vertex-face, 9 edge-edge): this keeps their count in 32 bits.
   static constexpr std::size_t kMaxCandidatesPerStep = 0xFFFFFFFFull / 15;
   /// Depth the traversal kernel's stack holds (CCD_TRAVERSAL_STACK in kernels/full.cl).
@@ -433,7 +472,7 @@ class FullOpenCl final : public Strategy {
     for (const Buffer* b : {&x_[0], &x_[1], &faces_, &face_edges_, &edges_, &masks_, &node_boxes_, &children_, &node_face_,
                             &all_leaves_buffer_, &moving_leaves_buffer_, &all_levels_, &moving_levels_, &q_leaf_, &q_face_, &q_root_,
                             &q_self_, &vertex_boxes_, &counter_, &candidates_, &elementary_, &status_, &toi_, &out_pairs_, &out_status_,
-                            &out_toi_}) {
+                            &out_toi_, &retry_pairs_, &retry_status_, &retry_toi_}) {
       total += b->bytes();
     }
     return total;
@@ -457,7 +496,7 @@ class FullOpenCl final : public Strategy {
   std::vector<std::size_t> level_offsets_all_, level_offsets_moving_;
   Buffer x_[2], faces_, face_edges_, edges_, masks_, node_boxes_, children_, node_face_, all_leaves_buffer_, moving_leaves_buffer_,
       all_levels_, moving_levels_, q_leaf_, q_face_, q_root_, q_self_, vertex_boxes_, counter_, candidates_, elementary_, status_, toi_,
-      out_pairs_, out_status_, out_toi_;
+      out_pairs_, out_status_, out_toi_, retry_pairs_, retry_status_, retry_toi_;
 };
 
 }  // namespace

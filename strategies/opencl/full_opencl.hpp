@@ -37,14 +37,15 @@ struct OpenClDeviceSummary {
 std::vector<OpenClDeviceSummary> opencl_devices();
 
 /// The keys every OpenCL-capable strategy takes: backend=cpu|opencl, device=INDEX|NAME-SUBSTRING and
-/// device_iterations=N (iterations a work item spends on one conservative query before the host decides it,
-/// from the start and with the same code: the answers do not depend on it, only the time; 0: never).
+/// device_iterations=N (iterations a work item spends on one conservative query before giving it up to a second
+/// pass, on the device or the host, that decides it from the start with the same code: the answers do not depend
+/// on it, only the time; 0: never give up).
 std::vector<std::string> backend_parameter_names();
 
 struct BackendChoice {
   std::string backend = "cpu";
   std::string device;
-  long device_iterations = 1000;
+  long device_iterations = 200;
 };
 
 /// Removes the backend keys from `parameters` and returns them.

@@ -3,6 +3,7 @@
 // refused. Every comparison asserts that its steps collide, or it would compare empty sets.
 
 #include "datasets/sample_step.hpp"
+#include "datasets/scene_file.hpp"
 #include "harness/run.hpp"
 #include "strategies/opencl/full_opencl.hpp"
 #include "strategies/opencl/runtime.hpp"
@@ -15,6 +16,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <iostream>
+#include <map>
 
 namespace ccd {
 namespace {
@@ -22,9 +25,9 @@ namespace {
 bool same_toi(double a, double b) { return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof(double)) == 0; }
 
 /// Runs `cpu` and `device` over every step of `frames`; fails on the first step whose sets or TOIs differ. Returns
-/// the number of colliding pairs over all steps (the caller asserts it is not 0) and adds the host-decided pairs.
+/// the number of colliding pairs over all steps (the caller asserts it is not 0) and adds up the device's counters.
 std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& device_spec, const Scene& scene,
-                                const std::vector<std::vector<Vec3>>& frames, double* host_decided = nullptr) {
+                                const std::vector<std::vector<Vec3>>& frames, std::map<std::string, double>* counters = nullptr) {
   auto cpu = strategies::make_strategy(cpu_spec);
   auto device = strategies::make_strategy(device_spec);
   cpu->init(scene, frames[0]);
@@ -45,8 +48,13 @@ std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& 
       EXPECT_TRUE(same_toi(a.collisions.edge_edge()[i].toi, b.collisions.edge_edge()[i].toi)) << "edge-edge TOI " << i;
     }
     colliding += a.collisions.size();
+    if (counters != nullptr) {
+      (*counters)["candidates"] += static_cast<double>(b.counters.candidate_triangle_pairs);
+      (*counters)["elementary_tests"] += static_cast<double>(b.counters.elementary_tests);
+      (*counters)["colliding"] += static_cast<double>(b.collisions.size());
+    }
     for (const auto& [name, value] : b.counters.extra) {
-      if (name == "host_decided_pairs" && host_decided != nullptr) *host_decided += value;
+      if (counters != nullptr) (*counters)[name] += value;
     }
   }
   return colliding;
@@ -110,6 +118,28 @@ TEST_F(OpenClParity, TheSuiteAskedForGivesTheCpuAnswersAtBothThicknesses) {
   for (const std::size_t scenes : suite_at_both_thicknesses(suite, {"conservative", "cubic64"}, max_steps)) EXPECT_GT(scenes, 0u);
 }
 
+// The stand-in for a public step with tens of millions of elementary candidates (scripts/device-opencl.sh: a
+// generated fold of a few hundred thousand triangles at a δ of several edge lengths): CCDBENCH_PARITY_SCENE=FILE,
+// CCDBENCH_PARITY_THICKNESS=δ, CCDBENCH_PARITY_STEPS=N, both narrow phases. Skipped unless asked for.
+TEST_F(OpenClParity, TheSceneAskedForGivesTheCpuAnswers) {
+  const char* file = std::getenv("CCDBENCH_PARITY_SCENE");
+  if (file == nullptr) GTEST_SKIP() << "set CCDBENCH_PARITY_SCENE (and CCDBENCH_PARITY_THICKNESS, CCDBENCH_PARITY_STEPS) to run it";
+  const datasets::SceneSequence loaded = datasets::load_scene_file(file);
+  const char* thickness = std::getenv("CCDBENCH_PARITY_THICKNESS");
+  const Scene scene = loaded.scene().with_thickness(thickness != nullptr ? std::stod(thickness) : loaded.scene().thickness());
+  const char* steps = std::getenv("CCDBENCH_PARITY_STEPS");
+  auto frames = all_frames(loaded);
+  if (steps != nullptr && std::stoul(steps) > 0 && frames.size() > std::stoul(steps) + 1) frames.resize(std::stoul(steps) + 1);
+  for (const std::string narrow : {"conservative", "cubic64"}) {
+    SCOPED_TRACE(narrow);
+    std::map<std::string, double> counters;
+    EXPECT_GT(expect_same_answers("full+" + narrow, "full+" + narrow + ":backend=opencl", scene, frames, &counters), 0u);
+    std::cout << "[ counts   ] " << narrow << ": " << frames.size() - 1 << " steps";
+    for (const auto& [name, value] : counters) std::cout << ", " << name << " " << value;
+    std::cout << '\n';
+  }
+}
+
 // The two public steps of ../shared/data/scalable-ccd-sample (80k and 18k faces): δ = 0 and δ = 5% of the step's
 // mean edge length.
 TEST_F(OpenClParity, ThePublicStepsGiveTheCpuAnswersAtBothThicknesses) {
@@ -137,21 +167,31 @@ TEST_F(OpenClParity, ThePublicStepsGiveTheCpuAnswersAtBothThicknesses) {
 TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
   ::setenv("CCDBENCH_OPENCL_TEST_TINY", "1", 1);
   const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
-  double host_decided = 0;
-  const std::size_t colliding = expect_same_answers("full", "full:backend=opencl", loaded.scene(), all_frames(loaded), &host_decided);
+  std::map<std::string, double> counters;
+  const std::size_t colliding = expect_same_answers("full", "full:backend=opencl", loaded.scene(), all_frames(loaded), &counters);
   ::unsetenv("CCDBENCH_OPENCL_TEST_TINY");
   EXPECT_GT(colliding, 0u);
-  EXPECT_GT(host_decided, 0.0) << "no query overflowed its sub-boxes: the host's part was not exercised";
+  EXPECT_GT(counters["host_decided_pairs"], 0.0) << "no query overflowed its sub-boxes: the host's part was not exercised";
 }
 
-// Queries that run longer than device_iterations on the device are handed to the host: the same answers.
-TEST_F(OpenClParity, QueriesGivenUpByTheDeviceGetTheSameAnswersFromTheHost) {
+// Queries that run longer than device_iterations on the device are given up: a few go to the host, many to a
+// second device pass without the limit. The same answers either way.
+TEST_F(OpenClParity, QueriesGivenUpByTheDeviceGetTheSameAnswers) {
   const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
-  double host_decided = 0;
-  const std::size_t colliding =
-      expect_same_answers("full", "full:backend=opencl:device_iterations=8", loaded.scene(), all_frames(loaded), &host_decided);
-  EXPECT_GT(colliding, 0u);
-  EXPECT_GT(host_decided, 0.0) << "no query ran past 8 iterations: the hand-over was not exercised";
+  for (const char* limit : {"1", "8", "64"}) {
+    SCOPED_TRACE(std::string("device_iterations=") + limit);
+    std::map<std::string, double> counters;
+    const std::size_t colliding = expect_same_answers("full", std::string("full:backend=opencl:device_iterations=") + limit,
+                                                      loaded.scene(), all_frames(loaded), &counters);
+    EXPECT_GT(colliding, 0u);
+    EXPECT_GT(counters["device_given_up_pairs"], 0.0) << "no query ran past the limit: the hand-over was not exercised";
+    if (std::string(limit) == "1") {
+      EXPECT_GT(counters["device_second_pass_pairs"], 0.0) << "the second device pass did not run";
+    }
+    if (std::string(limit) == "64") {
+      EXPECT_GT(counters["host_decided_pairs"], 0.0) << "the host decided nothing";
+    }
+  }
 }
 
 TEST(OpenClDevice, ADeviceWithoutDoublePrecisionIsRefusedSayingSo) {
