@@ -9,13 +9,17 @@
 #   3. the paper suite's first $PAPER_STEPS steps, the same strategies, every step verified;
 #   4. the stand-in for a step with tens of millions of elementary candidates: the kinematic fold at resolution
 #      $BIG_RESOLUTION with δ = $BIG_THICKNESS (several edge lengths), parity on its first step, then timings.
-# Writes every table and JSON summary to $OUT (default /tmp/ccdbench-opencl).
+# PARTS chooses among "parity public paper big" (default: all). Writes every table and JSON summary to a work
+# folder and, when $OUT is set (the device's return folder), packs them into $OUT/opencl-device.tgz.
 # Usage (from the repository root): scripts/device-opencl.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/device-env.sh
-out=${OUT:-/tmp/ccdbench-opencl}
+out=/tmp/ccdbench-opencl
+PARTS=${PARTS:-parity public paper big}
 mkdir -p "$out" /tmp/icd
+pack() { if [ -n "${OUT:-}" ]; then rm -rf "$out/runs"; tar czf "$OUT/opencl-device.tgz" -C "$out" .; fi; }
+trap pack EXIT
 echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd
 export OCL_ICD_VENDORS=/tmp/icd
 export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-cache}
@@ -24,21 +28,26 @@ bin=device-carry/bin
 data=${CCDBENCH_DATA_DIR:-device-carry/data}
 PARITY_STEPS=${PARITY_STEPS:-10}
 PAPER_STEPS=${PAPER_STEPS:-20}
-BIG_RESOLUTION=${BIG_RESOLUTION:-300}
-BIG_THICKNESS=${BIG_THICKNESS:-0.015}
+PAPER_STEPS_ONE_THREAD=${PAPER_STEPS_ONE_THREAD:-5}
+BIG_RESOLUTION=${BIG_RESOLUTION:-250}
+BIG_THICKNESS=${BIG_THICKNESS:-0.018}
 
 { nproc; lscpu | grep -E 'Model name|^CPU\(s\)'; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true; } > "$out/machine.txt" 2>&1
 "$bin/ccdbench" --version >> "$out/machine.txt"
 "$bin/ccdbench" devices | tee "$out/devices.txt"
 
+part() { [[ " $PARTS " == *" $1 "* ]]; }
+if part parity; then
 echo "== parity (opencl_tests on the first GPU)"
 start=$SECONDS
 CCDBENCH_DATA_DIR=$data CCDBENCH_REQUIRE_DATA=1 CCDBENCH_PARITY_SUITE=paper CCDBENCH_PARITY_STEPS=$PARITY_STEPS \
   "$bin/opencl_tests" --gtest_filter='OpenClParity.*' 2>&1 | tee "$out/parity.txt" | grep -E '^\[ +(OK|FAILED|PASSED) ' || true
 echo "parity: $((SECONDS - start)) s" | tee -a "$out/parity.txt"
+fi
 
 frames() { echo "$data/scalable-ccd-sample/$1/frames/$2.ply $data/scalable-ccd-sample/$1/frames/$3.ply"; }
 gpu="full:backend=opencl,full+cubic64:backend=opencl"
+if part public; then
 for step in "rod-twist 3036 3037" "cloth-funnel 227 228"; do
   set -- $step
   echo "== $1 $2 -> $3"
@@ -47,17 +56,22 @@ for step in "rod-twist 3036 3037" "cloth-funnel 227 228"; do
   "$bin/ccdbench" --threads "$threads" run --frames $(frames "$1" "$2" "$3") --repeat 5 --strategy "full,full+cubic64,$gpu" \
     --out "$out/runs" --json "$out/$1-${threads}threads.json" 2>/dev/null | tee "$out/$1-${threads}threads.txt"
 done
+fi
 
+if part paper; then
 echo "== paper suite, first $PAPER_STEPS steps"
-"$bin/ccdbench" --threads 1 run --suite paper --max-steps "$PAPER_STEPS" --strategy full \
+"$bin/ccdbench" --threads 1 run --suite paper --max-steps "$PAPER_STEPS_ONE_THREAD" --strategy full \
   --out "$out/runs" --json "$out/paper-1thread.json" 2>/dev/null | tee "$out/paper-1thread.txt"
 "$bin/ccdbench" --threads "$threads" run --suite paper --max-steps "$PAPER_STEPS" --strategy "full,full+cubic64,$gpu" \
   --out "$out/runs" --json "$out/paper-${threads}threads.json" 2>/dev/null | tee "$out/paper-${threads}threads.txt"
+fi
+
+if part big; then
 echo "== fold r$BIG_RESOLUTION, δ = $BIG_THICKNESS"
 "$bin/ccdbench" generate fold --resolution "$BIG_RESOLUTION" --frames 4 --out /tmp/ccdbench-fold > /dev/null
 CCDBENCH_PARITY_SCENE=/tmp/ccdbench-fold/scene.json CCDBENCH_PARITY_THICKNESS=$BIG_THICKNESS CCDBENCH_PARITY_STEPS=1 \
   "$bin/opencl_tests" --gtest_filter='*TheSceneAskedFor*' 2>&1 | tee "$out/big-parity.txt" | grep -E '^\[ +(OK|FAILED|counts) ' || true
 "$bin/ccdbench" --threads "$threads" run --scene /tmp/ccdbench-fold --thickness "$BIG_THICKNESS" --max-steps 3 --verify none \
   --strategy "full,full+cubic64,$gpu" --out "$out/runs" --json "$out/big-${threads}threads.json" 2>/dev/null | tee "$out/big-${threads}threads.txt"
-rm -rf "$out/runs"
+fi
 echo "done: $out"
