@@ -207,36 +207,33 @@ class FullOpenCl final : public Strategy {
     download(context, out_pairs_, pairs.data(), kept, events.add("download"));
     download(context, out_status_, status.data(), kept, events.add("download"));
     download(context, out_toi_, toi.data(), kept, events.add("download"));
-    // Queries the device gave up on (past device_iterations, or out of sub-boxes). Many of them: a second device
-    // pass without the iteration limit, all at once, so that long queries run side by side; few: the host, whose
-    // threads run one long query many times faster than a work item does. Either way the same code decides them.
+    // Queries the device gave up on (past device_iterations, or out of sub-boxes), decided by the same code in
+    // tiers: a second device pass that gives up after kSecondPassIterations (most finish there, side by side),
+    // then the rest, long queries up to the iteration cap, either in a device pass without a limit or on the host,
+    // whose threads run one long query several times faster than a work item does but are few.
     std::vector<std::size_t> given_up;
     for (std::size_t i = 0; i < kept; ++i) {
       if (status[i] == 2) given_up.push_back(i);
     }
     const std::size_t host_threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-    std::size_t second_pass = 0;
-    if (narrow_phase_name_ == "conservative" && given_up.size() > kHostQueriesPerThread * host_threads) {
-      second_pass = given_up.size();
-      std::vector<cl_uint4> retry(given_up.size());
-      for (std::size_t j = 0; j < given_up.size(); ++j) retry[j] = pairs[given_up[j]];
-      upload(context, retry_pairs_, retry.data(), retry.size(), events.add("narrow phase"));
-      retry_status_.reserve(context, retry.size());
-      retry_toi_.reserve(context, retry.size() * sizeof(double));
-      cl_kernel kernel = context.kernel("narrow_conservative");
-      const cl_double tolerance = std::stod(parameters_.at("tolerance"));
-      const cl_long max_iterations = std::stol(parameters_.at("max_iterations"));
-      const cl_long no_limit = 0;
-      set_arguments(kernel, static_cast<cl_uint>(retry.size()), retry_pairs_.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(),
-                    tolerance, max_iterations, no_limit, retry_status_.get(), retry_toi_.get());
-      launch(context, kernel, retry.size(), narrow_group(kernel), events.add("narrow phase"));
-      std::vector<cl_uchar> retry_status(retry.size());
-      std::vector<double> retry_toi(retry.size());
-      download(context, retry_status_, retry_status.data(), retry.size(), events.add("download"));
-      download(context, retry_toi_, retry_toi.data(), retry.size(), events.add("download"));
-      for (std::size_t j = 0; j < given_up.size(); ++j) {
-        status[given_up[j]] = retry_status[j];
-        toi[given_up[j]] = retry_toi[j];
+    std::size_t second_pass = 0, third_pass = 0;
+    if (narrow_phase_name_ == "conservative") {
+      auto still_given_up = [&] {
+        std::vector<std::size_t> left;
+        for (const std::size_t i : given_up) {
+          if (status[i] == 2) left.push_back(i);
+        }
+        return left;
+      };
+      std::vector<std::size_t> left = given_up;
+      if (left.size() > kHostQueriesPerThread * host_threads) {
+        second_pass = left.size();
+        device_pass(context, events, left, kSecondPassIterations, pairs, status, toi, x0, x1);
+        left = still_given_up();
+      }
+      if (left.size() > kHostQueriesPerThread * host_threads) {
+        third_pass = left.size();
+        device_pass(context, events, left, 0, pairs, status, toi, x0, x1);
       }
     }
     std::vector<std::size_t> on_host;
@@ -275,17 +272,48 @@ class FullOpenCl final : public Strategy {
     result.counters.history_bytes = device_bytes();
     result.counters.extra.emplace_back("device_given_up_pairs", static_cast<double>(given_up.size()));
     result.counters.extra.emplace_back("device_second_pass_pairs", static_cast<double>(second_pass));
+    result.counters.extra.emplace_back("device_third_pass_pairs", static_cast<double>(third_pass));
     result.counters.extra.emplace_back("host_decided_pairs", static_cast<double>(host_decided));
     return result;
   }
 
  private:
   static constexpr cl_uint kVertexFace = 0xFFFFFFFFu;
-  /// Given-up queries per host thread below which the host decides them, above which a second device pass does.
-  /// A second pass costs about the longest query on a work item (10 to 30 ms on the H200 at the 20,000-iteration
-  /// cap); the host pays about 1 to 2 ms per long query and thread. At 64 per thread the host took 65 to 92 ms on
-  /// three paper scenes (reports/opencl), so the host keeps only what it finishes in about 10 ms.
-  static constexpr std::size_t kHostQueriesPerThread = 8;
+  /// Given-up queries per host thread up to which the host decides them rather than another device pass. A pass
+  /// costs about its longest query on a work item (10 to 30 ms on the H200 at the 20,000-iteration cap, a few ms
+  /// at kSecondPassIterations); a host thread runs a query at the cap in about 10 ms, shorter ones in well under
+  /// one (reports/opencl: with the host taking up to 64 per thread, three paper scenes spent 65-92 ms there).
+  static constexpr std::size_t kHostQueriesPerThread = 2;
+  /// The second device pass gives up after this many iterations: the queries that cloth-funnel hands back finish
+  /// within it, side by side; what is left runs to the cap.
+  static constexpr long kSecondPassIterations = 4000;
+
+  /// Runs the conservative kernel again over the pairs `which` (indices into pairs) with give_up_after `limit`
+  /// (0: none), and stores their status and TOI.
+  void device_pass(opencl::Context& context, opencl::StageEvents& events, const std::vector<std::size_t>& which, long limit,
+                   const std::vector<cl_uint4>& pairs, std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0,
+                   const Buffer& x1) {
+    std::vector<cl_uint4> retry(which.size());
+    for (std::size_t j = 0; j < which.size(); ++j) retry[j] = pairs[which[j]];
+    upload(context, retry_pairs_, retry.data(), retry.size(), events.add("narrow phase"));
+    retry_status_.reserve(context, retry.size());
+    retry_toi_.reserve(context, retry.size() * sizeof(double));
+    cl_kernel kernel = context.kernel("narrow_conservative");
+    const cl_double tolerance = std::stod(parameters_.at("tolerance"));
+    const cl_long max_iterations = std::stol(parameters_.at("max_iterations"));
+    const cl_long give_up_after = limit;
+    set_arguments(kernel, static_cast<cl_uint>(retry.size()), retry_pairs_.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(),
+                  tolerance, max_iterations, give_up_after, retry_status_.get(), retry_toi_.get());
+    launch(context, kernel, retry.size(), narrow_group(kernel), events.add("narrow phase"));
+    std::vector<cl_uchar> retry_status(retry.size());
+    std::vector<double> retry_toi(retry.size());
+    download(context, retry_status_, retry_status.data(), retry.size(), events.add("download"));
+    download(context, retry_toi_, retry_toi.data(), retry.size(), events.add("download"));
+    for (std::size_t j = 0; j < which.size(); ++j) {
+      status[which[j]] = retry_status[j];
+      toi[which[j]] = retry_toi[j];
+    }
+  }
   /// Each candidate yields at most 15 elementary pairs (6 vertex-face, 9 edge-edge): this keeps their count in 32 bits.
   static constexpr std::size_t kMaxCandidatesPerStep = 0xFFFFFFFFull / 15;
   /// Depth the traversal kernel's stack holds (CCD_TRAVERSAL_STACK in kernels/full.cl).
