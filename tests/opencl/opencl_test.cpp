@@ -144,7 +144,13 @@ TEST_F(OpenClParity, TheSceneAskedForGivesTheCpuAnswers) {
 // mean edge length.
 TEST_F(OpenClParity, ThePublicStepsGiveTheCpuAnswersAtBothThicknesses) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
-  for (const char* name : {"cloth-funnel", "rod-twist"}) {
+  std::vector<const char*> names{"cloth-funnel", "rod-twist"};
+#if defined(__SANITIZE_ADDRESS__)
+  // Under AddressSanitizer rod-twist's two δ take nearly four minutes of CI's two cores; the Release run of CI
+  // compares it, and cloth-funnel runs the same code here.
+  names.pop_back();
+#endif
+  for (const char* name : names) {
     const datasets::SampleStep sample = datasets::load_sample_step(data / "scalable-ccd-sample" / name);
     double length = 0;
     for (EdgeId e = 0; e < sample.topology.num_edges(); ++e) {
