@@ -70,7 +70,7 @@ TEST(StrategyFactory, SpecsResolveAndErrorsAreClear) {
   EXPECT_THROW(make_strategy("full:nf_max=3"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full:oops"), std::invalid_argument);
   const std::string unknown = testing::error_message<std::invalid_argument>([] { make_strategy("full:nf_max=3"); });
-  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: none; narrow phase conservative's: "
+  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations; narrow phase conservative's: "
                          "tolerance, max_iterations)"), std::string::npos) << unknown;
 }
 
