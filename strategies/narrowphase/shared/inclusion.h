@@ -94,6 +94,18 @@ typedef struct {
   ccd_ulong order; /* ties broken by creation order, so the search is deterministic */
 } ccd_sub_box;
 
+static inline ccd_sub_box ccd_sub_box_make(double t0, double t1, double u0, double u1, double v0, double v1, ccd_ulong order) {
+  ccd_sub_box box;
+  box.t0 = t0;
+  box.t1 = t1;
+  box.u0 = u0;
+  box.u1 = u1;
+  box.v0 = v0;
+  box.v1 = v1;
+  box.order = order;
+  return box;
+}
+
 /* Earliest first: the order of the search's priority queues (a strict total order, so every heap pops alike). */
 static inline int ccd_earlier(const ccd_sub_box* a, const ccd_sub_box* b) {
   return a->t0 != b->t0 ? a->t0 < b->t0 : a->order < b->order;
@@ -365,14 +377,7 @@ static inline double ccd_m3_row_dot(const ccd_m3* a, int i, ccd_v3 x) {
 /* Miranda's theorem in a small box around (t, u, v): returns 1 and the box's t0 in *toi when it proves a zero. */
 static inline int ccd_miranda(const ccd_inclusion* s, double t, double u, double v, ccd_v3 dS, ccd_v3 dX, ccd_v3 dY, double* toi) {
   const double w = CCD_MIRANDA_HALF_WIDTH;
-  ccd_sub_box box;
-  box.t0 = t - w;
-  box.t1 = t + w;
-  box.u0 = u - w;
-  box.u1 = u + w;
-  box.v0 = v - w;
-  box.v1 = v + w;
-  box.order = 0;
+  const ccd_sub_box box = ccd_sub_box_make(t - w, t + w, u - w, u + w, v - w, v + w, 0);
   if (box.t0 < 0 || box.t1 > 1 || !ccd_in_domain(s, box.u0, box.v0) || !ccd_in_domain(s, box.u1, box.v1) ||
       !ccd_in_domain(s, box.u0, box.v1) || !ccd_in_domain(s, box.u1, box.v0)) {
     return 0;
@@ -478,19 +483,21 @@ typedef struct {
   int overflow;
 } ccd_conservative_outcome;
 
+static inline ccd_conservative_outcome ccd_outcome_make(int collides, double toi, double achieved_tolerance) {
+  ccd_conservative_outcome outcome;
+  outcome.collides = collides;
+  outcome.toi = toi;
+  outcome.hit_iteration_cap = 0;
+  outcome.achieved_tolerance = achieved_tolerance;
+  outcome.overflow = 0;
+  return outcome;
+}
+
 /* A lower bound of the earliest contact: boxes with t < limit are examined earliest first; the first one that
  * cannot be excluded (or whatever remains when the budget runs out) bounds the TOI from below. */
 static inline double ccd_earliest_possible(ccd_inclusion* s, double limit, long budget, ccd_sub_box* storage, int capacity, int* overflow) {
   int size = 0;
-  ccd_sub_box root;
-  root.t0 = 0;
-  root.t1 = limit;
-  root.u0 = 0;
-  root.u1 = 1;
-  root.v0 = 0;
-  root.v1 = 1;
-  root.order = s->created++;
-  ccd_heap_push(storage, &size, root);
+  ccd_heap_push(storage, &size, ccd_sub_box_make(0, limit, 0, 1, 0, 1, s->created++));
   while (size > 0) {
     if (budget-- <= 0 || ccd_over_budget(s)) {
       if (s->gave_up) *overflow = 1;
@@ -517,22 +524,9 @@ static inline double ccd_earliest_possible(ccd_inclusion* s, double limit, long 
  * quickly; then, since a contact in a pending box lies at t >= its t0, the TOI is the smallest t0 of an accepted
  * box or a pending one: boxes that start earlier than the TOI found so far are examined, earliest first. */
 static inline ccd_conservative_outcome ccd_full_search(ccd_inclusion* s, ccd_sub_box* storage, int capacity) {
-  ccd_conservative_outcome result;
-  result.collides = 0;
-  result.toi = NAN;
-  result.hit_iteration_cap = 0;
-  result.achieved_tolerance = 0;
-  result.overflow = 0;
+  ccd_conservative_outcome result = ccd_outcome_make(0, NAN, 0);
   int size = 0;
-  ccd_sub_box root;
-  root.t0 = 0;
-  root.t1 = 1;
-  root.u0 = 0;
-  root.u1 = 1;
-  root.v0 = 0;
-  root.v1 = 1;
-  root.order = s->created++;
-  storage[size++] = root;
+  storage[size++] = ccd_sub_box_make(0, 1, 0, 1, 0, 1, s->created++);
   double toi = INFINITY;
   while (size > 0) {
     if (ccd_over_budget(s)) break;
@@ -606,12 +600,7 @@ static inline int ccd_within_thickness_at_start(const ccd_v3 r[8], double thickn
 static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 original[8], double thickness_given, int vertex_face,
                                                              double tolerance_fraction, long max_iterations, long give_up_after,
                                                              ccd_sub_box* storage, int capacity) {
-  ccd_conservative_outcome result;
-  result.collides = 1;
-  result.toi = 0;
-  result.hit_iteration_cap = 0;
-  result.achieved_tolerance = INFINITY;
-  result.overflow = 0;
+  ccd_conservative_outcome result = ccd_outcome_make(1, 0, INFINITY);
   ccd_v3 rows[8];
   for (int i = 0; i < 8; ++i) rows[i] = original[i];
   double thickness = thickness_given;
@@ -622,14 +611,8 @@ static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 origin
   ccd_inclusion search;
   ccd_inclusion_init(&search, rows, thickness, vertex_face, tolerance_fraction, max_iterations);
   search.give_up_after = give_up_after;
-  ccd_sub_box root, low, high;
-  root.t0 = 0;
-  root.t1 = 1;
-  root.u0 = 0;
-  root.u1 = 1;
-  root.v0 = 0;
-  root.v1 = 1;
-  root.order = 0;
+  const ccd_sub_box root = ccd_sub_box_make(0, 1, 0, 1, 0, 1, 0);
+  ccd_sub_box low, high;
   double achieved = 0;
   ccd_over_budget(&search);
   if (ccd_examine(&search, &root, &low, &high, &achieved) == CCD_EXCLUDED) {
