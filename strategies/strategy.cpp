@@ -74,7 +74,7 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
     std::map<std::string, std::string> parameters = parsed.parameters;
     const BackendChoice backend = parsed.name == "full" ? take_backend(parameters) : BackendChoice{};
     auto narrow_phase = narrowphase::make_narrow_phase(parsed.narrow_phase, parameters);
-    if (backend.backend == "opencl") return make_full_opencl(std::move(narrow_phase), parsed.narrow_phase, backend);
+    if (backend.backend == "opencl") return make_full_opencl(std::move(narrow_phase), parsed.narrow_phase, parameters, backend);
     return parsed.name == "full" ? make_full_traversal(std::move(narrow_phase)) : make_brute_force(std::move(narrow_phase));
   }
   if (parsed.name == "apccd") {

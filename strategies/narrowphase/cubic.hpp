@@ -14,6 +14,10 @@ struct CubicSettings {
   double eta = 1e-6;
 };
 
+/// The settings of `name` (cubic32 or cubic64) from its spec keys, with the ranges make_narrow_phase checks.
+/// @throws std::invalid_argument for an unknown key or a value out of range.
+CubicSettings read_cubic_settings(const std::string& name, const NarrowPhaseParameters& parameters);
+
 /// `single_precision`: every computation in float (cubic32); otherwise double (cubic64).
 std::unique_ptr<NarrowPhase> make_cubic(bool single_precision, const CubicSettings& settings);
 

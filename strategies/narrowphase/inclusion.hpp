@@ -16,6 +16,10 @@ struct InclusionSettings {
   long max_iterations = 20000;
 };
 
+/// The settings from `conservative`'s spec keys, with the ranges make_narrow_phase checks.
+/// @throws std::invalid_argument for an unknown key or a value out of range.
+InclusionSettings read_inclusion_settings(const NarrowPhaseParameters& parameters);
+
 std::unique_ptr<NarrowPhase> make_inclusion(const InclusionSettings& settings);
 
 }  // namespace ccd::narrowphase

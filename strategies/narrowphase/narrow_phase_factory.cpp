@@ -70,21 +70,27 @@ std::vector<std::string> narrow_phase_parameter_names(const std::string& name) {
 
 std::vector<std::string> narrow_phase_names() { return {"cubic32", "cubic64", "conservative", "advancement"}; }
 
-std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const NarrowPhaseParameters& parameters) {
+CubicSettings read_cubic_settings(const std::string& name, const NarrowPhaseParameters& parameters) {
   ParameterReader reader(name, parameters);
-  if (name == "cubic32" || name == "cubic64") {
-    CubicSettings settings;
-    settings.eta = reader.number("eta", settings.eta, kFractionRange);
-    reader.finish("eta");
-    return make_cubic(name == "cubic32", settings);
-  }
-  if (name == "conservative") {
-    InclusionSettings settings;
-    settings.tolerance = reader.number("tolerance", settings.tolerance, kFractionRange);
-    settings.max_iterations = static_cast<long>(reader.number("max_iterations", static_cast<double>(settings.max_iterations), kIterationRange));
-    reader.finish("tolerance, max_iterations");
-    return make_inclusion(settings);
-  }
+  CubicSettings settings;
+  settings.eta = reader.number("eta", settings.eta, kFractionRange);
+  reader.finish("eta");
+  return settings;
+}
+
+InclusionSettings read_inclusion_settings(const NarrowPhaseParameters& parameters) {
+  ParameterReader reader("conservative", parameters);
+  InclusionSettings settings;
+  settings.tolerance = reader.number("tolerance", settings.tolerance, kFractionRange);
+  settings.max_iterations = static_cast<long>(reader.number("max_iterations", static_cast<double>(settings.max_iterations), kIterationRange));
+  reader.finish("tolerance, max_iterations");
+  return settings;
+}
+
+std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const NarrowPhaseParameters& parameters) {
+  if (name == "cubic32" || name == "cubic64") return make_cubic(name == "cubic32", read_cubic_settings(name, parameters));
+  if (name == "conservative") return make_inclusion(read_inclusion_settings(parameters));
+  ParameterReader reader(name, parameters);
   if (name == "advancement") {
     AdvancementSettings settings;
     settings.eta = reader.number("eta", settings.eta, kFractionRange);

@@ -3,6 +3,8 @@
 #include "ccd/config.hpp"
 #include "core/assignment.hpp"
 #include "strategies/bvh/bvh.hpp"
+#include "strategies/narrowphase/cubic.hpp"
+#include "strategies/narrowphase/inclusion.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 
 #if CCDBENCH_WITH_OPENCL
@@ -64,32 +66,22 @@ std::size_t group_size_for(const opencl::DeviceInfo& device) {
   return group;
 }
 
-template <class T>
-void upload(opencl::Context& context, Buffer& buffer, const T* data, std::size_t count, cl_event* event = nullptr) {
-  buffer.reserve(context, std::max<std::size_t>(count, 1) * sizeof(T));
-  if (count == 0) return;
-  check(clEnqueueWriteBuffer(context.queue(), buffer.get(), CL_FALSE, 0, count * sizeof(T), data, 0, nullptr, event), "clEnqueueWriteBuffer");
-}
-
-template <class T>
-void download(opencl::Context& context, const Buffer& buffer, T* data, std::size_t count, cl_event* event = nullptr) {
-  if (count == 0) return;
-  check(clEnqueueReadBuffer(context.queue(), buffer.get(), CL_TRUE, 0, count * sizeof(T), data, 0, nullptr, event), "clEnqueueReadBuffer");
-}
-
-/// What the device returns for one compacted pair.
-struct DevicePair {
-  cl_uint4 ids;
-  cl_uchar status;
-  double toi;
-};
+using opencl::download;
+using opencl::upload;
 
 class FullOpenCl final : public Strategy {
  public:
-  FullOpenCl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, std::string narrow_phase_name, opencl::DeviceInfo device,
-             long device_iterations)
+  /// `parameters`: the narrow phase's spec keys, read here as the CPU's factory reads them (every digit).
+  FullOpenCl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, std::string narrow_phase_name,
+             const narrowphase::NarrowPhaseParameters& parameters, opencl::DeviceInfo device, long device_iterations)
       : narrow_phase_(std::move(narrow_phase)), narrow_phase_name_(std::move(narrow_phase_name)), device_(std::move(device)),
-        parameters_(narrowphase::split_spec(narrow_phase_->name()).second), device_iterations_(device_iterations) {}
+        device_iterations_(device_iterations) {
+    if (narrow_phase_name_ == "conservative") {
+      inclusion_ = narrowphase::read_inclusion_settings(parameters);
+    } else {
+      cubic_ = narrowphase::read_cubic_settings(narrow_phase_name_, parameters);
+    }
+  }
 
   std::string name() const override {
     return "full+" + narrow_phase_->name() + ":backend=opencl:device=" + device_.name +
@@ -131,7 +123,7 @@ class FullOpenCl final : public Strategy {
     // Static objects are fitted once, here, over frame 0 (as the CPU does): every leaf and every level now.
     upload(*context_, x_[0], first_frame.data()->data(), 3 * num_vertices_);
     upload(*context_, x_[1], first_frame.data()->data(), 3 * num_vertices_);
-    refit(all_leaves_, all_levels_, level_offsets_all_, x_[0], x_[1], nullptr);
+    refit(all_, x_[0], x_[1], nullptr);
     context_->finish();
     last_step_ = static_cast<std::size_t>(-1);
   }
@@ -154,7 +146,7 @@ class FullOpenCl final : public Strategy {
       set_arguments(kernel, static_cast<cl_uint>(num_vertices_), x0.get(), x1.get(), half, vertex_boxes_.get());
       launch(context, kernel, num_vertices_, group_, events.add("boxes"));
     }
-    refit(moving_leaves_, moving_levels_, level_offsets_moving_, x0, x1, &events);
+    refit(moving_, x0, x1, &events);
 
     // Traversal: candidate triangle pairs.
     const std::size_t candidates = fill_list(context, "traverse", query_count_, candidates_, sizeof(cl_uint2), candidate_capacity_,
@@ -179,16 +171,10 @@ class FullOpenCl final : public Strategy {
     status_.reserve(context, std::max<std::size_t>(elementary, 1));
     toi_.reserve(context, std::max<std::size_t>(elementary, 1) * sizeof(double));
     if (narrow_phase_name_ == "conservative") {
-      cl_kernel kernel = context.kernel("narrow_conservative");
-      const cl_double tolerance = std::stod(parameters_.at("tolerance"));
-      const cl_long max_iterations = std::stol(parameters_.at("max_iterations"));
-      const cl_long give_up_after = device_iterations_;
-      set_arguments(kernel, static_cast<cl_uint>(elementary), elementary_.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(),
-                    tolerance, max_iterations, give_up_after, status_.get(), toi_.get());
-      launch(context, kernel, elementary, narrow_group(kernel), events.add("narrow phase"));
+      launch_conservative(elementary_, elementary, device_iterations_, status_, toi_, x0, x1, events);
     } else {
       cl_kernel kernel = context.kernel("narrow_cubic");
-      const cl_double eta = std::stod(parameters_.at("eta"));
+      const cl_double eta = cubic_.eta;
       set_arguments(kernel, static_cast<cl_uint>(elementary), elementary_.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), eta,
                     status_.get(), toi_.get());
       launch(context, kernel, elementary, narrow_group(kernel), events.add("narrow phase"));
@@ -288,6 +274,18 @@ class FullOpenCl final : public Strategy {
   /// within it, side by side; what is left runs to the cap.
   static constexpr long kSecondPassIterations = 4000;
 
+  /// The conservative kernel over the first `count` pairs of `pairs`, giving up after `limit` iterations (0: never),
+  /// writing `status` and `toi` (sized by the caller).
+  void launch_conservative(const Buffer& pairs, std::size_t count, long limit, const Buffer& status, const Buffer& toi, const Buffer& x0,
+                           const Buffer& x1, opencl::StageEvents& events) {
+    cl_kernel kernel = context_->kernel("narrow_conservative");
+    const cl_double tolerance = inclusion_.tolerance;
+    const cl_long max_iterations = inclusion_.max_iterations, give_up_after = limit;
+    set_arguments(kernel, static_cast<cl_uint>(count), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), tolerance,
+                  max_iterations, give_up_after, status.get(), toi.get());
+    launch(*context_, kernel, count, narrow_group(kernel), events.add("narrow phase"));
+  }
+
   /// Runs the conservative kernel again over the pairs `which` (indices into pairs) with give_up_after `limit`
   /// (0: none), and stores their status and TOI.
   void device_pass(opencl::Context& context, opencl::StageEvents& events, const std::vector<std::size_t>& which, long limit,
@@ -298,13 +296,7 @@ class FullOpenCl final : public Strategy {
     upload(context, retry_pairs_, retry.data(), retry.size(), events.add("narrow phase"));
     retry_status_.reserve(context, retry.size());
     retry_toi_.reserve(context, retry.size() * sizeof(double));
-    cl_kernel kernel = context.kernel("narrow_conservative");
-    const cl_double tolerance = std::stod(parameters_.at("tolerance"));
-    const cl_long max_iterations = std::stol(parameters_.at("max_iterations"));
-    const cl_long give_up_after = limit;
-    set_arguments(kernel, static_cast<cl_uint>(retry.size()), retry_pairs_.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(),
-                  tolerance, max_iterations, give_up_after, retry_status_.get(), retry_toi_.get());
-    launch(context, kernel, retry.size(), narrow_group(kernel), events.add("narrow phase"));
+    launch_conservative(retry_pairs_, retry.size(), limit, retry_status_, retry_toi_, x0, x1, events);
     std::vector<cl_uchar> retry_status(retry.size());
     std::vector<double> retry_toi(retry.size());
     download(context, retry_status_, retry_status.data(), retry.size(), events.add("download"));
@@ -373,27 +365,26 @@ class FullOpenCl final : public Strategy {
     // Leaves, and internal nodes grouped by depth, deepest first (children before parents).
     cl_uint max_depth = 0;
     for (cl_uint d : depth) max_depth = std::max(max_depth, d);
-    all_leaves_.clear();
-    moving_leaves_.clear();
+    std::vector<cl_uint> leaves_all, leaves_moving;
     std::vector<std::vector<cl_uint>> by_depth(max_depth + 1);
     for (std::size_t n = 0; n < node_count; ++n) {
       if (children[n].s[0] < 0) {
-        all_leaves_.push_back(static_cast<cl_uint>(n));
-        if (moving_node[n]) moving_leaves_.push_back(static_cast<cl_uint>(n));
+        leaves_all.push_back(static_cast<cl_uint>(n));
+        if (moving_node[n]) leaves_moving.push_back(static_cast<cl_uint>(n));
       } else {
         by_depth[depth[n]].push_back(static_cast<cl_uint>(n));
       }
     }
     std::vector<cl_uint> levels_all, levels_moving;
-    level_offsets_all_.assign(1, 0);
-    level_offsets_moving_.assign(1, 0);
+    all_.level_offsets.assign(1, 0);
+    moving_.level_offsets.assign(1, 0);
     for (std::size_t d = by_depth.size(); d-- > 0;) {
       for (cl_uint n : by_depth[d]) {
         levels_all.push_back(n);
         if (moving_node[n]) levels_moving.push_back(n);
       }
-      level_offsets_all_.push_back(levels_all.size());
-      level_offsets_moving_.push_back(levels_moving.size());
+      all_.level_offsets.push_back(levels_all.size());
+      moving_.level_offsets.push_back(levels_moving.size());
     }
     // Queries: each face of a self-colliding object against its own tree; for each collidable pair, the faces of
     // the larger object against the smaller one's tree (the other way round, a two-triangle ground would be two
@@ -426,10 +417,12 @@ class FullOpenCl final : public Strategy {
     node_boxes_.reserve(context, std::max<std::size_t>(node_count, 1) * 6 * sizeof(double));
     upload(context, children_, children.data(), children.size());
     upload(context, node_face_, node_face.data(), node_face.size());
-    upload(context, all_leaves_buffer_, all_leaves_.data(), all_leaves_.size());
-    upload(context, moving_leaves_buffer_, moving_leaves_.data(), moving_leaves_.size());
-    upload(context, all_levels_, levels_all.data(), levels_all.size());
-    upload(context, moving_levels_, levels_moving.data(), levels_moving.size());
+    all_.leaf_count = leaves_all.size();
+    moving_.leaf_count = leaves_moving.size();
+    upload(context, all_.leaves, leaves_all.data(), leaves_all.size());
+    upload(context, moving_.leaves, leaves_moving.data(), leaves_moving.size());
+    upload(context, all_.levels, levels_all.data(), levels_all.size());
+    upload(context, moving_.levels, levels_moving.data(), levels_moving.size());
     upload(context, q_leaf_, q_leaf.data(), q_leaf.size());
     upload(context, q_face_, q_face.data(), q_face.size());
     upload(context, q_root_, q_root.data(), q_root.size());
@@ -441,19 +434,27 @@ class FullOpenCl final : public Strategy {
     context.finish();
   }
 
-  /// Leaf boxes of `leaves` over x0 -> x1, then each level of `levels` (deepest first).
-  void refit(const std::vector<cl_uint>& leaves, const Buffer& levels, const std::vector<std::size_t>& offsets, const Buffer& x0,
-             const Buffer& x1, opencl::StageEvents* events) {
+  /// What a refit covers: every node (at init, static objects included) or the moving objects' nodes (per step).
+  struct RefitPlan {
+    Buffer leaves;
+    std::size_t leaf_count = 0;
+    /// Internal nodes, deepest level first; level i is [level_offsets[i], level_offsets[i + 1]).
+    Buffer levels;
+    std::vector<std::size_t> level_offsets;
+  };
+
+  /// The plan's leaf boxes over x0 -> x1, then each of its levels (deepest first).
+  void refit(const RefitPlan& plan, const Buffer& x0, const Buffer& x1, opencl::StageEvents* events) {
     opencl::Context& context = *context_;
-    const Buffer& leaf_list = &leaves == &all_leaves_ ? all_leaves_buffer_ : moving_leaves_buffer_;
     cl_kernel boxes = context.kernel("leaf_boxes");
-    set_arguments(boxes, static_cast<cl_uint>(leaves.size()), leaf_list.get(), node_face_.get(), faces_.get(), x0.get(), x1.get(),
+    set_arguments(boxes, static_cast<cl_uint>(plan.leaf_count), plan.leaves.get(), node_face_.get(), faces_.get(), x0.get(), x1.get(),
                   scene_->thickness() / 2, node_boxes_.get());
-    launch(context, boxes, leaves.size(), group_, events != nullptr ? events->add("boxes") : nullptr);
+    launch(context, boxes, plan.leaf_count, group_, events != nullptr ? events->add("boxes") : nullptr);
     cl_kernel level = context.kernel("refit_level");
+    const std::vector<std::size_t>& offsets = plan.level_offsets;
     for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
       const std::size_t count = offsets[i + 1] - offsets[i];
-      set_arguments(level, static_cast<cl_uint>(count), static_cast<cl_uint>(offsets[i]), levels.get(), children_.get(), node_boxes_.get());
+      set_arguments(level, static_cast<cl_uint>(count), static_cast<cl_uint>(offsets[i]), plan.levels.get(), children_.get(), node_boxes_.get());
       launch(context, level, count, group_, events != nullptr ? events->add("refit") : nullptr);
     }
   }
@@ -499,7 +500,7 @@ class FullOpenCl final : public Strategy {
   std::size_t device_bytes() const {
     std::size_t total = 0;
     for (const Buffer* b : {&x_[0], &x_[1], &faces_, &face_edges_, &edges_, &masks_, &node_boxes_, &children_, &node_face_,
-                            &all_leaves_buffer_, &moving_leaves_buffer_, &all_levels_, &moving_levels_, &q_leaf_, &q_face_, &q_root_,
+                            &all_.leaves, &moving_.leaves, &all_.levels, &moving_.levels, &q_leaf_, &q_face_, &q_root_,
                             &q_self_, &vertex_boxes_, &counter_, &candidates_, &elementary_, &status_, &toi_, &out_pairs_, &out_status_,
                             &out_toi_, &retry_pairs_, &retry_status_, &retry_toi_}) {
       total += b->bytes();
@@ -510,7 +511,8 @@ class FullOpenCl final : public Strategy {
   std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
   std::string narrow_phase_name_;
   opencl::DeviceInfo device_;
-  narrowphase::NarrowPhaseParameters parameters_;
+  narrowphase::InclusionSettings inclusion_;
+  narrowphase::CubicSettings cubic_;
   const Scene* scene_ = nullptr;
   std::unique_ptr<opencl::Context> context_;
   long device_iterations_ = 0;
@@ -521,10 +523,8 @@ class FullOpenCl final : public Strategy {
   std::size_t current_ = 0;
   std::size_t last_step_ = static_cast<std::size_t>(-1);
   std::size_t candidate_capacity_ = 0, elementary_capacity_ = 0, out_capacity_ = 0;
-  std::vector<cl_uint> all_leaves_, moving_leaves_;
-  std::vector<std::size_t> level_offsets_all_, level_offsets_moving_;
-  Buffer x_[2], faces_, face_edges_, edges_, masks_, node_boxes_, children_, node_face_, all_leaves_buffer_, moving_leaves_buffer_,
-      all_levels_, moving_levels_, q_leaf_, q_face_, q_root_, q_self_, vertex_boxes_, counter_, candidates_, elementary_, status_, toi_,
+  RefitPlan all_, moving_;
+  Buffer x_[2], faces_, face_edges_, edges_, masks_, node_boxes_, children_, node_face_, q_leaf_, q_face_, q_root_, q_self_, vertex_boxes_, counter_, candidates_, elementary_, status_, toi_,
       out_pairs_, out_status_, out_toi_, retry_pairs_, retry_status_, retry_toi_;
 };
 
@@ -545,13 +545,13 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
 }
 
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, const std::string& narrow_phase_name,
-                                           const BackendChoice& backend) {
+                                           const narrowphase::NarrowPhaseParameters& parameters, const BackendChoice& backend) {
   if (narrow_phase_name != "conservative" && narrow_phase_name != "cubic64") {
     throw std::invalid_argument("full:backend=opencl runs the narrow phases conservative and cubic64, not " + narrow_phase_name);
   }
   opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), backend.device);
   opencl::require_double_precision(device);
-  return std::make_unique<FullOpenCl>(std::move(narrow_phase), narrow_phase_name, std::move(device), backend.device_iterations);
+  return std::make_unique<FullOpenCl>(std::move(narrow_phase), narrow_phase_name, parameters, std::move(device), backend.device_iterations);
 }
 
 #else
@@ -561,7 +561,8 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
                               "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }
 
-std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const std::string&, const BackendChoice&) {
+std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const std::string&,
+                                           const narrowphase::NarrowPhaseParameters&, const BackendChoice&) {
   throw std::invalid_argument("backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
                               "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }

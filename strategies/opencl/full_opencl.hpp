@@ -56,7 +56,9 @@ BackendChoice take_backend(std::map<std::string, std::string>& parameters);
 /// run is planned. The context, the program and the device's arithmetic self-test come at init().
 /// @throws std::invalid_argument for a narrow phase other than conservative and cubic64, a missing device, or a
 ///         device without (denormal-keeping) fp64; OpenClError when this build has no OpenCL.
+/// `parameters`: the narrow phase's own spec keys, which the kernels read as the CPU narrow phase does.
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase,
-                                           const std::string& narrow_phase_name, const BackendChoice& backend);
+                                           const std::string& narrow_phase_name, const narrowphase::NarrowPhaseParameters& parameters,
+                                           const BackendChoice& backend);
 
 }  // namespace ccd::strategies

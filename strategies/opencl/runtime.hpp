@@ -124,6 +124,21 @@ void set_arguments(cl_kernel kernel, const Arguments&... arguments) {
   (check(clSetKernelArg(kernel, index++, sizeof(Arguments), &arguments), "clSetKernelArg"), ...);
 }
 
+/// Writes `count` values to `buffer` (grown to hold them; at least one entry) without waiting.
+template <class T>
+void upload(Context& context, Buffer& buffer, const T* data, std::size_t count, cl_event* event = nullptr) {
+  buffer.reserve(context, (count > 0 ? count : 1) * sizeof(T));
+  if (count == 0) return;
+  check(clEnqueueWriteBuffer(context.queue(), buffer.get(), CL_FALSE, 0, count * sizeof(T), data, 0, nullptr, event), "clEnqueueWriteBuffer");
+}
+
+/// Reads the first `count` values of `buffer`, waiting for them.
+template <class T>
+void download(Context& context, const Buffer& buffer, T* data, std::size_t count, cl_event* event = nullptr) {
+  if (count == 0) return;
+  check(clEnqueueReadBuffer(context.queue(), buffer.get(), CL_TRUE, 0, count * sizeof(T), data, 0, nullptr, event), "clEnqueueReadBuffer");
+}
+
 /// Enqueues `kernel` over `items` work items (rounded up to whole groups of `group`; group 0 lets the implementation
 /// choose); nothing for 0 items.
 void launch(Context& context, cl_kernel kernel, std::size_t items, std::size_t group, cl_event* event);

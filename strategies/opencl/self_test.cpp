@@ -26,20 +26,6 @@ std::string hex(double value) {
   return out.str();
 }
 
-template <class T>
-void write(Context& context, Buffer& buffer, const std::vector<T>& values) {
-  buffer.reserve(context, values.size() * sizeof(T));
-  check(clEnqueueWriteBuffer(context.queue(), buffer.get(), CL_TRUE, 0, values.size() * sizeof(T), values.data(), 0, nullptr, nullptr),
-        "clEnqueueWriteBuffer");
-}
-
-std::vector<double> read(Context& context, Buffer& buffer, std::size_t count) {
-  std::vector<double> values(count);
-  check(clEnqueueReadBuffer(context.queue(), buffer.get(), CL_TRUE, 0, count * sizeof(double), values.data(), 0, nullptr, nullptr),
-        "clEnqueueReadBuffer");
-  return values;
-}
-
 [[noreturn]] void refuse(const Context& context, const std::string& what) {
   throw std::invalid_argument("OpenCL device " + std::to_string(context.device().index) + " (" + context.device().name +
                               ") does not compute what the host computes: " + what +
@@ -56,12 +42,13 @@ void check_device_arithmetic(Context& context) {
   const char* meaning[5] = {"a*b+c was contracted into a fused multiply-add", "a subnormal double was flushed to zero",
                             "subnormal arithmetic is not exact", "sqrt is not correctly rounded", "division is not correctly rounded"};
   Buffer input, output;
-  write(context, input, in);
+  upload(context, input, in.data(), in.size());
   output.reserve(context, 5 * sizeof(double));
   cl_kernel arithmetic = context.kernel("self_test_arithmetic");
   set_arguments(arithmetic, input.get(), output.get());
   launch(context, arithmetic, 1, 1, nullptr);
-  const std::vector<double> got = read(context, output, 5);
+  std::vector<double> got(5);
+  download(context, output, got.data(), got.size());
   for (int i = 0; i < 5; ++i) {
     if (!same_bits(got[static_cast<std::size_t>(i)], expected[i])) {
       refuse(context, std::string(meaning[i]) + " (got " + hex(got[static_cast<std::size_t>(i)]) + ", the host " + hex(expected[i]) + ")");
@@ -87,9 +74,9 @@ void check_device_arithmetic(Context& context) {
     kinds[i] = static_cast<int>(i % 2);
   }
   Buffer rows_buffer, kinds_buffer, thickness_buffer, out_buffer;
-  write(context, rows_buffer, rows);
-  write(context, kinds_buffer, kinds);
-  write(context, thickness_buffer, thickness);
+  upload(context, rows_buffer, rows.data(), rows.size());
+  upload(context, kinds_buffer, kinds.data(), kinds.size());
+  upload(context, thickness_buffer, thickness.data(), thickness.size());
   out_buffer.reserve(context, kPairs * 6 * sizeof(double));
   cl_kernel pairs = context.kernel("self_test_pairs");
   const cl_uint count = static_cast<cl_uint>(kPairs);
@@ -97,7 +84,8 @@ void check_device_arithmetic(Context& context) {
   const cl_long max_iterations = kMaxIterations;
   set_arguments(pairs, count, rows_buffer.get(), kinds_buffer.get(), thickness_buffer.get(), tolerance, max_iterations, eta, out_buffer.get());
   launch(context, pairs, kPairs, 64, nullptr);
-  const std::vector<double> device = read(context, out_buffer, kPairs * 6);
+  std::vector<double> device(kPairs * 6);
+  download(context, out_buffer, device.data(), device.size());
 
   const narrowphase::RoundToNearest rounding;
   std::vector<narrowphase::shared::f64::ccd_sub_box> storage(1 << 16);

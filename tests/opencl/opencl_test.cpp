@@ -198,6 +198,18 @@ TEST_F(OpenClParity, QueriesGivenUpByTheDeviceGetTheSameAnswers) {
   }
 }
 
+// Narrow-phase keys reach the kernels as the CPU reads them, every digit (the resolved spec prints 6).
+TEST_F(OpenClParity, NarrowPhaseKeysReachTheDeviceWithEveryDigit) {
+  const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
+  for (const char* keys : {":tolerance=3.3333333333e-4:max_iterations=1234567", "+cubic64:eta=3.3333333333e-4"}) {
+    SCOPED_TRACE(keys);
+    const std::string cpu = std::string("full") + keys;
+    const std::string head = keys[0] == '+' ? std::string("full+cubic64") : std::string("full");
+    const std::string device = head + ":backend=opencl" + (keys[0] == '+' ? std::string(keys).substr(8) : std::string(keys));
+    EXPECT_GT(expect_same_answers(cpu, device, loaded.scene(), all_frames(loaded)), 0u);
+  }
+}
+
 TEST(OpenClDevice, ADeviceWithoutDoublePrecisionIsRefusedSayingSo) {
   opencl::DeviceInfo device;
   device.name = "a float-only GPU";
