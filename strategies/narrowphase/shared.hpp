@@ -31,6 +31,7 @@ using std::nextafter;
 using std::sqrt;
 #include "strategies/narrowphase/shared/geometry.h"
 #include "strategies/narrowphase/shared/inclusion.h"
+#include "strategies/narrowphase/shared/separation.h"
 }  // namespace f64
 namespace f32 {
 using ccd_real = float;

@@ -117,6 +117,7 @@ std::vector<DeviceInfo> list_devices() {
       const std::string extensions = device_string(id, CL_DEVICE_EXTENSIONS);
       info.fp64 = fp64 != 0 && extensions.find("cl_khr_fp64") != std::string::npos;
       info.fp64_denormals = (fp64 & CL_FP_DENORM) != 0;
+      info.int64_atomics = extensions.find("cl_khr_int64_base_atomics") != std::string::npos;
       info.id = id;
       devices.push_back(std::move(info));
     }
@@ -232,6 +233,19 @@ void Context::finish() { check(clFinish(queue_), "clFinish"); }
 
 Buffer::~Buffer() {
   if (memory_ != nullptr) clReleaseMemObject(memory_);
+}
+
+void Buffer::reserve_keeping(Context& context, std::size_t bytes, std::size_t keep) {
+  if (bytes <= bytes_ && memory_ != nullptr) return;
+  Buffer old;
+  std::swap(old.memory_, memory_);
+  std::swap(old.bytes_, bytes_);
+  reserve(context, std::max(bytes, old.bytes_ + old.bytes_ / 2));
+  keep = std::min(keep, old.bytes_);
+  if (keep > 0) {
+    check(clEnqueueCopyBuffer(context.queue(), old.memory_, memory_, 0, 0, keep, 0, nullptr, nullptr), "clEnqueueCopyBuffer");
+    context.finish();  // the old buffer is released below
+  }
 }
 
 void Buffer::reserve(Context& context, std::size_t bytes) {

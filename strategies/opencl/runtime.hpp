@@ -41,6 +41,8 @@ struct DeviceInfo {
   bool fp64 = false;
   /// CL_FP_DENORM in CL_DEVICE_DOUBLE_FP_CONFIG: subnormal doubles are kept, not flushed.
   bool fp64_denormals = false;
+  /// cl_khr_int64_base_atomics: apccd's pending list is a hash table of 64-bit pair keys.
+  bool int64_atomics = false;
   cl_device_id id = nullptr;
 };
 
@@ -93,6 +95,8 @@ class Buffer {
   Buffer& operator=(const Buffer&) = delete;
   /// Ensures room for `bytes` (contents are lost when it grows: by half again, to spare later steps a reallocation).
   void reserve(Context& context, std::size_t bytes);
+  /// The same, but a grown buffer keeps its first `keep` bytes (copied on the device, queue-ordered).
+  void reserve_keeping(Context& context, std::size_t bytes, std::size_t keep);
   cl_mem get() const { return memory_; }
   std::size_t bytes() const { return bytes_; }
 

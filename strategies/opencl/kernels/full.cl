@@ -108,9 +108,11 @@ kernel void vertex_boxes(uint count, global const double* x0, global const doubl
 }
 
 /* Leaf boxes of the listed leaves: the face's corners at t = 0 and 1, widened by `inflation` (bvh.cpp's
- * swept_face_box). */
+ * swept_face_box), plus, with has_budget, the largest budget of its corners (apccd's session trees:
+ * inflation = δ/2 + max(budget[a], budget[b], budget[c]), one rounding as on the host). */
 kernel void leaf_boxes(uint count, global const uint* leaves, global const uint* node_face, global const uint* faces,
-                       global const double* x0, global const double* x1, double inflation, global double* node_boxes) {
+                       global const double* x0, global const double* x1, double inflation, uchar has_budget,
+                       global const double* budget, global double* node_boxes) {
   const uint i = get_global_id(0);
   if (i >= count) return;
   const uint node = leaves[i];
@@ -121,7 +123,11 @@ kernel void leaf_boxes(uint count, global const uint* leaves, global const uint*
     b = ccd_box_extend(b, x0, v);
     b = ccd_box_extend(b, x1, v);
   }
-  ccd_box_store(node_boxes, node, ccd_box_widen(b, inflation));
+  double widening = inflation;
+  if (has_budget) {
+    widening = inflation + ccd_max(ccd_max(budget[faces[3 * (size_t)f]], budget[faces[3 * (size_t)f + 1]]), budget[faces[3 * (size_t)f + 2]]);
+  }
+  ccd_box_store(node_boxes, node, ccd_box_widen(b, widening));
 }
 
 /* One level of the bottom-up refit: each internal node level[first + i] becomes the union of its children. */
@@ -134,10 +140,20 @@ kernel void refit_level(uint count, uint first, global const uint* level, global
 }
 
 /* Candidate triangle pairs: query q is face q_face[q] (its leaf q_leaf[q]) against the tree rooted at q_root[q].
- * Self queries keep the faces g > f (each pair once); the others keep every overlap, as (smaller, larger). Exactly
- * the face pairs whose leaf boxes overlap: an internal box holds its leaves' boxes, so pruning loses none. The
- * tree is walked twice, to count and then to write, so no per-item buffer is needed. */
-static inline uint ccd_traverse(uint f, ccd_box query, int root, int self_query, global const double* node_boxes,
+ * Modes: 1 self (keeps the faces g > f, each pair once); 0 a pair of objects; 2 and 3 a pair of objects in moving
+ * frames (apccd's object_pairs=session), whose translation box offsets[6 q_offset[q]] sweeps the query's box (2)
+ * or every box of the tree (3), as bvh.cpp's shifted(): (lo + offset lo, hi + offset hi). Pairs are written as
+ * (smaller, larger). Exactly the face pairs whose leaf boxes overlap (after the sweep): an internal box holds its
+ * leaves' boxes, and a swept one its leaves' swept boxes (rounding is monotone), so pruning loses none. The tree
+ * is walked twice, to count and then to write, so no per-item buffer is needed. */
+static inline ccd_box ccd_box_shift(ccd_box b, global const double* offset) {
+  for (int k = 0; k < 3; ++k) {
+    b.lo[k] = b.lo[k] + offset[k];
+    b.hi[k] = b.hi[k] + offset[3 + k];
+  }
+  return b;
+}
+static inline uint ccd_traverse(uint f, ccd_box query, int root, int mode, global const double* offset, global const double* node_boxes,
                                 global const int2* children, global const uint* node_face, global uint2* pairs, uint first,
                                 uint capacity, int write) {
   int stack[CCD_TRAVERSAL_STACK];
@@ -146,7 +162,8 @@ static inline uint ccd_traverse(uint f, ccd_box query, int root, int self_query,
   stack[size++] = root;
   while (size > 0) {
     const int node = stack[--size];
-    if (!ccd_box_intersects(query, ccd_box_load(node_boxes, (uint)node))) continue;
+    const ccd_box box = mode == 3 ? ccd_box_shift(ccd_box_load(node_boxes, (uint)node), offset) : ccd_box_load(node_boxes, (uint)node);
+    if (!ccd_box_intersects(query, box)) continue;
     const int2 c = children[node];
     if (c.x >= 0) {
       stack[size++] = c.x;
@@ -154,7 +171,7 @@ static inline uint ccd_traverse(uint f, ccd_box query, int root, int self_query,
       continue;
     }
     const uint g = node_face[node];
-    if (self_query ? g > f : 1) {
+    if (mode == 1 ? g > f : 1) {
       if (write && first + found < capacity) pairs[first + found] = (uint2)(min(f, g), max(f, g));
       ++found;
     }
@@ -163,20 +180,25 @@ static inline uint ccd_traverse(uint f, ccd_box query, int root, int self_query,
 }
 
 kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void traverse(
-    uint count, global const uint* q_leaf, global const uint* q_face, global const int* q_root, global const uchar* q_self,
-    global const double* node_boxes, global const int2* children, global const uint* node_face, uint capacity,
-    volatile global uint* total, global uint2* pairs) {
+    uint count, global const uint* q_leaf, global const uint* q_face, global const int* q_root, global const uchar* q_mode,
+    global const int* q_offset, global const double* offsets, global const double* node_boxes, global const int2* children,
+    global const uint* node_face, uint capacity, volatile global uint* total, global uint2* pairs) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   const uint q = get_global_id(0);
   uint found = 0;
   ccd_box query;
+  int mode = 0;
+  global const double* offset = offsets;
   if (q < count) {
+    mode = q_mode[q];
+    if (mode >= 2) offset = offsets + 6 * (size_t)q_offset[q];
     query = ccd_box_load(node_boxes, q_leaf[q]);
-    found = ccd_traverse(q_face[q], query, q_root[q], q_self[q], node_boxes, children, node_face, pairs, 0, 0, 0);
+    if (mode == 2) query = ccd_box_shift(query, offset);
+    found = ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, pairs, 0, 0, 0);
   }
   const uint first = ccd_group_reserve(scratch, found, total);
   if (q < count && found > 0 && first < capacity) {
-    ccd_traverse(q_face[q], query, q_root[q], q_self[q], node_boxes, children, node_face, pairs, first, capacity, 1);
+    ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, pairs, first, capacity, 1);
   }
 }
 

@@ -1,0 +1,414 @@
+#include "strategies/opencl/pipeline.hpp"
+
+#include "core/assignment.hpp"
+#include "strategies/bvh/bvh.hpp"
+#include "strategies/opencl/self_test.hpp"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cstdlib>
+
+namespace ccd::opencl {
+namespace {
+
+/// Work-group size of the kernels that reserve list space per group (CCD_GROUP_SIZE): 256, or the device's
+/// largest power of two below that.
+std::size_t group_size_for(const DeviceInfo& device) {
+  std::size_t group = 256;
+  while (group > device.max_work_group_size && group > 1) group /= 2;
+  return group;
+}
+
+/// Given-up queries per host thread up to which the host decides them rather than another device pass. A pass
+/// costs about its longest query on a work item (10 to 30 ms on the H200 at the 20,000-iteration cap, a few ms
+/// at kSecondPassIterations); a host thread runs a query at the cap in about 10 ms, shorter ones in well under
+/// one (reports/opencl: with the host taking up to 64 per thread, three paper scenes spent 65-92 ms there).
+constexpr std::size_t kHostQueriesPerThread = 2;
+/// The second device pass gives up after this many iterations: the queries that cloth-funnel hands back finish
+/// within it, side by side; what is left runs to the cap.
+constexpr long kSecondPassIterations = 4000;
+/// Depth the traversal kernel's stack holds (CCD_TRAVERSAL_STACK in kernels/full.cl).
+constexpr std::size_t kTraversalStack = 64;
+
+EdgeEdgePair edge_pair(const cl_uint4& p) { return {Edge{p.s[0], p.s[1]}, Edge{p.s[2], p.s[3]}}; }
+
+}  // namespace
+
+NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_ptr<narrowphase::NarrowPhase> host, const std::string& name,
+                                      const narrowphase::NarrowPhaseParameters& parameters, long device_iterations) {
+  if (name != "conservative" && name != "cubic64") {
+    throw std::invalid_argument(strategy + ":backend=opencl runs the narrow phases conservative and cubic64, not " + name);
+  }
+  NarrowPhaseChoice choice;
+  choice.host = std::move(host);
+  choice.name = name;
+  choice.device_iterations = device_iterations;
+  if (name == "conservative") {
+    choice.inclusion = narrowphase::read_inclusion_settings(parameters);
+  } else {
+    choice.cubic = narrowphase::read_cubic_settings(name, parameters);
+  }
+  return choice;
+}
+
+DevicePipeline::DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, std::string label)
+    : narrow_phase_(std::move(narrow_phase)), device_(std::move(device)), label_(std::move(label)) {}
+
+void DevicePipeline::init(const Scene& scene, std::span<const Vec3> first_frame) {
+  scene_ = &scene;
+  group_ = group_size_for(device_);
+  // Test hook (tests/opencl): lists start with room for one entry and a work item holds 4 sub-boxes, so that the
+  // growing of lists and the host's share of the conservative queries run on small scenes too.
+  const char* tiny_hook = std::getenv("CCDBENCH_OPENCL_TEST_TINY");
+  tiny_ = tiny_hook != nullptr && std::string(tiny_hook) == "1";
+  context_ = std::make_unique<Context>(device_, "-DCCD_GROUP_SIZE=" + std::to_string(group_) + (tiny_ ? " -DCCD_DEVICE_SUB_BOXES=4" : ""));
+  check_device_arithmetic(*context_);
+  const MeshTopology& topology = scene.topology();
+  const std::size_t faces = topology.num_faces();
+  std::vector<cl_uint> face_corners(3 * faces), face_edges(3 * faces);
+  for (FaceId f = 0; f < faces; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      face_corners[3 * f + static_cast<std::size_t>(k)] = topology.face(f)[static_cast<std::size_t>(k)];
+      face_edges[3 * f + static_cast<std::size_t>(k)] = topology.face_edges(f)[static_cast<std::size_t>(k)];
+    }
+  }
+  std::vector<cl_uint2> edges(topology.num_edges());
+  for (EdgeId e = 0; e < edges.size(); ++e) edges[e] = {{topology.edge(e).v0, topology.edge(e).v1}};
+  const std::vector<AssignmentMask> masks = assign_primitives(topology);
+  build_hierarchies(scene, first_frame);
+  upload(*context_, faces_, face_corners.data(), face_corners.size());
+  upload(*context_, face_edges_, face_edges.data(), face_edges.size());
+  upload(*context_, edges_, edges.data(), edges.size());
+  upload(*context_, masks_, masks.data(), masks.size());
+  counter_.reserve(*context_, 2 * sizeof(cl_uint));
+  initial_elementary_capacity_ = tiny_ ? 1 : 16 * std::max<std::size_t>(faces, 256);
+  out_.capacity = tiny_ ? 1 : 1024;
+  context_->finish();
+}
+
+void DevicePipeline::build_hierarchies(const Scene& scene, std::span<const Vec3> first_frame) {
+  std::vector<cl_int2> children;
+  std::vector<cl_uint> node_face, depth;
+  leaf_node_.assign(scene.topology().num_faces(), 0);
+  roots_.assign(scene.objects().size(), -1);
+  std::vector<bool> moving_node;
+  for (ObjectId id = 0; id < scene.objects().size(); ++id) {
+    const SceneObject& object = scene.object(id);
+    bvh::TriangleBvh tree;
+    tree.build(scene.topology(), object.first_face, object.num_faces, first_frame);
+    if (tree.empty()) continue;
+    const auto base = static_cast<cl_int>(children.size());
+    roots_[id] = base;
+    const auto& nodes = tree.nodes();
+    std::vector<cl_uint> local_depth(nodes.size(), 0);
+    for (std::size_t n = 0; n < nodes.size(); ++n) {  // children follow their parent in build order
+      if (!nodes[n].is_leaf()) {
+        local_depth[static_cast<std::size_t>(nodes[n].left)] = local_depth[n] + 1;
+        local_depth[static_cast<std::size_t>(nodes[n].right)] = local_depth[n] + 1;
+      }
+    }
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+      const auto& node = nodes[n];
+      children.push_back(node.is_leaf() ? cl_int2{{-1, -1}} : cl_int2{{node.left + base, node.right + base}});
+      node_face.push_back(node.is_leaf() ? node.face : 0);
+      depth.push_back(local_depth[n]);
+      moving_node.push_back(object.kind != ObjectKind::static_object);
+      if (node.is_leaf()) leaf_node_[node.face] = static_cast<cl_uint>(base) + static_cast<cl_uint>(n);
+      if (local_depth[n] + 1 >= kTraversalStack) {
+        throw std::invalid_argument(label_ + ": object " + object.name + "'s hierarchy is deeper than the " +
+                                    std::to_string(kTraversalStack) + " levels its traversal stack holds");
+      }
+    }
+  }
+  node_count_ = children.size();
+  // Leaves, and internal nodes grouped by depth, deepest first (children before parents).
+  cl_uint max_depth = 0;
+  for (cl_uint d : depth) max_depth = std::max(max_depth, d);
+  std::vector<cl_uint> leaves_all, leaves_moving;
+  std::vector<std::vector<cl_uint>> by_depth(max_depth + 1);
+  for (std::size_t n = 0; n < node_count_; ++n) {
+    if (children[n].s[0] < 0) {
+      leaves_all.push_back(static_cast<cl_uint>(n));
+      if (moving_node[n]) leaves_moving.push_back(static_cast<cl_uint>(n));
+    } else {
+      by_depth[depth[n]].push_back(static_cast<cl_uint>(n));
+    }
+  }
+  std::vector<cl_uint> levels_all, levels_moving;
+  all_.level_offsets.assign(1, 0);
+  moving_.level_offsets.assign(1, 0);
+  for (std::size_t d = by_depth.size(); d-- > 0;) {
+    for (cl_uint n : by_depth[d]) {
+      levels_all.push_back(n);
+      if (moving_node[n]) levels_moving.push_back(n);
+    }
+    all_.level_offsets.push_back(levels_all.size());
+    moving_.level_offsets.push_back(levels_moving.size());
+  }
+  Context& context = *context_;
+  upload(context, children_, children.data(), children.size());
+  upload(context, node_face_, node_face.data(), node_face.size());
+  upload(context, leaf_node_buffer_, leaf_node_.data(), leaf_node_.size());
+  all_.leaf_count = leaves_all.size();
+  moving_.leaf_count = leaves_moving.size();
+  upload(context, all_.leaves, leaves_all.data(), leaves_all.size());
+  upload(context, moving_.leaves, leaves_moving.data(), leaves_moving.size());
+  upload(context, all_.levels, levels_all.data(), levels_all.size());
+  upload(context, moving_.levels, levels_moving.data(), levels_moving.size());
+  context.finish();
+}
+
+void DevicePipeline::make_queries(Queries& queries, bool self, bool pairs, bool offsets) {
+  const Scene& scene = *scene_;
+  std::vector<cl_uint> q_leaf, q_face;
+  std::vector<cl_int> q_root, q_offset;
+  std::vector<cl_uchar> q_mode;
+  // mode: 0 pair, 1 self, 2 pair with the query's box swept by the offset, 3 pair with the tree's boxes swept.
+  auto add = [&](ObjectId from, ObjectId into, cl_uchar mode, cl_int offset) {
+    const SceneObject& object = scene.object(from);
+    if (roots_[into] < 0 || roots_[from] < 0) return;
+    for (FaceId f = object.first_face; f < object.first_face + object.num_faces; ++f) {
+      q_leaf.push_back(leaf_node_[f]);
+      q_face.push_back(f);
+      q_root.push_back(roots_[into]);
+      q_mode.push_back(mode);
+      q_offset.push_back(offset);
+    }
+  };
+  if (self) {
+    for (ObjectId id = 0; id < scene.objects().size(); ++id) {
+      if (scene.object(id).self_collision) add(id, id, 1, -1);
+    }
+  }
+  if (pairs) {
+    const auto& collidable = scene.collidable_pairs();
+    for (std::size_t i = 0; i < collidable.size(); ++i) {
+      const auto [a, b] = collidable[i];
+      const cl_int index = offsets ? static_cast<cl_int>(i) : -1;
+      if (scene.object(a).num_faces >= scene.object(b).num_faces) {
+        add(a, b, offsets ? 3 : 0, index);  // a's faces against b's tree: b's boxes are swept
+      } else {
+        add(b, a, offsets ? 2 : 0, index);  // b's faces against a's tree: the query (b's) box is swept
+      }
+    }
+  }
+  queries.count = q_leaf.size();
+  upload(*context_, queries.leaf, q_leaf.data(), q_leaf.size());
+  upload(*context_, queries.face, q_face.data(), q_face.size());
+  upload(*context_, queries.root, q_root.data(), q_root.size());
+  upload(*context_, queries.mode, q_mode.data(), q_mode.size());
+  upload(*context_, queries.offset_index, q_offset.data(), q_offset.size());
+  context_->finish();
+}
+
+void DevicePipeline::refit(const RefitPlan& plan, const Buffer& x0, const Buffer& x1, double inflation, const Buffer* budget,
+                           const Buffer& node_boxes, StageEvents* events) {
+  Context& context = *context_;
+  cl_kernel boxes = context.kernel("leaf_boxes");
+  const cl_mem budget_memory = budget != nullptr ? budget->get() : nullptr;
+  const cl_uchar has_budget = budget != nullptr ? 1 : 0;
+  set_arguments(boxes, static_cast<cl_uint>(plan.leaf_count), plan.leaves.get(), node_face_.get(), faces_.get(), x0.get(), x1.get(), inflation,
+                has_budget, budget_memory, node_boxes.get());
+  launch(context, boxes, plan.leaf_count, group_, events != nullptr ? events->add("boxes") : nullptr);
+  refit_levels(plan, node_boxes, events);
+}
+
+void DevicePipeline::refit_levels(const RefitPlan& plan, const Buffer& node_boxes, StageEvents* events) {
+  Context& context = *context_;
+  cl_kernel level = context.kernel("refit_level");
+  const std::vector<std::size_t>& offsets = plan.level_offsets;
+  for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+    const std::size_t count = offsets[i + 1] - offsets[i];
+    set_arguments(level, static_cast<cl_uint>(count), static_cast<cl_uint>(offsets[i]), plan.levels.get(), children_.get(), node_boxes.get());
+    launch(context, level, count, group_, events != nullptr ? events->add("refit") : nullptr);
+  }
+}
+
+std::size_t DevicePipeline::traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out,
+                                     StageEvents& events, const char* stage) {
+  if (out.capacity == 0) out.capacity = tiny_ ? 1 : std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024);
+  const cl_mem offset_memory = offsets != nullptr ? offsets->get() : nullptr;
+  const std::size_t candidates = fill_list("traverse", queries.count, out, sizeof(cl_uint2), events, stage, [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+    set_arguments(kernel, static_cast<cl_uint>(queries.count), queries.leaf.get(), queries.face.get(), queries.root.get(), queries.mode.get(),
+                  queries.offset_index.get(), offset_memory, node_boxes.get(), children_.get(), node_face_.get(), capacity, counter.get(),
+                  out.buffer.get());
+  });
+  return candidates;
+}
+
+void DevicePipeline::vertex_boxes(const Buffer& x0, const Buffer& x1, StageEvents& events) {
+  const std::size_t vertices = scene_->topology().num_vertices();
+  vertex_boxes_.reserve(*context_, std::max<std::size_t>(vertices, 1) * 6 * sizeof(double));
+  cl_kernel kernel = context_->kernel("vertex_boxes");
+  set_arguments(kernel, static_cast<cl_uint>(vertices), x0.get(), x1.get(), scene_->thickness() / 2, vertex_boxes_.get());
+  launch(*context_, kernel, vertices, group_, events.add("boxes"));
+}
+
+std::size_t DevicePipeline::expand(const Buffer& candidates, std::size_t count, DeviceList& out, StageEvents& events) {
+  if (count > kMaxCandidatesPerStep) {
+    throw std::runtime_error(label_ + ": " + std::to_string(count) + " candidate triangle pairs in one step; at most " +
+                             std::to_string(kMaxCandidatesPerStep) + " keep the elementary count within 32-bit indices");
+  }
+  if (out.capacity == 0) out.capacity = initial_elementary_capacity_;
+  return fill_list("expand", count, out, sizeof(cl_uint4), events, "expansion", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+    set_arguments(kernel, static_cast<cl_uint>(count), candidates.get(), masks_.get(), faces_.get(), face_edges_.get(), edges_.get(),
+                  vertex_boxes_.get(), capacity, counter.get(), out.buffer.get());
+  });
+}
+
+std::size_t DevicePipeline::narrow_group(cl_kernel kernel) const {
+  // 64, or less where the kernel's resources allow less. Always the same for a kernel: PoCL compiles a kernel anew
+  // for each work-group size it meets.
+  std::size_t largest = 0;
+  check(clGetKernelWorkGroupInfo(kernel, device_.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof(largest), &largest, nullptr), "clGetKernelWorkGroupInfo");
+  std::size_t group = 64;
+  while (group > largest && group > 1) group /= 2;
+  return group;
+}
+
+void DevicePipeline::launch_conservative(const Buffer& pairs, std::size_t count, long limit, const Buffer& status, const Buffer& toi,
+                                         const Buffer& x0, const Buffer& x1, StageEvents& events) {
+  cl_kernel kernel = context_->kernel("narrow_conservative");
+  const cl_double tolerance = narrow_phase_.inclusion.tolerance;
+  const cl_long max_iterations = narrow_phase_.inclusion.max_iterations, give_up_after = limit;
+  set_arguments(kernel, static_cast<cl_uint>(count), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), tolerance, max_iterations,
+                give_up_after, status.get(), toi.get());
+  launch(*context_, kernel, count, narrow_group(kernel), events.add("narrow phase"));
+}
+
+void DevicePipeline::device_pass(StageEvents& events, const std::vector<std::size_t>& which, long limit, const std::vector<cl_uint4>& pairs,
+                                 std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1) {
+  Context& context = *context_;
+  std::vector<cl_uint4> retry(which.size());
+  for (std::size_t j = 0; j < which.size(); ++j) retry[j] = pairs[which[j]];
+  upload(context, retry_pairs_, retry.data(), retry.size(), events.add("narrow phase"));
+  retry_status_.reserve(context, retry.size());
+  retry_toi_.reserve(context, retry.size() * sizeof(double));
+  launch_conservative(retry_pairs_, retry.size(), limit, retry_status_, retry_toi_, x0, x1, events);
+  std::vector<cl_uchar> retry_status(retry.size());
+  std::vector<double> retry_toi(retry.size());
+  download(context, retry_status_, retry_status.data(), retry.size(), events.add("download"));
+  download(context, retry_toi_, retry_toi.data(), retry.size(), events.add("download"));
+  for (std::size_t j = 0; j < which.size(); ++j) {
+    status[which[j]] = retry_status[j];
+    toi[which[j]] = retry_toi[j];
+  }
+}
+
+void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const StepView& step, const Buffer& x0, const Buffer& x1,
+                              strategies::StepResult& result, StageEvents& events) {
+  Context& context = *context_;
+  status_.reserve(context, std::max<std::size_t>(count, 1));
+  toi_.reserve(context, std::max<std::size_t>(count, 1) * sizeof(double));
+  const bool conservative = narrow_phase_.name == "conservative";
+  if (conservative) {
+    launch_conservative(elementary, count, narrow_phase_.device_iterations, status_, toi_, x0, x1, events);
+  } else {
+    cl_kernel kernel = context.kernel("narrow_cubic");
+    const cl_double eta = narrow_phase_.cubic.eta;
+    set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), eta,
+                  status_.get(), toi_.get());
+    launch(context, kernel, count, narrow_group(kernel), events.add("narrow phase"));
+  }
+  // The compaction of what collides (or needs another pass).
+  const std::size_t kept = fill_list("compact", count, out_, sizeof(cl_uint4), events, "narrow phase", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+    out_status_.reserve(context, std::max<std::size_t>(out_.capacity, 1));
+    out_toi_.reserve(context, std::max<std::size_t>(out_.capacity, 1) * sizeof(double));
+    set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), status_.get(), toi_.get(), capacity, counter.get(), out_.buffer.get(),
+                  out_status_.get(), out_toi_.get());
+  });
+  std::vector<cl_uint4> pairs(kept);
+  std::vector<cl_uchar> status(kept);
+  std::vector<double> toi(kept);
+  download(context, out_.buffer, pairs.data(), kept, events.add("download"));
+  download(context, out_status_, status.data(), kept, events.add("download"));
+  download(context, out_toi_, toi.data(), kept, events.add("download"));
+  // Queries the device gave up on (past device_iterations, or out of sub-boxes), decided by the same code in
+  // tiers: a second device pass that gives up after kSecondPassIterations (most finish there, side by side), then
+  // the rest, long queries up to the iteration cap, either in a device pass without a limit or on the host, whose
+  // threads run one long query several times faster than a work item does but are few.
+  std::vector<std::size_t> given_up;
+  for (std::size_t i = 0; i < kept; ++i) {
+    if (status[i] == 2) given_up.push_back(i);
+  }
+  auto still_given_up = [&] {
+    std::vector<std::size_t> left;
+    for (const std::size_t i : given_up) {
+      if (status[i] == 2) left.push_back(i);
+    }
+    return left;
+  };
+  const std::size_t host_threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+  std::size_t second_pass = 0, third_pass = 0;
+  if (conservative) {
+    std::vector<std::size_t> left = given_up;
+    if (left.size() > kHostQueriesPerThread * host_threads) {
+      second_pass = left.size();
+      device_pass(events, left, kSecondPassIterations, pairs, status, toi, x0, x1);
+      left = still_given_up();
+    }
+    if (left.size() > kHostQueriesPerThread * host_threads) {
+      third_pass = left.size();
+      device_pass(events, left, 0, pairs, status, toi, x0, x1);
+    }
+  }
+  const std::vector<std::size_t> on_host = still_given_up();
+  {
+    ScopedStageTimer timer(result.stages, "host narrow phase");
+    const narrowphase::NarrowPhase& host = *narrow_phase_.host;
+    tbb::parallel_for(std::size_t{0}, on_host.size(), [&](std::size_t j) {
+      const std::size_t i = on_host[j];
+      const cl_uint4& p = pairs[i];
+      const narrowphase::NarrowPhaseResult r =
+          p.s[2] == kVertexFace ? host.vertex_face(pair_rows(scene_->topology(), step.x0, step.x1, VertexFacePair{p.s[0], p.s[1]}), scene_->thickness())
+                                : host.edge_edge(pair_rows(scene_->topology(), step.x0, step.x1, edge_pair(p)), scene_->thickness());
+      status[i] = r.collides ? 1 : 0;
+      toi[i] = r.toi;
+    });
+  }
+  for (std::size_t i = 0; i < kept; ++i) {
+    if (status[i] != 1) continue;
+    const cl_uint4& p = pairs[i];
+    if (p.s[2] == kVertexFace) {
+      result.collisions.add(VertexFacePair{p.s[0], p.s[1]}, toi[i]);
+    } else {
+      result.collisions.add(edge_pair(p), toi[i]);
+    }
+  }
+  result.collisions.normalize();
+  result.counters.extra.emplace_back("device_given_up_pairs", static_cast<double>(given_up.size()));
+  result.counters.extra.emplace_back("device_second_pass_pairs", static_cast<double>(second_pass));
+  result.counters.extra.emplace_back("device_third_pass_pairs", static_cast<double>(third_pass));
+  result.counters.extra.emplace_back("host_decided_pairs", static_cast<double>(on_host.size()));
+}
+
+strategies::TestedPairs DevicePipeline::tested_pairs(const Buffer& elementary, std::size_t count) {
+  std::vector<cl_uint4> all(count);
+  download(*context_, elementary, all.data(), count);
+  strategies::TestedPairs tested;
+  for (const cl_uint4& p : all) {
+    if (p.s[2] == kVertexFace) {
+      tested.vertex_face.push_back({p.s[0], p.s[1]});
+    } else {
+      tested.edge_edge.push_back(edge_pair(p));
+    }
+  }
+  tbb::parallel_sort(tested.vertex_face.begin(), tested.vertex_face.end());
+  tbb::parallel_sort(tested.edge_edge.begin(), tested.edge_edge.end());
+  return tested;
+}
+
+std::size_t DevicePipeline::bytes() const {
+  std::size_t total = 0;
+  for (const Buffer* b : {&faces_, &face_edges_, &edges_, &masks_, &children_, &node_face_, &leaf_node_buffer_, &all_.leaves, &moving_.leaves,
+                          &all_.levels, &moving_.levels, &vertex_boxes_, &counter_, &status_, &toi_, &out_.buffer, &out_status_, &out_toi_,
+                          &retry_pairs_, &retry_status_, &retry_toi_}) {
+    total += b->bytes();
+  }
+  return total;
+}
+
+}  // namespace ccd::opencl

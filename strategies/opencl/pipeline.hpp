@@ -1,0 +1,180 @@
+#pragma once
+/// @file
+/// What every strategy of the OpenCL backend does the same way (kernels/full.cl): the device's context and its
+/// arithmetic self-test, the scene's topology and assignment masks on the device, each object's hierarchy built on
+/// the host exactly as the CPU's and refitted level by level, traversal queries, lists of unknown length, the
+/// expansion of candidate triangle pairs into elementary pairs, and the back end: the narrow phase with its tiers
+/// for queries the device gives up, down to the collision set. `full:backend=opencl` is this pipeline run whole
+/// every step; `apccd:backend=opencl` (strategies/apccd/opencl) adds its sessions around it.
+///
+/// Only for sources built with CCDBENCH_WITH_OPENCL.
+
+#include "core/scene.hpp"
+#include "core/step.hpp"
+#include "strategies/narrowphase/cubic.hpp"
+#include "strategies/narrowphase/inclusion.hpp"
+#include "strategies/narrowphase/narrow_phase.hpp"
+#include "strategies/opencl/runtime.hpp"
+#include "strategies/strategy.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ccd::opencl {
+
+/// The narrow phase a pipeline runs: conservative or cubic64, with its keys read as the CPU's factory reads them.
+struct NarrowPhaseChoice {
+  std::unique_ptr<narrowphase::NarrowPhase> host;
+  std::string name;
+  narrowphase::InclusionSettings inclusion;
+  narrowphase::CubicSettings cubic;
+  /// Iterations a work item spends on one conservative query before giving it up (0: never).
+  long device_iterations = 200;
+};
+
+/// The narrow phase of `strategy`:backend=opencl, its keys (`parameters`) read as the CPU's factory reads them.
+/// @throws std::invalid_argument for a narrow phase other than conservative and cubic64.
+NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_ptr<narrowphase::NarrowPhase> host, const std::string& name,
+                                      const narrowphase::NarrowPhaseParameters& parameters, long device_iterations);
+
+/// A list the device fills: its buffer, its room (entries) and, after a fill, its length.
+struct DeviceList {
+  Buffer buffer;
+  std::size_t capacity = 0;
+  std::size_t count = 0;
+};
+
+/// Traversal queries: face q_face[i] (its leaf q_leaf[i], whose box is the query) against the tree rooted at
+/// q_root[i]; self queries keep the faces after it only. Pair queries of object_pairs=session read a translation box
+/// (q_offset[i], 6 doubles in offsets) that sweeps the query's box (mode 2) or the tree's boxes (mode 3).
+struct Queries {
+  Buffer leaf, face, root, mode, offset_index;
+  std::size_t count = 0;
+};
+
+/// The refit of a set of leaves and of their ancestors.
+struct RefitPlan {
+  Buffer leaves;
+  std::size_t leaf_count = 0;
+  /// Internal nodes, deepest level first; level i is [level_offsets[i], level_offsets[i + 1]).
+  Buffer levels;
+  std::vector<std::size_t> level_offsets;
+};
+
+class DevicePipeline {
+ public:
+  /// `label` names the strategy in errors ("full:backend=opencl").
+  DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, std::string label);
+
+  /// Context, self-test, topology, masks and the flattened hierarchies (shape only; boxes come from refits).
+  void init(const Scene& scene, std::span<const Vec3> first_frame);
+
+  Context& context() { return *context_; }
+  const Scene& scene() const { return *scene_; }
+  std::size_t group() const { return group_; }
+  bool tiny() const { return tiny_; }
+  const std::string& label() const { return label_; }
+  const NarrowPhaseChoice& narrow_phase() const { return narrow_phase_; }
+  const DeviceInfo& device() const { return device_; }
+
+  // Topology on the device.
+  const Buffer& faces() const { return faces_; }
+  std::size_t node_count() const { return node_count_; }
+  /// Every node (at init: static objects too) and the moving objects' nodes.
+  const RefitPlan& all_nodes() const { return all_; }
+  const RefitPlan& moving_nodes() const { return moving_; }
+  /// Leaf node of each face, and the root of each object's tree (-1: no faces), on the host.
+  const std::vector<cl_uint>& leaf_node() const { return leaf_node_; }
+  const std::vector<cl_int>& roots() const { return roots_; }
+  const Buffer& leaf_node_buffer() const { return leaf_node_buffer_; }
+
+  /// Self queries (each face of a self-colliding object against its own tree) and/or pair queries (for each
+  /// collidable pair, the faces of the larger object against the smaller one's tree: the other way round, a
+  /// two-triangle ground would be two work items walking the whole cloth). With `offsets`, pair queries sweep by
+  /// the pair's translation box (index = position in the scene's collidable pairs, for (a, b): b relative to a).
+  void make_queries(Queries& queries, bool self, bool pairs, bool offsets);
+
+  /// Leaf boxes of the plan over x0 -> x1, widened by `inflation` plus, with `budget` (per vertex), the largest
+  /// budget of the face's corners; then every level of the plan.
+  void refit(const RefitPlan& plan, const Buffer& x0, const Buffer& x1, double inflation, const Buffer* budget, const Buffer& node_boxes,
+             StageEvents* events);
+  /// The levels of the plan only (after leaves changed).
+  void refit_levels(const RefitPlan& plan, const Buffer& node_boxes, StageEvents* events);
+
+  /// Runs a list-filling kernel: resets the counter, launches over `items` with the list's room, reads the total;
+  /// when the list did not fit, grows it to the total and runs again. Returns the total (also in list.count).
+  template <class SetArguments>
+  std::size_t fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes, StageEvents& events,
+                        const char* stage, SetArguments set);
+
+  /// Candidate triangle pairs of `queries` against `node_boxes` (offsets: 6 doubles per collidable pair, or none).
+  std::size_t traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out, StageEvents& events,
+                       const char* stage);
+  /// Swept vertex boxes x0 ∪ x1 widened by δ/2 (the expansion's primitive-level box test).
+  void vertex_boxes(const Buffer& x0, const Buffer& x1, StageEvents& events);
+  /// Elementary pairs of `count` candidates in `candidates` that pass the primitive-level box test.
+  std::size_t expand(const Buffer& candidates, std::size_t count, DeviceList& out, StageEvents& events);
+  /// The narrow phase over `count` elementary pairs, then the tiers for given-up queries, into result.collisions
+  /// (normalised) and the device_* / host_decided_pairs counters.
+  void back_end(const Buffer& elementary, std::size_t count, const StepView& step, const Buffer& x0, const Buffer& x1, strategies::StepResult& result,
+                StageEvents& events);
+  /// The first `count` elementary pairs of `elementary`, sorted (audit mode).
+  strategies::TestedPairs tested_pairs(const Buffer& elementary, std::size_t count);
+
+  /// Bytes of the pipeline's own buffers.
+  std::size_t bytes() const;
+
+  /// Each candidate yields at most 15 elementary pairs (6 vertex-face, 9 edge-edge): this keeps their count in 32 bits.
+  static constexpr std::size_t kMaxCandidatesPerStep = 0xFFFFFFFFull / 15;
+  /// The third component of a vertex-face pair's uint4 (CCD_VERTEX_FACE in kernels/full.cl).
+  static constexpr cl_uint kVertexFace = 0xFFFFFFFFu;
+
+ private:
+  void build_hierarchies(const Scene& scene, std::span<const Vec3> first_frame);
+  void launch_conservative(const Buffer& pairs, std::size_t count, long limit, const Buffer& status, const Buffer& toi, const Buffer& x0,
+                           const Buffer& x1, StageEvents& events);
+  void device_pass(StageEvents& events, const std::vector<std::size_t>& which, long limit, const std::vector<cl_uint4>& pairs,
+                   std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1);
+  std::size_t narrow_group(cl_kernel kernel) const;
+
+  NarrowPhaseChoice narrow_phase_;
+  DeviceInfo device_;
+  std::string label_;
+  const Scene* scene_ = nullptr;
+  std::unique_ptr<Context> context_;
+  std::size_t group_ = 256;
+  bool tiny_ = false;
+  std::size_t node_count_ = 0;
+  std::vector<cl_uint> leaf_node_;
+  std::vector<cl_int> roots_;
+  RefitPlan all_, moving_;
+  std::size_t initial_elementary_capacity_ = 0;
+  DeviceList out_;
+  Buffer faces_, face_edges_, edges_, masks_, children_, node_face_, leaf_node_buffer_, vertex_boxes_, counter_, status_, toi_,
+      out_status_, out_toi_, retry_pairs_, retry_status_, retry_toi_;
+};
+
+template <class SetArguments>
+std::size_t DevicePipeline::fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes,
+                                      StageEvents& events, const char* stage, SetArguments set) {
+  Context& context = *context_;
+  cl_kernel kernel = context.kernel(kernel_name);
+  while (true) {
+    list.buffer.reserve(context, std::max<std::size_t>(list.capacity, 1) * entry_bytes);
+    const cl_uint zero[2] = {0, 0};
+    check(clEnqueueWriteBuffer(context.queue(), counter_.get(), CL_FALSE, 0, sizeof(zero), zero, 0, nullptr, nullptr), "clEnqueueWriteBuffer");
+    set(kernel, static_cast<cl_uint>(std::min<std::size_t>(list.capacity, 0xFFFFFFFFu)), counter_);
+    launch(context, kernel, items, group_, events.add(stage));
+    cl_uint total[2] = {0, 0};
+    download(context, counter_, total, 2);
+    if (total[1] != 0) throw std::runtime_error(label_ + ": the " + stage + " list of one step passed 2^32 entries");
+    if (total[0] <= list.capacity) {
+      list.count = total[0];
+      return total[0];
+    }
+    list.capacity = total[0] + total[0] / 4;
+  }
+}
+
+}  // namespace ccd::opencl
