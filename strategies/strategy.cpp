@@ -3,6 +3,7 @@
 #include "strategies/narrowphase/narrow_phase.hpp"
 
 #include "strategies/apccd/cpu/apccd.hpp"
+#include "strategies/apccd/opencl/apccd_opencl.hpp"
 #include "strategies/full_traversal/full_traversal.hpp"
 #include "strategies/opencl/full_opencl.hpp"
 
@@ -79,12 +80,11 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
   }
   if (parsed.name == "apccd") {
     std::map<std::string, std::string> parameters = parsed.parameters;
-    if (take_backend(parameters).backend == "opencl") {
-      throw std::invalid_argument("apccd:backend=opencl is not built yet: apccd runs on the CPU backend (full:backend=opencl "
-                                  "runs on OpenCL)");
-    }
+    const BackendChoice backend = take_backend(parameters);
     const ApccdSettings settings = take_apccd_settings(parameters);
-    return make_apccd(settings, narrowphase::make_narrow_phase(parsed.narrow_phase, parameters));
+    auto narrow_phase = narrowphase::make_narrow_phase(parsed.narrow_phase, parameters);
+    if (backend.backend == "opencl") return make_apccd_opencl(settings, std::move(narrow_phase), parsed.narrow_phase, parameters, backend);
+    return make_apccd(settings, std::move(narrow_phase));
   }
   if (parsed.name == "fcl" || parsed.name == "fcl-bvh") {
 #if CCDBENCH_WITH_FCL

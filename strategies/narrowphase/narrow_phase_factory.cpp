@@ -3,6 +3,7 @@
 #include "strategies/narrowphase/inclusion.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <functional>
 #include <sstream>
@@ -42,6 +43,13 @@ class ParameterReader {
 // query at minutes, far beyond any use, and keeps the count exact in a long.
 constexpr SpecRange kFractionRange{0.0, 1.0};
 constexpr SpecRange kIterationRange{1.0, 1e9, true};
+
+std::string format_spec_number(double value) {
+  char text[32];
+  const auto [end, error] = std::to_chars(text, text + sizeof(text), value);
+  if (error != std::errc()) return std::to_string(value);
+  return std::string(text, end);
+}
 
 double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, SpecRange range) {
   std::size_t used = 0;

@@ -88,6 +88,11 @@ class DevicePipeline {
   const std::vector<cl_uint>& leaf_node() const { return leaf_node_; }
   const std::vector<cl_int>& roots() const { return roots_; }
   const Buffer& leaf_node_buffer() const { return leaf_node_buffer_; }
+  const Buffer& children() const { return children_; }
+  const Buffer& node_face() const { return node_face_; }
+  /// Work-group size of a narrow-phase-like kernel (one heavy query per item): 64, or less where its resources
+  /// allow less. Always the same for a kernel: PoCL compiles a kernel anew for each work-group size it meets.
+  std::size_t narrow_group(cl_kernel kernel) const;
 
   /// Self queries (each face of a self-colliding object against its own tree) and/or pair queries (for each
   /// collidable pair, the faces of the larger object against the smaller one's tree: the other way round, a
@@ -136,7 +141,6 @@ class DevicePipeline {
                            const Buffer& x1, StageEvents& events);
   void device_pass(StageEvents& events, const std::vector<std::size_t>& which, long limit, const std::vector<cl_uint4>& pairs,
                    std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1);
-  std::size_t narrow_group(cl_kernel kernel) const;
 
   NarrowPhaseChoice narrow_phase_;
   DeviceInfo device_;

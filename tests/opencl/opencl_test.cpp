@@ -18,14 +18,27 @@
 #include <cstring>
 #include <iostream>
 #include <map>
+#include <sstream>
 
 namespace ccd {
 namespace {
 
 bool same_toi(double a, double b) { return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof(double)) == 0; }
 
-/// Runs `cpu` and `device` over every step of `frames`; fails on the first step whose sets or TOIs differ. Returns
-/// the number of colliding pairs over all steps (the caller asserts it is not 0) and adds up the device's counters.
+/// The counters of apccd's session logic: the two backends must take the same decisions.
+const std::vector<std::string> kSessionCounters{"session_start", "nf", "pending_pairs", "dangling_vertices", "dangling_triangles",
+                                               "distance_filtered", "history_catches"};
+
+double extra_counter(const strategies::StepResult& result, const std::string& name) {
+  for (const auto& [key, value] : result.counters.extra) {
+    if (key == name) return value;
+  }
+  return -1;
+}
+
+/// Runs `cpu` and `device` over every step of `frames`; fails on the first step whose sets or TOIs differ (or,
+/// for apccd, whose session counters differ). Returns the number of colliding pairs over all steps (the caller
+/// asserts it is not 0) and adds up the device's counters.
 std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& device_spec, const Scene& scene,
                                 const std::vector<std::vector<Vec3>>& frames, std::map<std::string, double>* counters = nullptr) {
   auto cpu = strategies::make_strategy(cpu_spec);
@@ -39,6 +52,9 @@ std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& 
     const strategies::StepResult b = device->step({&scene, k, frames[k], frames[k + 1]}, false);
     EXPECT_EQ(a.counters.candidate_triangle_pairs, b.counters.candidate_triangle_pairs);
     EXPECT_EQ(a.counters.elementary_tests, b.counters.elementary_tests);
+    if (cpu_spec.rfind("apccd", 0) == 0) {
+      for (const std::string& name : kSessionCounters) EXPECT_EQ(extra_counter(a, name), extra_counter(b, name)) << name;
+    }
     EXPECT_TRUE(a.collisions.same_pairs(b.collisions)) << a.collisions.size() << " pairs on the CPU, " << b.collisions.size() << " on the device";
     if (!a.collisions.same_pairs(b.collisions)) return colliding;
     for (std::size_t i = 0; i < a.collisions.vertex_face().size(); ++i) {
@@ -71,10 +87,12 @@ class OpenClParity : public ::testing::Test {
   void SetUp() override { ::setenv("CCDBENCH_CACHE_DIR", cache_.path().c_str(), 1); }
   void TearDown() override { ::unsetenv("CCDBENCH_CACHE_DIR"); }
 
-  /// Every scene of `suite` at its δ and at δ = 0, with `narrow` on both backends. Returns, per δ (scene's, 0)
-  /// and narrow phase, how many scenes collided: a comparison of empty sets proves nothing.
+  /// Every scene of `suite` at its δ and at δ = 0, with `strategy`+narrow`keys` on both backends. Returns, per δ
+  /// (scene's, 0) and narrow phase, how many scenes collided: a comparison of empty sets proves nothing. Adds the
+  /// device's counters to `counters`.
   std::vector<std::size_t> suite_at_both_thicknesses(const std::string& suite, const std::vector<std::string>& narrow_phases,
-                                                     std::size_t max_steps = 0) {
+                                                     std::size_t max_steps = 0, const std::string& strategy = "full",
+                                                     const std::string& keys = "", std::map<std::string, double>* counters = nullptr) {
     std::vector<std::size_t> colliding_scenes(2 * narrow_phases.size(), 0);
     for (const harness::SceneSource& source : harness::suite_scenes(suite)) {
       const datasets::SceneSequence loaded = source.load();
@@ -86,7 +104,8 @@ class OpenClParity : public ::testing::Test {
         for (std::size_t n = 0; n < narrow_phases.size(); ++n) {
           const std::string& narrow = narrow_phases[n];
           SCOPED_TRACE(source.label + ", δ = " + std::to_string(thickness) + ", " + narrow);
-          if (expect_same_answers("full+" + narrow, "full+" + narrow + ":backend=opencl", scene, frames) > 0) {
+          const std::string cpu = strategy + "+" + narrow + keys;
+          if (expect_same_answers(cpu, cpu + ":backend=opencl", scene, frames, counters) > 0) {
             ++colliding_scenes[2 * n + z];
           }
         }
@@ -106,6 +125,54 @@ TEST_F(OpenClParity, TheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
 TEST_F(OpenClParity, TheDefaultSuiteGivesTheCpuAnswersAtBothThicknesses) {
   // Five of its six scenes collide at both δ; the flag at resolution 16 does not fold onto itself in 20 frames.
   for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"})) EXPECT_GE(scenes, 5u);
+}
+
+// apccd:backend=opencl against the CPU apccd, every step: the same sets and TOIs, and the same session decisions
+// (session starts, nf, pending pairs, dangling vertices and triangles, pairs the distance heuristic drops).
+TEST_F(OpenClParity, ApccdOnTheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
+  std::map<std::string, double> counters;
+  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"}, 0, "apccd", "", &counters)) EXPECT_EQ(scenes, 2u);
+  // Sessions longer than a frame, with partial traversals that found pairs: the device's pending list grew.
+  EXPECT_GT(counters["dangling_triangles"], 0.0);
+  EXPECT_GT(counters["distance_filtered"], 0.0);
+}
+
+// Each knob that changes the session logic, on the ci suite's first scene at both δ: skipping off, nf bounds,
+// inflation (local, global, inflation_max), the session's end (dangling_max, pending_max), the front end off,
+// pairs across objects from the session's trees, and history.
+TEST_F(OpenClParity, ApccdKnobsGiveTheCpuAnswers) {
+  for (const char* keys : {":skip=off", ":nf_min=2:nf_max=4", ":nf_max=16:inflation_max=1e9", ":local=2.5:global=0",
+                           ":local=0.5:global=1.5:inflation_max=0.25", ":dangling_max=0.001:pending_max=1.5", ":heuristic=off",
+                           ":object_pairs=session", ":history=on:inflation_max=1e9"}) {
+    SCOPED_TRACE(keys);
+    std::map<std::string, double> counters;
+    for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, 0, "apccd", keys, &counters)) EXPECT_EQ(scenes, 2u);
+    if (std::string(keys) != ":skip=off") {
+      EXPECT_GT(counters["dangling_vertices"], 0.0) << "no session outlived its first frame";
+    }
+  }
+}
+
+// Both backends of apccd, verified against the exact truth on every step of the ci suite at both δ: 0 missed.
+TEST_F(OpenClParity, ApccdOnTheDeviceMissesNothingOnTheCiSuite) {
+  for (const bool zero : {false, true}) {
+    harness::RunOptions options;
+    options.scenes = harness::suite_scenes("ci");
+    options.strategies = {"apccd:backend=opencl", "apccd+cubic64:backend=opencl"};
+    if (zero) options.thickness = 0.0;
+    options.out = cache_.path() / (zero ? "results-zero" : "results");
+    std::ostringstream table;
+    const std::vector<nlohmann::json> summaries = harness::run_benchmark(options, table);
+    ASSERT_EQ(summaries.size(), 4u) << table.str();
+    for (const nlohmann::json& summary : summaries) {
+      SCOPED_TRACE(summary.value("scene", "") + " " + summary.value("strategy", ""));
+      EXPECT_TRUE(summary.value("verified", false));
+      EXPECT_GT(summary.value("colliding", std::size_t{0}), 0u);
+      if (summary.value("strategy", "").find("cubic64") == std::string::npos) {
+        EXPECT_EQ(summary.value("missed", std::size_t{1}), 0u);
+      }
+    }
+  }
 }
 
 // On a GPU machine (scripts/device-opencl.sh): CCDBENCH_PARITY_SUITE=paper CCDBENCH_PARITY_STEPS=N runs the parity
@@ -252,7 +319,11 @@ TEST(OpenClDevice, TheResolvedSpecNamesTheDeviceAndWrongKeysAreRefused) {
   EXPECT_THROW(strategies::make_strategy("full:device=0"), std::invalid_argument);
   EXPECT_THROW(strategies::make_strategy("full:backend=opencl:device_iterations=-1"), std::invalid_argument);
   EXPECT_THROW(strategies::make_strategy("full:device_iterations=10"), std::invalid_argument);
-  EXPECT_THROW(strategies::make_strategy("apccd:backend=opencl"), std::invalid_argument);
+  EXPECT_THROW(strategies::make_strategy("apccd+advancement:backend=opencl"), std::invalid_argument);
+  EXPECT_THROW(strategies::make_strategy("apccd:device=0"), std::invalid_argument);
+  const std::string apccd = strategies::make_strategy("apccd:backend=opencl:device=0:local=1.0000000001")->name();
+  EXPECT_NE(apccd.find(":local=1.0000000001:"), std::string::npos) << apccd;
+  EXPECT_NE(apccd.find(":backend=opencl:device=" + devices[0].name + ":device_iterations=200"), std::string::npos) << apccd;
   EXPECT_EQ(strategies::make_strategy("full:backend=cpu")->name(), strategies::make_strategy("full")->name());
 }
 

@@ -29,45 +29,11 @@
 /// pair that ends a session), inflation_max (mean budget per mean edge length that shortens a session), heuristic
 /// (front end on/off), history, object_pairs (fresh/session).
 
+#include "strategies/apccd/session.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 #include "strategies/strategy.hpp"
 
-#include <map>
-
 namespace ccd::strategies {
-
-struct ApccdSettings {
-  bool skip = true;
-  int nf_min = 1;
-  int nf_max = 8;
-  double local = 1.0;
-  double global = 0.25;
-  double dangling_max = 0.05;
-  /// A session whose pending list outgrows `pending_max` times the pairs the front end admits is too costly: it
-  /// ends, and nf halves.
-  double pending_max = 4.0;
-  /// A session is shortened so that a self-colliding object's mean budget stays within this fraction of its mean
-  /// edge length (0: every frame is a session start).
-  double inflation_max = 0.5;
-  /// The front end: candidate triangle pairs whose fresh swept boxes overlap, then elementary pairs the distance
-  /// heuristic (separation_filter.hpp) cannot prove apart.
-  bool heuristic = true;
-  /// Off by default: with the default (conservative) narrow phase there is no missed crossing for history to
-  /// catch, and on the drape scene it cost about 2 ms of a 5 ms step and added false alarms. It pays only with a
-  /// narrow phase that misses (measured: cubic64's misses 68 -> 67 on spinning-ball, 337 -> 314 on funnel).
-  bool history = false;
-  /// Pairs across objects from fresh world-frame trees every step (true) or from the session's trees (false).
-  /// Measured on the default spinning-ball with advancement: 2.46 ms per step for session trees against 0.88 ms
-  /// for full's whole traversal, because a turning ball outgrows every centroid-relative budget.
-  bool fresh_object_pairs = true;
-};
-
-/// The keys apccd itself accepts (the rest of a spec's keys are its narrow phase's).
-std::vector<std::string> apccd_parameter_names();
-
-/// Reads the apccd keys from `parameters`, removing them (what remains is the narrow phase's).
-/// @throws std::invalid_argument for a malformed or out-of-range value.
-ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters);
 
 std::unique_ptr<Strategy> make_apccd(const ApccdSettings& settings, std::unique_ptr<narrowphase::NarrowPhase> narrow_phase);
 

@@ -107,8 +107,8 @@ static inline int ccd_apart_by_motion_bound(const ccd_v3 r[8], int vertex_face, 
   if (ccd_clears(d0, d1, motion, thickness)) return 1;
   ccd_v3 middle[4];
   for (int i = 0; i < 4; ++i) middle[i] = ccd_scale(0.5, ccd_add(r[i], r[i + 4]));
-  const double half = ccd_distance_lower_bound(middle, vertex_face, largest, CCD_UNIT_ROUNDOFF * largest + CCD_DENORM_MIN);
-  return ccd_clears(d0, half, motion / 2, thickness) && ccd_clears(half, d1, motion / 2, thickness);
+  const double midway = ccd_distance_lower_bound(middle, vertex_face, largest, CCD_UNIT_ROUNDOFF * largest + CCD_DENORM_MIN);
+  return ccd_clears(d0, midway, motion / 2, thickness) && ccd_clears(midway, d1, motion / 2, thickness);
 }
 
 /* Component-wise |a.y·b.z| + |a.z·b.y|, ...: the cross product evaluated on absolute values. */

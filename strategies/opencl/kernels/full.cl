@@ -140,7 +140,8 @@ kernel void refit_level(uint count, uint first, global const uint* level, global
 }
 
 /* Candidate triangle pairs: query q is face q_face[q] (its leaf q_leaf[q]) against the tree rooted at q_root[q].
- * Modes: 1 self (keeps the faces g > f, each pair once); 0 a pair of objects; 2 and 3 a pair of objects in moving
+ * Modes: 1 self (keeps the faces g > f, each pair once); 4 a face against its own tree (keeps g != f: apccd's
+ * partial traversal, whose query box is not the leaf's); 0 a pair of objects; 2 and 3 a pair of objects in moving
  * frames (apccd's object_pairs=session), whose translation box offsets[6 q_offset[q]] sweeps the query's box (2)
  * or every box of the tree (3), as bvh.cpp's shifted(): (lo + offset lo, hi + offset hi). Pairs are written as
  * (smaller, larger). Exactly the face pairs whose leaf boxes overlap (after the sweep): an internal box holds its
@@ -171,7 +172,7 @@ static inline uint ccd_traverse(uint f, ccd_box query, int root, int mode, globa
       continue;
     }
     const uint g = node_face[node];
-    if (mode == 1 ? g > f : 1) {
+    if (mode == 1 ? g > f : (mode == 4 ? g != f : 1)) {
       if (write && first + found < capacity) pairs[first + found] = (uint2)(min(f, g), max(f, g));
       ++found;
     }

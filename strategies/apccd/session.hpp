@@ -1,0 +1,115 @@
+#pragma once
+/// @file
+/// What both of apccd's backends (cpu/ with TBB, opencl/) decide alike, so that they test the same pairs: the
+/// settings and their keys, the object frames (centroids summed in vertex order), the session's budgets and length,
+/// the session's end, and history. Everything here runs on the host in one fixed order; a backend only supplies
+/// the per-vertex and per-pair values it computes (dangling vertices, admissible and pending pairs).
+
+#include "core/scene.hpp"
+#include "core/step.hpp"
+#include "strategies/strategy.hpp"
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace ccd::strategies {
+
+struct ApccdSettings {
+  bool skip = true;
+  int nf_min = 1;
+  int nf_max = 8;
+  double local = 1.0;
+  double global = 0.25;
+  double dangling_max = 0.05;
+  /// A session whose pending list outgrows `pending_max` times the pairs the front end admits is too costly: it
+  /// ends, and nf halves.
+  double pending_max = 4.0;
+  /// A session is shortened so that a self-colliding object's mean budget stays within this fraction of its mean
+  /// edge length (0: every frame is a session start).
+  double inflation_max = 0.5;
+  /// The front end: candidate triangle pairs whose fresh swept boxes overlap, then elementary pairs the distance
+  /// heuristic (separation_filter.hpp) cannot prove apart.
+  bool heuristic = true;
+  /// Off by default: with the default (conservative) narrow phase there is no missed crossing for history to
+  /// catch, and on the drape scene it cost about 2 ms of a 5 ms step and added false alarms. It pays only with a
+  /// narrow phase that misses (measured: cubic64's misses 68 -> 67 on spinning-ball, 337 -> 314 on funnel).
+  bool history = false;
+  /// Pairs across objects from fresh world-frame trees every step (true) or from the session's trees (false).
+  /// Measured on the default spinning-ball with advancement: 2.46 ms per step for session trees against 0.88 ms
+  /// for full's whole traversal, because a turning ball outgrows every centroid-relative budget.
+  bool fresh_object_pairs = true;
+};
+
+/// The keys apccd itself accepts (the rest of a spec's keys are its narrow phase's and its backend's).
+std::vector<std::string> apccd_parameter_names();
+
+/// Reads the apccd keys from `parameters`, removing them (what remains is the narrow phase's).
+/// @throws std::invalid_argument for a malformed or out-of-range value.
+ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters);
+
+/// The resolved name: "apccd+NARROW:skip=on:..." with every key, numbers as format_spec_number prints them.
+std::string apccd_name(const ApccdSettings& settings, const std::string& narrow_phase_name);
+
+/// The session logic: object frames, budgets, session length and end.
+class ApccdSession {
+ public:
+  void init(const ApccdSettings& settings, const Scene& scene, std::span<const Vec3> first_frame);
+  /// Whether this step starts a session (every step with skip=off).
+  bool starts() const { return frame_ == 0; }
+  int nf() const { return nf_; }
+
+  /// Each moving object's centroid at both ends of the step, summed in vertex order (static objects: zero). Self
+  /// contact does not change when an object moves as a whole, so budgets and self traversal live in its frame.
+  void update_centroids(const StepView& step);
+  const std::vector<Vec3>& centroid0() const { return centroid0_; }
+  const std::vector<Vec3>& centroid1() const { return centroid1_; }
+  /// Positions relative to their object's centroid (x - centroid, one rounding per coordinate).
+  void relative_positions(const StepView& step, std::vector<Vec3>& relative0, std::vector<Vec3>& relative1) const;
+  /// The translations object b's frame makes relative to a's during the step (object_pairs=session): centroids
+  /// move linearly, as vertices do, so the range of cb - ca.
+  Box3 pair_offset(ObjectId a, ObjectId b) const;
+
+  /// A session's first frame: each vertex's budget for the frames left of the session, from its relative motion
+  /// (local) and its object's mean (global), at least δ per frame; nf is first shortened by inflation_max.
+  /// Static objects' vertices get 0.
+  void start(std::span<const Vec3> relative0, std::span<const Vec3> relative1, std::vector<double>& budget);
+
+  /// Ends the session after nf frames, or early when too many vertices dangle or the pending list costs more than
+  /// it saves; adapts nf for the next one (nf = 1 is a refit and full traversal every frame).
+  void advance(std::size_t dangling_vertices, std::size_t admissible, std::size_t pending);
+
+ private:
+  void limit_session_by_inflation(const std::vector<double>& budget);
+
+  ApccdSettings settings_;
+  const Scene* scene_ = nullptr;
+  /// Each object's mean edge length in frame 0 (the scale of inflation_max).
+  std::vector<double> mean_edge_;
+  std::vector<Vec3> centroid0_, centroid1_;
+  int nf_ = 1;
+  int frame_ = 0;
+  double worst_dangling_ = 0;
+};
+
+/// History: pairs in close proximity keep their relative orientation across steps. For the tested pairs, the side
+/// of the face a vertex is on and how two edges cross; a pair whose orientation flipped (where that can be a
+/// crossing) is reported unless the test already did.
+class ProximityHistory {
+ public:
+  /// Records the orientations of `tested` at the end of the step and adds the flipped pairs to `collisions`;
+  /// returns how many it added.
+  std::size_t apply(const MeshTopology& topology, std::span<const Vec3> x1, const TestedPairs& tested, CollisionSet& collisions);
+  std::size_t pairs() const { return vertex_face_.size() + edge_edge_.size(); }
+  /// Bytes of the tables: buckets plus one node per entry (key, value, next pointer, cached hash).
+  std::size_t bytes() const;
+  void clear();
+
+ private:
+  std::unordered_map<VertexFacePair, std::int8_t> vertex_face_;
+  std::unordered_map<EdgeEdgePair, std::int8_t> edge_edge_;
+};
+
+}  // namespace ccd::strategies
