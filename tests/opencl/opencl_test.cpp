@@ -247,6 +247,19 @@ TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
   EXPECT_GT(counters["host_decided_pairs"], 0.0) << "no query overflowed its sub-boxes: the host's part was not exercised";
 }
 
+// The same for apccd: its own lists (dangling triangles, partial traversal, admissible, tested) grow and run
+// again, and the pending list's hash table is rebuilt at every growth within a session.
+TEST_F(OpenClParity, ApccdGrowingListsGiveTheSameAnswers) {
+  ::setenv("CCDBENCH_OPENCL_TEST_TINY", "1", 1);
+  std::map<std::string, double> counters;
+  const std::vector<std::size_t> colliding_scenes = suite_at_both_thicknesses("ci", {"conservative"}, 0, "apccd", "", &counters);
+  ::unsetenv("CCDBENCH_OPENCL_TEST_TINY");
+  for (const std::size_t scenes : colliding_scenes) EXPECT_EQ(scenes, 2u);
+  EXPECT_GT(counters["host_decided_pairs"], 0.0);
+  // pending_table_builds is a running total: summed over steps it exceeds the steps only when a session rebuilt it.
+  EXPECT_GT(counters["pending_table_builds"], 0.0) << "no partial traversal found a pair: the pending list never grew";
+}
+
 // Queries that run longer than device_iterations on the device are given up: many go to further device passes,
 // a few to the host (the host's part is exercised by the tiny-storage test above). The same answers either way.
 TEST_F(OpenClParity, QueriesGivenUpByTheDeviceGetTheSameAnswers) {
