@@ -179,15 +179,27 @@ TEST_F(OpenClParity, ApccdOnTheDeviceMissesNothingOnTheCiSuite) {
 // above on a larger suite's first N steps (0: all), both narrow phases. Skipped unless asked for.
 TEST_F(OpenClParity, TheSuiteAskedForGivesTheCpuAnswersAtBothThicknesses) {
   const char* suite = std::getenv("CCDBENCH_PARITY_SUITE");
-  if (suite == nullptr) GTEST_SKIP() << "set CCDBENCH_PARITY_SUITE (and CCDBENCH_PARITY_STEPS) to run it";
+  if (suite == nullptr) GTEST_SKIP() << "set CCDBENCH_PARITY_SUITE (and CCDBENCH_PARITY_STEPS, CCDBENCH_PARITY_STRATEGY) to run it";
   const char* steps = std::getenv("CCDBENCH_PARITY_STEPS");
   const std::size_t max_steps = steps != nullptr ? std::stoul(steps) : 0;
-  for (const std::size_t scenes : suite_at_both_thicknesses(suite, {"conservative", "cubic64"}, max_steps)) EXPECT_GT(scenes, 0u);
+  // CCDBENCH_PARITY_STRATEGY: full (default) or apccd; CCDBENCH_PARITY_NARROW: one narrow phase (default both).
+  const char* strategy = std::getenv("CCDBENCH_PARITY_STRATEGY");
+  const char* narrow = std::getenv("CCDBENCH_PARITY_NARROW");
+  const std::vector<std::string> narrow_phases =
+      narrow != nullptr ? std::vector<std::string>{narrow} : std::vector<std::string>{"conservative", "cubic64"};
+  std::map<std::string, double> counters;
+  for (const std::size_t scenes : suite_at_both_thicknesses(suite, narrow_phases, max_steps, strategy != nullptr ? strategy : "full", "", &counters)) {
+    EXPECT_GT(scenes, 0u);
+  }
+  std::cout << "[ counts   ] " << (strategy != nullptr ? strategy : "full") << " on " << suite << ", device's totals over both δ";
+  for (const auto& [name, value] : counters) std::cout << ", " << name << " " << value;
+  std::cout << '\n';
 }
 
 // The stand-in for a public step with tens of millions of elementary candidates (scripts/device-opencl.sh: a
 // generated fold of a few hundred thousand triangles at a δ of several edge lengths): CCDBENCH_PARITY_SCENE=FILE,
-// CCDBENCH_PARITY_THICKNESS=δ, CCDBENCH_PARITY_STEPS=N, both narrow phases. Skipped unless asked for.
+// CCDBENCH_PARITY_THICKNESS=δ, CCDBENCH_PARITY_STEPS=N, both narrow phases (or CCDBENCH_PARITY_NARROW), `full` (or
+// CCDBENCH_PARITY_STRATEGY=apccd). Skipped unless asked for.
 TEST_F(OpenClParity, TheSceneAskedForGivesTheCpuAnswers) {
   const char* file = std::getenv("CCDBENCH_PARITY_SCENE");
   if (file == nullptr) GTEST_SKIP() << "set CCDBENCH_PARITY_SCENE (and CCDBENCH_PARITY_THICKNESS, CCDBENCH_PARITY_STEPS) to run it";
@@ -197,11 +209,17 @@ TEST_F(OpenClParity, TheSceneAskedForGivesTheCpuAnswers) {
   const char* steps = std::getenv("CCDBENCH_PARITY_STEPS");
   auto frames = all_frames(loaded);
   if (steps != nullptr && std::stoul(steps) > 0 && frames.size() > std::stoul(steps) + 1) frames.resize(std::stoul(steps) + 1);
-  for (const std::string narrow : {"conservative", "cubic64"}) {
+  const char* strategy_asked = std::getenv("CCDBENCH_PARITY_STRATEGY");
+  const std::string strategy = strategy_asked != nullptr ? strategy_asked : "full";
+  const char* narrow_asked = std::getenv("CCDBENCH_PARITY_NARROW");
+  const std::vector<std::string> narrow_phases =
+      narrow_asked != nullptr ? std::vector<std::string>{narrow_asked} : std::vector<std::string>{"conservative", "cubic64"};
+  for (const std::string& narrow : narrow_phases) {
     SCOPED_TRACE(narrow);
     std::map<std::string, double> counters;
-    EXPECT_GT(expect_same_answers("full+" + narrow, "full+" + narrow + ":backend=opencl", scene, frames, &counters), 0u);
-    std::cout << "[ counts   ] " << narrow << ": " << frames.size() - 1 << " steps";
+    const std::string cpu = strategy + "+" + narrow;
+    EXPECT_GT(expect_same_answers(cpu, cpu + ":backend=opencl", scene, frames, &counters), 0u);
+    std::cout << "[ counts   ] " << cpu << ": " << frames.size() - 1 << " steps";
     for (const auto& [name, value] : counters) std::cout << ", " << name << " " << value;
     std::cout << '\n';
   }
