@@ -16,6 +16,8 @@
 #        δ and at δ = 0, full and apccd on the CPU (every core) and on the device, every step verified;
 #      apccd-large: spinning-ball at resolution 317 (about 200k triangles), 20 steps: parity on its first
 #        $LARGE_PARITY_STEPS steps, the first $LARGE_VERIFIED_STEPS steps verified, then all 20 with --verify none.
+# PART_TIMEOUT (seconds) stops an apccd-paper run before the device's 10-minute call ends; its finished cells stay in
+# $out/runs-paper-* and are packed, and the same command on the still-warm machine resumes from them.
 # PARTS chooses among "parity public paper big apccd-parity apccd-paper-delta apccd-paper-zero apccd-large"
 # (default: the first four). Writes every table and JSON summary to a work
 # folder and, when $OUT is set (the device's return folder), packs them into $OUT/opencl-device.tgz.
@@ -102,9 +104,9 @@ for delta in delta zero; do
   echo "== apccd, paper suite ($delta), first $APCCD_PAPER_STEPS steps (0: all)"
   thickness=(); [ "$delta" = zero ] && thickness=(--thickness 0)
   start=$SECONDS
-  "$bin/ccdbench" --threads "$threads" run --suite paper --max-steps "$APCCD_PAPER_STEPS" "${thickness[@]}" --strategy "$apccd_cells" \
+  timeout "${PART_TIMEOUT:-100000}" "$bin/ccdbench" --threads "$threads" run --suite paper --max-steps "$APCCD_PAPER_STEPS" "${thickness[@]}" --strategy "$apccd_cells" \
     --out "$out/runs-paper-$delta" --json "$out/apccd-paper-$delta.json" 2>/dev/null | tee "$out/apccd-paper-$delta.txt"
-  cp "$out/runs-paper-$delta/results.jsonl" "$out/apccd-paper-$delta.jsonl"
+  cp "$out/runs-paper-$delta/results.jsonl" "$out/apccd-paper-$delta.jsonl" || true
   echo "apccd paper $delta: $((SECONDS - start)) s" | tee -a "$out/apccd-paper-$delta.txt"
   pack
 done

@@ -1,12 +1,13 @@
 #!/usr/bin/python3
 """apccd and full on both backends, one table per run (reports/opencl/README.md, "apccd on the device").
 
-Usage: apccd_table.py SUMMARY.json RESULTS.jsonl DEVICE_LABEL THREADS
+Usage: apccd_table.py SUMMARY.json RESULTS.jsonl[.gz] DEVICE_LABEL THREADS
 SUMMARY.json is a `ccdbench run --json` array of one run with the cells full, apccd, full:backend=opencl and
 apccd:backend=opencl (conservative); RESULTS.jsonl is that run's --out results file (a folder of its own: its step
 records carry no δ; the last `steps` records of a cell are read), for apccd's per-step counters (session starts,
 nf, pending pairs). Ratios are within this run only.
 """
+import gzip
 import json
 import sys
 from collections import defaultdict
@@ -33,7 +34,7 @@ def main():
             order.append(key)
         cells[key][k] = s
     steps = defaultdict(list)
-    for line in open(results_file):
+    for line in (gzip.open(results_file, "rt") if results_file.endswith(".gz") else open(results_file)):
         r = json.loads(line)
         if r.get("record") != "step" or not r.get("strategy", "").startswith("apccd") or ":backend=opencl" not in r["strategy"]:
             continue
@@ -56,7 +57,7 @@ def main():
         verified = dev.get("verified", False)
         missed = f"{c['apccd cpu'].get('missed', '-')} / {dev.get('missed', '-')}" if verified else "not verified"
         alarms = f"{c['apccd cpu'].get('false_alarms', '-')} / {dev.get('false_alarms', '-')}" if verified else "-"
-        colliding = dev.get("colliding", "-") if verified else dev.get("reported", "-")
+        colliding = dev.get("colliding", "-") if verified else f"{dev.get('reported', '-')} reported"
         print(f"| {key[0]} (δ = {key[1]:.3g}) | {dev['steps']} | {ms['full cpu']:.2f} | {ms['apccd cpu']:.2f} | {ms['full device']:.2f} | "
               f"**{ms['apccd device']:.2f}** | {ms['full cpu'] / ms['apccd cpu']:.2f}x / {ms['full device'] / ms['apccd device']:.2f}x | "
               f"{ms['apccd cpu'] / ms['apccd device']:.2f}x | {starts} of {len(records)} | {nf:.2f} | {pending:.0f} | {colliding} | {missed} | "
