@@ -354,16 +354,16 @@ int run_devices(bool json, std::ostream& out) {
       const nlohmann::json line = {{"index", d.index}, {"platform", d.platform}, {"name", d.name}, {"version", d.version},
                                    {"driver", d.driver}, {"type", d.gpu ? "gpu" : "other"}, {"compute_units", d.compute_units},
                                    {"global_memory_bytes", d.global_memory}, {"fp64", d.fp64}, {"fp64_denormals", d.fp64_denormals},
-                                   {"usable", d.refused_because.empty()}};
+                                   {"int64_atomics", d.int64_atomics}, {"usable", d.refused_because.empty()}};
       out << line.dump() << '\n';
     } else {
       out << d.index << ": " << d.name << " [" << d.platform << "; " << d.version << "; driver " << d.driver << "]\n"
           << "   " << (d.gpu ? "GPU" : "not a GPU") << ", " << d.compute_units << " compute units, "
           << d.global_memory / (1024 * 1024) << " MiB, fp64 " << (d.fp64 ? (d.fp64_denormals ? "yes (subnormals kept)" : "yes (subnormals flushed)") : "no")
-          << "\n   " << verdict << "\n";
+          << ", 64-bit atomics " << (d.int64_atomics ? "yes" : "no (apccd:backend=opencl needs them)") << "\n   " << verdict << "\n";
     }
   }
-  if (!json) out << "choose one with --strategy full:backend=opencl:device=INDEX (default: the first GPU, else device 0)\n";
+  if (!json) out << "choose one with --strategy full:backend=opencl:device=INDEX or apccd:backend=opencl:device=INDEX (default: the first GPU, else device 0)\n";
   return 0;
 }
 

@@ -106,12 +106,13 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
 
 void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::span<const AssignmentMask> masks,
                       std::span<const bvh::TrianglePair> candidates, const StepView& step,
-                      const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit) {
+                      const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit, bool separation_filter) {
   ElementaryOutcome outcome;
   {
     ScopedStageTimer timer(result.stages, "narrow phase");
-    outcome = test_candidates(topology, masks, candidates, step, narrow_phase, thickness, audit);
+    outcome = test_candidates(topology, masks, candidates, step, narrow_phase, thickness, audit, separation_filter);
   }
+  if (separation_filter) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(outcome.filtered));
   result.collisions = std::move(outcome.collisions);
   result.tested = std::move(outcome.tested);
   result.counters.candidate_triangle_pairs = candidates.size();

@@ -34,10 +34,11 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
                                   bool separation_filter = false);
 
 /// The last stage of a strategy that hands its candidate triangle pairs to a narrow phase: test_candidates, timed as
-/// "narrow phase", with its collisions, tested pairs, candidate count and test count stored in `result`.
+/// "narrow phase", with its collisions, tested pairs, candidate count and test count stored in `result`. With
+/// `separation_filter`, also the counter distance_filtered.
 void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::span<const AssignmentMask> masks,
                       std::span<const bvh::TrianglePair> candidates, const StepView& step,
-                      const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit);
+                      const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit, bool separation_filter = false);
 
 /// Appends every elementary pair of triangles a and b, not only those the masks give: their six vertices against
 /// the other face and their nine edge pairs, skipping pairs that share a vertex (unsorted; may repeat across calls).

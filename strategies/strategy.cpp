@@ -61,7 +61,11 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
   if (parsed.name != "fcl" && std::find(narrow_names.begin(), narrow_names.end(), parsed.narrow_phase) == narrow_names.end()) {
     throw std::invalid_argument("unknown narrow phase '" + parsed.narrow_phase + "' in '" + spec + "' (known: " + joined(narrow_names) + ")");
   }
-  if (parsed.name == "full") reject_unknown_keys(parsed, backend_parameter_names());
+  if (parsed.name == "full") {
+    std::vector<std::string> own = backend_parameter_names();
+    own.push_back("filter");
+    reject_unknown_keys(parsed, own);
+  }
   if (parsed.name == "brute") reject_unknown_keys(parsed, {});
   if (parsed.name == "apccd") {
     std::vector<std::string> own = apccd_parameter_names();
@@ -70,13 +74,14 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
     reject_unknown_keys(parsed, own);
   }
   if (parsed.name == "fcl-bvh") reject_unknown_keys(parsed, {"bv"});
-  // `full` has only the backend keys of its own and `brute` none: every other key is the narrow phase's.
+  // `full` has only the backend keys and filter of its own and `brute` none: every other key is the narrow phase's.
   if (parsed.name == "full" || parsed.name == "brute") {
     std::map<std::string, std::string> parameters = parsed.parameters;
     const BackendChoice backend = parsed.name == "full" ? take_backend(parameters) : BackendChoice{};
+    const bool filter = parsed.name == "full" && take_full_filter(parameters);
     auto narrow_phase = narrowphase::make_narrow_phase(parsed.narrow_phase, parameters);
-    if (backend.backend == "opencl") return make_full_opencl(std::move(narrow_phase), parsed.narrow_phase, parameters, backend);
-    return parsed.name == "full" ? make_full_traversal(std::move(narrow_phase)) : make_brute_force(std::move(narrow_phase));
+    if (backend.backend == "opencl") return make_full_opencl(std::move(narrow_phase), parsed.narrow_phase, parameters, backend, filter);
+    return parsed.name == "full" ? make_full_traversal(std::move(narrow_phase), filter) : make_brute_force(std::move(narrow_phase));
   }
   if (parsed.name == "apccd") {
     std::map<std::string, std::string> parameters = parsed.parameters;

@@ -4,14 +4,17 @@
 #include "strategies/elementary_tests.hpp"
 #include "strategies/object_hierarchies.hpp"
 
+#include <stdexcept>
+
 namespace ccd::strategies {
 namespace {
 
 class FullTraversal final : public Strategy {
  public:
-  explicit FullTraversal(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase) : narrow_phase_(std::move(narrow_phase)) {}
+  FullTraversal(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, bool separation_filter)
+      : narrow_phase_(std::move(narrow_phase)), separation_filter_(separation_filter) {}
 
-  std::string name() const override { return "full+" + narrow_phase_->name(); }
+  std::string name() const override { return "full+" + narrow_phase_->name() + (separation_filter_ ? ":filter=on" : ""); }
 
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
     scene_ = &scene;
@@ -31,13 +34,14 @@ class FullTraversal final : public Strategy {
       ScopedStageTimer timer(result.stages, "traversal");
       candidates = hierarchies_.candidates();
     }
-    run_narrow_phase(result, scene_->topology(), masks_, candidates, step, *narrow_phase_, scene_->thickness(), audit);
+    run_narrow_phase(result, scene_->topology(), masks_, candidates, step, *narrow_phase_, scene_->thickness(), audit, separation_filter_);
     result.counters.history_bytes = hierarchies_.bytes();
     return result;
   }
 
  private:
   std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
+  bool separation_filter_ = false;
   const Scene* scene_ = nullptr;
   std::vector<AssignmentMask> masks_;
   ObjectHierarchies hierarchies_;
@@ -81,8 +85,18 @@ class BruteForce final : public Strategy {
 
 }  // namespace
 
-std::unique_ptr<Strategy> make_full_traversal(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase) {
-  return std::make_unique<FullTraversal>(std::move(narrow_phase));
+bool take_full_filter(std::map<std::string, std::string>& parameters) {
+  const auto it = parameters.find("filter");
+  if (it == parameters.end()) return false;
+  const std::string value = it->second;
+  parameters.erase(it);
+  if (value == "on" || value == "true" || value == "1") return true;
+  if (value == "off" || value == "false" || value == "0") return false;
+  throw std::invalid_argument("full: filter=" + value + " must be on or off");
+}
+
+std::unique_ptr<Strategy> make_full_traversal(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, bool separation_filter) {
+  return std::make_unique<FullTraversal>(std::move(narrow_phase), separation_filter);
 }
 
 std::unique_ptr<Strategy> make_brute_force(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase) {

@@ -62,8 +62,9 @@ struct SpecRange {
 /// @throws std::invalid_argument "OWNER: KEY=VALUE must be a number in [MIN, MAX]" (or "an integer") otherwise.
 double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, SpecRange range);
 
-/// `value` as a spec prints it: the shortest text that reads back as the same double (so specs that differ in any
-/// digit get different names), e.g. 0.25, 1e-06, 1.0000000001.
+/// `value` as a spec prints it: as an ostream does (6 significant digits: 0.25, 1e-06, 100000) when that reads back
+/// as the same double, else the shortest text that does (1.0000000001), so specs that differ in any digit get
+/// different names.
 std::string format_spec_number(double value);
 
 /// The keys a narrow phase accepts (empty for an unknown name).

@@ -5,6 +5,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <sstream>
 #include <stdexcept>
@@ -45,9 +46,14 @@ constexpr SpecRange kFractionRange{0.0, 1.0};
 constexpr SpecRange kIterationRange{1.0, 1e9, true};
 
 std::string format_spec_number(double value) {
+  // As an ostream prints it (6 significant digits) when that reads back as the same double, so that the names of
+  // existing results stay; otherwise the shortest text that does.
+  std::ostringstream six;
+  six << value;
+  if (std::strtod(six.str().c_str(), nullptr) == value) return six.str();
   char text[32];
   const auto [end, error] = std::to_chars(text, text + sizeof(text), value);
-  if (error != std::errc()) return std::to_string(value);
+  if (error != std::errc()) return six.str();
   return std::string(text, end);
 }
 

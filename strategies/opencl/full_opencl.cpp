@@ -49,12 +49,12 @@ using opencl::upload;
 
 class FullOpenCl final : public Strategy {
  public:
-  FullOpenCl(opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device)
-      : pipeline_(std::move(narrow_phase), std::move(device), "full:backend=opencl") {}
+  FullOpenCl(opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device, bool separation_filter)
+      : pipeline_(std::move(narrow_phase), std::move(device), "full:backend=opencl"), separation_filter_(separation_filter) {}
 
   std::string name() const override {
     const opencl::NarrowPhaseChoice& narrow = pipeline_.narrow_phase();
-    return "full+" + narrow.host->name() + ":backend=opencl:device=" + pipeline_.device().name +
+    return "full+" + narrow.host->name() + (separation_filter_ ? ":filter=on" : "") + ":backend=opencl:device=" + pipeline_.device().name +
            (narrow.name == "conservative" ? ":device_iterations=" + std::to_string(narrow.device_iterations) : "");
   }
 
@@ -86,15 +86,22 @@ class FullOpenCl final : public Strategy {
     pipeline_.refit(pipeline_.moving_nodes(), x0, x1, pipeline_.scene().thickness() / 2, nullptr, node_boxes_, &events);
     const std::size_t candidates = pipeline_.traverse(queries_, node_boxes_, nullptr, candidates_, events, "traversal");
     const std::size_t elementary = pipeline_.expand(candidates_.buffer, candidates, elementary_, events);
-    pipeline_.back_end(elementary_.buffer, elementary, step, x0, x1, result, events);
+    const opencl::DeviceList* tested = &elementary_;
+    if (separation_filter_) {
+      pipeline_.filter(elementary_.buffer, elementary, x0, x1, kept_, events);
+      tested = &kept_;
+    }
+    const std::size_t tests = separation_filter_ ? kept_.count : elementary;
+    pipeline_.back_end(tested->buffer, tests, step, x0, x1, result, events);
     for (const auto& [stage, milliseconds] : events.collect()) result.stages.add(stage, milliseconds);
-    if (audit) result.tested = pipeline_.tested_pairs(elementary_.buffer, elementary);
+    if (audit) result.tested = pipeline_.tested_pairs(tested->buffer, tests);
+    if (separation_filter_) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(elementary - tests));
     current_ = 1 - current_;
     last_step_ = step.index;
     result.counters.candidate_triangle_pairs = candidates;
-    result.counters.elementary_tests = elementary;
+    result.counters.elementary_tests = tests;
     result.counters.history_bytes = pipeline_.bytes() + x_[0].bytes() + x_[1].bytes() + node_boxes_.bytes() + queries_bytes() +
-                                    candidates_.buffer.bytes() + elementary_.buffer.bytes();
+                                    candidates_.buffer.bytes() + elementary_.buffer.bytes() + kept_.buffer.bytes();
     return result;
   }
 
@@ -104,12 +111,13 @@ class FullOpenCl final : public Strategy {
   }
 
   opencl::DevicePipeline pipeline_;
+  bool separation_filter_ = false;
   opencl::Queries queries_;
   std::size_t num_vertices_ = 0;
   std::size_t current_ = 0;
   std::size_t last_step_ = static_cast<std::size_t>(-1);
   Buffer x_[2], node_boxes_;
-  opencl::DeviceList candidates_, elementary_;
+  opencl::DeviceList candidates_, elementary_, kept_;
 };
 
 }  // namespace
@@ -117,7 +125,8 @@ class FullOpenCl final : public Strategy {
 std::vector<OpenClDeviceSummary> opencl_devices() {
   std::vector<OpenClDeviceSummary> summaries;
   for (const opencl::DeviceInfo& d : opencl::list_devices()) {
-    OpenClDeviceSummary s{d.index, d.platform, d.name, d.version, d.driver, d.is_gpu, d.compute_units, d.global_memory, d.fp64, d.fp64_denormals, ""};
+    OpenClDeviceSummary s{d.index, d.platform, d.name, d.version, d.driver, d.is_gpu, d.compute_units, d.global_memory, d.fp64, d.fp64_denormals,
+                          d.int64_atomics, ""};
     try {
       opencl::require_double_precision(d);
     } catch (const std::invalid_argument& refusal) {
@@ -129,11 +138,12 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
 }
 
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, const std::string& narrow_phase_name,
-                                           const narrowphase::NarrowPhaseParameters& parameters, const BackendChoice& backend) {
+                                           const narrowphase::NarrowPhaseParameters& parameters, const BackendChoice& backend,
+                                           bool separation_filter) {
   opencl::NarrowPhaseChoice narrow = opencl::choose_narrow_phase("full", std::move(narrow_phase), narrow_phase_name, parameters, backend.device_iterations);
   opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), backend.device);
   opencl::require_double_precision(device);
-  return std::make_unique<FullOpenCl>(std::move(narrow), std::move(device));
+  return std::make_unique<FullOpenCl>(std::move(narrow), std::move(device), separation_filter);
 }
 
 #else
@@ -144,7 +154,7 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
 }
 
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const std::string&,
-                                           const narrowphase::NarrowPhaseParameters&, const BackendChoice&) {
+                                           const narrowphase::NarrowPhaseParameters&, const BackendChoice&, bool) {
   throw std::invalid_argument("backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
                               "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }

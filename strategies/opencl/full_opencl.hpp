@@ -29,6 +29,8 @@ struct OpenClDeviceSummary {
   std::uint64_t global_memory = 0;
   bool fp64 = false;
   bool fp64_denormals = false;
+  /// cl_khr_int64_base_atomics, which apccd:backend=opencl's pending list needs.
+  bool int64_atomics = false;
   /// Whether full:backend=opencl accepts it (fp64 that keeps subnormals); else why not.
   std::string refused_because;
 };
@@ -57,8 +59,9 @@ BackendChoice take_backend(std::map<std::string, std::string>& parameters);
 /// @throws std::invalid_argument for a narrow phase other than conservative and cubic64, a missing device, or a
 ///         device without (denormal-keeping) fp64; OpenClError when this build has no OpenCL.
 /// `parameters`: the narrow phase's own spec keys, which the kernels read as the CPU narrow phase does.
+/// `separation_filter`: full's filter=on (full_traversal.hpp), the same filter on the device.
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase,
                                            const std::string& narrow_phase_name, const narrowphase::NarrowPhaseParameters& parameters,
-                                           const BackendChoice& backend);
+                                           const BackendChoice& backend, bool separation_filter = false);
 
 }  // namespace ccd::strategies

@@ -259,6 +259,19 @@ std::size_t DevicePipeline::expand(const Buffer& candidates, std::size_t count, 
   });
 }
 
+std::size_t DevicePipeline::filter(const Buffer& elementary, std::size_t count, const Buffer& x0, const Buffer& x1, DeviceList& out,
+                                   StageEvents& events) {
+  Context& context = *context_;
+  keep_.reserve(context, std::max<std::size_t>(count, 1));
+  cl_kernel kernel = context.kernel("separation");
+  set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), keep_.get());
+  launch(context, kernel, count, narrow_group(kernel), events.add("distance heuristic"));
+  if (out.capacity == 0) out.capacity = initial_elementary_capacity_;
+  return fill_list("compact_kept", count, out, sizeof(cl_uint4), events, "distance heuristic", [&](cl_kernel compact, cl_uint capacity, const Buffer& counter) {
+    set_arguments(compact, static_cast<cl_uint>(count), elementary.get(), keep_.get(), capacity, counter.get(), out.buffer.get());
+  });
+}
+
 std::size_t DevicePipeline::narrow_group(cl_kernel kernel) const {
   // 64, or less where the kernel's resources allow less. Always the same for a kernel: PoCL compiles a kernel anew
   // for each work-group size it meets.
@@ -403,7 +416,7 @@ strategies::TestedPairs DevicePipeline::tested_pairs(const Buffer& elementary, s
 
 std::size_t DevicePipeline::bytes() const {
   std::size_t total = 0;
-  for (const Buffer* b : {&faces_, &face_edges_, &edges_, &masks_, &children_, &node_face_, &leaf_node_buffer_, &all_.leaves, &moving_.leaves,
+  for (const Buffer* b : {&keep_, &faces_, &face_edges_, &edges_, &masks_, &children_, &node_face_, &leaf_node_buffer_, &all_.leaves, &moving_.leaves,
                           &all_.levels, &moving_.levels, &vertex_boxes_, &counter_, &status_, &toi_, &out_.buffer, &out_status_, &out_toi_,
                           &retry_pairs_, &retry_status_, &retry_toi_}) {
     total += b->bytes();

@@ -120,6 +120,9 @@ class DevicePipeline {
   void vertex_boxes(const Buffer& x0, const Buffer& x1, StageEvents& events);
   /// Elementary pairs of `count` candidates in `candidates` that pass the primitive-level box test.
   std::size_t expand(const Buffer& candidates, std::size_t count, DeviceList& out, StageEvents& events);
+  /// The separation filter (narrowphase/shared/separation.h) over `count` elementary pairs: those it cannot prove
+  /// apart go to `out` (in any order). Returns their count.
+  std::size_t filter(const Buffer& elementary, std::size_t count, const Buffer& x0, const Buffer& x1, DeviceList& out, StageEvents& events);
   /// The narrow phase over `count` elementary pairs, then the tiers for given-up queries, into result.collisions
   /// (normalised) and the device_* / host_decided_pairs counters.
   void back_end(const Buffer& elementary, std::size_t count, const StepView& step, const Buffer& x0, const Buffer& x1, strategies::StepResult& result,
@@ -155,6 +158,7 @@ class DevicePipeline {
   RefitPlan all_, moving_;
   std::size_t initial_elementary_capacity_ = 0;
   DeviceList out_;
+  Buffer keep_;
   Buffer faces_, face_edges_, edges_, masks_, children_, node_face_, leaf_node_buffer_, vertex_boxes_, counter_, status_, toi_,
       out_status_, out_toi_, retry_pairs_, retry_status_, retry_toi_;
 };

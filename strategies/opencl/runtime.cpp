@@ -212,6 +212,9 @@ Context::Context(const DeviceInfo& device, const std::string& defines) : device_
 }
 
 Context::~Context() {
+  // Writes enqueued without waiting read host memory until they run: a strategy destroyed after an error must not
+  // free that memory under them.
+  if (queue_ != nullptr) clFinish(queue_);
   for (auto& [name, kernel] : kernels_) clReleaseKernel(kernel);
   if (program_ != nullptr) clReleaseProgram(program_);
   if (queue_ != nullptr) clReleaseCommandQueue(queue_);

@@ -26,6 +26,8 @@ TEST_P(FullTraversalOnScene, EqualsBruteForceForAnyThreadCountAndMissesNothing) 
     const auto brute = testing::run_all_steps("brute", scene, loaded.frames, 2);
     const auto full_one = testing::run_all_steps("full", scene, loaded.frames, 1);
     const auto full_two = testing::run_all_steps("full", scene, loaded.frames, 2);
+    // filter=on drops pairs the separation filter proves apart: a subset of full's answers, still every truth pair.
+    const auto filtered = testing::run_all_steps("full:filter=on", scene, loaded.frames, 2);
     std::size_t colliding = 0;
     for (std::size_t k = 0; k < brute.size(); ++k) {
       ASSERT_TRUE(full_one[k].same_pairs(brute[k])) << "step " << k << ": full " << full_one[k].size() << ", brute " << brute[k].size();
@@ -33,6 +35,8 @@ TEST_P(FullTraversalOnScene, EqualsBruteForceForAnyThreadCountAndMissesNothing) 
       const auto truth = reference::compute_step_truth(scene, loaded.frames[k], loaded.frames[k + 1], {thickness, false, {}});
       const CollisionSet missed = set_difference(truth.collisions, full_one[k]);
       ASSERT_EQ(missed.size(), 0u) << "step " << k << ": full missed " << missed.size() << " of " << truth.collisions.size();
+      ASSERT_EQ(set_difference(truth.collisions, filtered[k]).size(), 0u) << "step " << k << ": full:filter=on missed";
+      ASSERT_EQ(set_difference(filtered[k], full_one[k]).size(), 0u) << "step " << k << ": full:filter=on reported what full did not";
       colliding += truth.collisions.size();
     }
     EXPECT_GT(colliding, 0u) << "the scene must collide somewhere for 'misses nothing' to mean anything";
@@ -65,12 +69,16 @@ TEST(FullTraversal, FindsTheContactOfTwoTrianglesSharingAVertex) {
 TEST(StrategyFactory, SpecsResolveAndErrorsAreClear) {
   EXPECT_EQ(make_strategy("full")->name(), "full+conservative:tolerance=1e-06:max_iterations=20000");
   EXPECT_EQ(make_strategy("full+cubic64:eta=1e-05")->name(), "full+cubic64:eta=1e-05");
+  EXPECT_EQ(make_strategy("full:filter=on")->name(), "full+conservative:tolerance=1e-06:max_iterations=20000:filter=on");
+  EXPECT_EQ(make_strategy("full:filter=off")->name(), make_strategy("full")->name());
+  EXPECT_THROW(make_strategy("full:filter=maybe"), std::invalid_argument);
+  EXPECT_THROW(make_strategy("brute:filter=on"), std::invalid_argument);
   EXPECT_THROW(make_strategy("fast"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full+quartic"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full:nf_max=3"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full:oops"), std::invalid_argument);
   const std::string unknown = testing::error_message<std::invalid_argument>([] { make_strategy("full:nf_max=3"); });
-  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations; narrow phase conservative's: "
+  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, filter; narrow phase conservative's: "
                          "tolerance, max_iterations)"), std::string::npos) << unknown;
 }
 

@@ -24,6 +24,8 @@ using opencl::upload;
 /// The pending list's hash table is rebuilt larger once it would be more than half full (linear probing stays
 /// short below that).
 constexpr std::size_t kTableLoadInverse = 2;
+/// Lists are indexed with 32-bit work-item ids and counters in the kernels.
+constexpr std::size_t kMaxListEntries = 0xFFFFFFFFull;
 
 class ApccdOpenCl final : public Strategy {
  public:
@@ -61,6 +63,7 @@ class ApccdOpenCl final : public Strategy {
     // for object_pairs=fresh, the world-frame ones.
     const std::size_t box_bytes = std::max<std::size_t>(pipeline_.node_count(), 1) * 6 * sizeof(double);
     session_boxes_.reserve(context, box_bytes);
+    if (num_vertices_ == 0) throw std::invalid_argument("apccd:backend=opencl: the scene has no vertices");
     upload(context, x_[0], first_frame.data()->data(), 3 * num_vertices_);
     upload(context, x_[1], first_frame.data()->data(), 3 * num_vertices_);
     pipeline_.refit(pipeline_.all_nodes(), x_[0], x_[1], scene.thickness() / 2, nullptr, session_boxes_, nullptr);
@@ -114,7 +117,8 @@ class ApccdOpenCl final : public Strategy {
         pipeline_.refit(pipeline_.moving_nodes(), x0, x1, half, nullptr, world_boxes_, &events);
         pipeline_.traverse(pair_queries_, world_boxes_, nullptr, across_, events, "object pairs");
       } else {
-        std::vector<double> offsets;
+        std::vector<double>& offsets = host_offsets_;  // read by the device after this call returns
+        offsets.clear();
         for (const auto& [a, b] : scene_->collidable_pairs()) {
           const Box3 offset = session_.pair_offset(a, b);
           for (int k = 0; k < 3; ++k) offsets.push_back(offset.min()[k]);
@@ -133,6 +137,10 @@ class ApccdOpenCl final : public Strategy {
       launch(context, kernel, faces, pipeline_.group(), events.add("front end"));
     }
     const std::size_t across_count = across != nullptr ? across->count : 0;
+    if (pending_.count + across_count > kMaxListEntries) {
+      throw std::runtime_error("apccd:backend=opencl: " + std::to_string(pending_.count + across_count) +
+                               " pending and object pairs in one step; the kernels index at most 2^32 - 1");
+    }
     const cl_mem across_memory = across != nullptr ? across->buffer.get() : nullptr;
     if (admissible_.capacity == 0) admissible_.capacity = pipeline_.tiny() ? 1 : std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024);
     const std::size_t admissible = pipeline_.fill_list(
@@ -146,17 +154,7 @@ class ApccdOpenCl final : public Strategy {
     const std::size_t elementary = pipeline_.expand(admissible_.buffer, admissible, elementary_, events);
     const DeviceList* tested = &elementary_;
     if (settings_.heuristic) {
-      keep_.reserve(context, std::max<std::size_t>(elementary, 1));
-      cl_kernel kernel = context.kernel("separation");
-      set_arguments(kernel, static_cast<cl_uint>(elementary), elementary_.buffer.get(), pipeline_.faces().get(), x0.get(), x1.get(),
-                    scene_->thickness(), keep_.get());
-      launch(context, kernel, elementary, pipeline_.narrow_group(kernel), events.add("distance heuristic"));
-      if (tested_.capacity == 0) tested_.capacity = std::max<std::size_t>(elementary_.capacity, 1);
-      pipeline_.fill_list("compact_kept", elementary, tested_, sizeof(cl_uint4), events, "distance heuristic",
-                          [&](cl_kernel compact, cl_uint capacity, const Buffer& counter) {
-                            set_arguments(compact, static_cast<cl_uint>(elementary), elementary_.buffer.get(), keep_.get(), capacity,
-                                          counter.get(), tested_.buffer.get());
-                          });
+      pipeline_.filter(elementary_.buffer, elementary, x0, x1, tested_, events);
       tested = &tested_;
     }
     const std::size_t tests = tested->count;
@@ -275,6 +273,9 @@ class ApccdOpenCl final : public Strategy {
     if (found == 0) return;
     // The table holds the pending list; it is (re)built when missing or when the new pairs could fill it past half.
     const std::size_t most = pending_.count + found;
+    if (most > kMaxListEntries) {
+      throw std::runtime_error("apccd:backend=opencl: a pending list of " + std::to_string(most) + " pairs; the kernels index at most 2^32 - 1");
+    }
     if (!table_valid_ || kTableLoadInverse * most > (std::size_t{1} << table_bits_)) {
       table_bits_ = 4;
       // Room for the list to double before the next rebuild (the test hook's tiny lists rebuild at every growth).
@@ -315,7 +316,7 @@ class ApccdOpenCl final : public Strategy {
   std::size_t device_bytes() const {
     std::size_t total = pipeline_.bytes();
     for (const Buffer* b : {&x_[0], &x_[1], &relative_[0], &relative_[1], &anchor_, &budget_, &dangling_, &session_boxes_, &world_boxes_,
-                            &face_boxes_, &fresh_boxes_, &centroids_[0], &centroids_[1], &vertex_object_, &face_root_, &offsets_, &keep_, &table_, &counter_,
+                            &face_boxes_, &fresh_boxes_, &centroids_[0], &centroids_[1], &vertex_object_, &face_root_, &offsets_, &table_, &counter_,
                             &pending_.buffer, &across_.buffer, &admissible_.buffer, &elementary_.buffer, &tested_.buffer, &found_.buffer,
                             &dangling_faces_.buffer}) {
       total += b->bytes();
@@ -339,12 +340,13 @@ class ApccdOpenCl final : public Strategy {
   std::vector<Vec3> host_relative0_, host_relative1_;
   std::vector<double> host_budget_;
   std::vector<double> host_centroids_[2];
+  std::vector<double> host_offsets_;
   std::size_t table_bits_ = 0;
   /// How often the table was built (counter pending_table_builds).
   std::size_t table_builds_ = 0;
   bool table_valid_ = false;
   Buffer x_[2], relative_[2], anchor_, budget_, dangling_, session_boxes_, world_boxes_, face_boxes_, fresh_boxes_, centroids_[2], vertex_object_,
-      face_root_, offsets_, keep_, table_, counter_;
+      face_root_, offsets_, table_, counter_;
   DeviceList pending_, across_, admissible_, elementary_, tested_, found_, dangling_faces_;
 };
 

@@ -15,11 +15,11 @@ kernel void object_frame(uint count, global const double* x, global const uint* 
   for (int k = 0; k < 3; ++k) relative[3 * (size_t)v + k] = x[3 * (size_t)v + k] - centroids[3 * (size_t)o + k];
 }
 
-/* |relative - anchor|_inf > budget (the CPU's `outside`). */
+/* |relative - anchor|_inf > budget (the CPU's `outside`: cwiseAbs().maxCoeff(), max(max(x, y), z)). */
 static inline int ccd_outside(global const double* relative, global const double* anchor, uint v, double budget) {
-  double largest = 0;
-  for (int k = 0; k < 3; ++k) largest = ccd_max(largest, fabs(relative[3 * (size_t)v + k] - anchor[3 * (size_t)v + k]));
-  return largest > budget;
+  const ccd_v3 d = ccd_v3_make(relative[3 * (size_t)v] - anchor[3 * (size_t)v], relative[3 * (size_t)v + 1] - anchor[3 * (size_t)v + 1],
+                               relative[3 * (size_t)v + 2] - anchor[3 * (size_t)v + 2]);
+  return ccd_max_coeff(ccd_cwise_abs(d)) > budget;
 }
 
 /* Dangling vertices: beyond their budget around the session's anchor at either end of the step; counted in total[0]. */
