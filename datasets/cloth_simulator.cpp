@@ -81,9 +81,12 @@ void ClothSimulator::set_wind(std::function<Vec3(double)> wind, double normal_dr
   tangential_drag_ = tangential_drag;
 }
 
-void ClothSimulator::step_frame() {
-  const double dt = settings_.frame_seconds / settings_.substeps;
-  for (int s = 0; s < settings_.substeps; ++s) substep(dt);
+void ClothSimulator::step_frame() { step_fraction(1); }
+
+void ClothSimulator::step_fraction(int parts) {
+  const int per_part = (settings_.substeps + parts - 1) / parts;
+  const double dt = settings_.frame_seconds / (per_part * parts);
+  for (int s = 0; s < per_part; ++s) substep(dt);
 }
 
 void ClothSimulator::apply_wind(double dt) {

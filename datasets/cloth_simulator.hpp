@@ -61,6 +61,10 @@ class ClothSimulator {
 
   /// Advances by one frame (settings.frame_seconds).
   void step_frame();
+  /// Advances 1/parts of a frame: ceil(substeps / parts) substeps of frame_seconds / (that · parts), so that
+  /// `parts` calls make one frame. parts = 1 is step_frame(); parts dividing `substeps` (1, 2, 4 with the default
+  /// 4) keep its substeps, and so its motion, bit for bit; others take the next multiple of parts.
+  void step_fraction(int parts);
 
   const std::vector<Vec3>& positions() const { return x_; }
   double time() const { return time_; }

@@ -149,8 +149,11 @@ struct Setup {
 
 struct CommonParameters {
   std::size_t n;
+  /// Simulated frames (30 per simulated second).
   std::size_t frames;
   std::mt19937_64 random;
+  /// CCD steps per simulated frame: the emitted frames are (frames - 1) · steps_per_frame + 1.
+  std::size_t steps_per_frame = 1;
 };
 
 Vec3 rotate_z(const Vec3& p, double angle) {
@@ -475,7 +478,11 @@ struct SceneDefinition {
 std::vector<SceneParameter> with_common(std::vector<SceneParameter> own) {
   std::vector<SceneParameter> all = {{"resolution", 32, "cloth grid side N: N x N vertices, 2(N-1)^2 triangles per cloth"},
                                      {"frames", 30, "frames to generate (steps = frames - 1), 30 per simulated second"},
-                                     {"seed", 1, "seed of the scene's random placement and gusts"}};
+                                     {"seed", 1, "seed of the scene's random placement and gusts"},
+                                     {"steps_per_frame", 1,
+                                      "CCD steps per simulated frame: the simulator's substeps emitted as steps, simulated time "
+                                      "and motion unchanged ((frames - 1) x this + 1 frames are written; 1, 2 and 4 keep the "
+                                      "simulator's 4 substeps per frame bit for bit, others the next multiple)"}};
   all.insert(all.end(), own.begin(), own.end());
   return all;
 }
@@ -550,6 +557,7 @@ SceneParameters resolve_parameters(const ProceduralSceneInfo& info, const SceneP
   require_integer("resolution", 3, 4096);
   require_integer("frames", 2, 100000);
   require_integer("seed", 0, 9007199254740992.0);
+  require_integer("steps_per_frame", 1, 64);
   if (resolved.count("count")) require_integer("count", 1, 64);
   return resolved;
 }
@@ -600,7 +608,11 @@ void check_scene_fits(const ProceduralSceneInfo& info, const SceneParameters& pa
 std::string cache_key(const std::string& name, const SceneParameters& parameters) {
   std::ostringstream key;
   key << "ccdbench procedural v" << kGeneratorVersion << ' ' << name << std::setprecision(17);
-  for (const auto& [parameter, value] : parameters) key << ' ' << parameter << '=' << value;
+  for (const auto& [parameter, value] : parameters) {
+    // steps_per_frame=1 (the default) is left out, so that the scenes generated before it existed keep their key.
+    if (parameter == "steps_per_frame" && value == 1) continue;
+    key << ' ' << parameter << '=' << value;
+  }
   return key.str();
 }
 
@@ -676,24 +688,30 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
   check_scene_fits(definition.info, parameters, request.out);
   CommonParameters common{static_cast<std::size_t>(parameters.at("resolution")),
                           static_cast<std::size_t>(parameters.at("frames")),
-                          std::mt19937_64(static_cast<std::uint64_t>(parameters.at("seed")))};
+                          std::mt19937_64(static_cast<std::uint64_t>(parameters.at("seed"))),
+                          static_cast<std::size_t>(parameters.at("steps_per_frame"))};
   Setup setup = definition.build(common, parameters);
   const std::string key = cache_key(request.name, parameters);
+  // Every CCD step is 1/steps_per_frame of a simulated frame; the emitted frames are the simulator's states at
+  // those times.
+  const std::size_t parts = common.steps_per_frame;
+  const std::size_t emitted = (common.frames - 1) * parts + 1;
   const double frame_seconds = SimulatorSettings{}.frame_seconds;
+  auto time_of = [&](std::size_t frame) { return static_cast<double>(frame) * frame_seconds / static_cast<double>(parts); };
   // One process generates a folder at a time; another one waits, then finds it complete.
   std::filesystem::create_directories(request.out);
   const FileLock lock(request.out / ".generate.lock");
 
   GenerateResult result;
   result.scene_file = request.out / "scene.json";
-  result.frames = common.frames;
+  result.frames = emitted;
   result.thickness = setup.thickness;
   result.cloth_triangles = 0;
   for (const OutputObject& object : setup.objects) {
     result.triangles += object.faces.size();
     if (object.kind == ObjectKind::deformable) result.cloth_triangles += object.faces.size();
   }
-  result.from_cache = complete_in(request.out, setup, key, common.frames);
+  result.from_cache = complete_in(request.out, setup, key, emitted);
 
   std::vector<std::unique_ptr<FrameSource>> caches;
   if (!result.from_cache) {
@@ -703,9 +721,9 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
       writers.push_back(std::make_unique<FrameCacheWriter>(request.out / "cache" / (object.name + ".frames"), key,
                                                            object.num_vertices, object.faces));
     }
-    for (std::size_t frame = 0; frame < common.frames; ++frame) {
-      if (frame > 0) setup.simulator->step_frame();
-      const double time = static_cast<double>(frame) * frame_seconds;
+    for (std::size_t frame = 0; frame < emitted; ++frame) {
+      if (frame > 0) setup.simulator->step_fraction(static_cast<int>(parts));
+      const double time = time_of(frame);
       std::vector<std::vector<Vec3>> positions;
       for (std::size_t k = 0; k < setup.objects.size(); ++k) {
         positions.push_back(setup.objects[k].positions(*setup.simulator, time));
@@ -717,10 +735,10 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
                                         ": a parameter is outside the range where the simulator is stable");
           }
         }
-        if (frame < frames_of(setup.objects[k], common.frames)) writers[k]->append(positions.back());
+        if (frame < frames_of(setup.objects[k], emitted)) writers[k]->append(positions.back());
       }
       if (request.report) request.report({frame, setup.report(frame, time, positions)});
-      if (request.progress) request.progress(frame + 1, common.frames);
+      if (request.progress) request.progress(frame + 1, emitted);
     }
     for (auto& writer : writers) writer->finish();
   }
@@ -728,10 +746,10 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
     caches.push_back(open_frame_cache(request.out / "cache" / (object.name + ".frames")));
   }
   if (result.from_cache && request.report) {
-    for (std::size_t frame = 0; frame < common.frames; ++frame) {
+    for (std::size_t frame = 0; frame < emitted; ++frame) {
       std::vector<std::vector<Vec3>> positions;
       for (const auto& cache : caches) positions.push_back(cache->frame(std::min(frame, cache->num_frames() - 1)));
-      request.report({frame, setup.report(frame, static_cast<double>(frame) * frame_seconds, positions)});
+      request.report({frame, setup.report(frame, time_of(frame), positions)});
     }
   }
   if (!result.from_cache) {

@@ -43,6 +43,7 @@ using nlohmann::json;
 SceneSource generated(const std::string& name, std::map<std::string, double> parameters) {
   std::ostringstream label;
   label << name << "-r" << parameters.at("resolution") << "-f" << parameters.at("frames");
+  if (const auto it = parameters.find("steps_per_frame"); it != parameters.end() && it->second != 1) label << "-s" << it->second;
   return {label.str(), [name, parameters] {
             json block = {{"name", name}};
             for (const auto& [key, value] : parameters) block[key] = value;
@@ -305,6 +306,9 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   std::size_t colliding = 0, reported = 0, missed = 0, culled = 0, tested = 0, false_alarms = 0;
   ToiVerdict toi_total;
   double candidates = 0, tests = 0, history = 0;
+  // Each strategy counter (apccd's session_start, nf, pending_pairs, ...) over the steps: mean and max, since the
+  // paper reports averages and peaks, in the order the strategy reports them.
+  std::vector<std::pair<std::string, std::pair<double, double>>> counter_totals;
   for (std::size_t k = 0; k < steps; ++k) {
     const strategies::StepResult& r = first_pass[k];
     const double ms = median(step_ms[k]);
@@ -321,7 +325,13 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                    {"elementary_tests", r.counters.elementary_tests},
                    {"history_bytes", r.counters.history_bytes},
                    {"reported", reported_count(r, judging)}};
-    for (const auto& [name, value] : r.counters.extra) record[name] = value;
+    for (const auto& [name, value] : r.counters.extra) {
+      record[name] = value;
+      auto it = std::find_if(counter_totals.begin(), counter_totals.end(), [&](const auto& entry) { return entry.first == name; });
+      if (it == counter_totals.end()) it = counter_totals.insert(counter_totals.end(), {name, {0.0, value}});
+      it->second.first += value;
+      it->second.second = std::max(it->second.second, value);
+    }
     if (options.verify) {
       record["colliding"] = data.truth[k].size();
       record["missed"] = verdicts[k].missed;
@@ -349,6 +359,12 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   }
   json stage_summary = json::object();
   for (const auto& [stage, values] : stage_ms) stage_summary[stage] = median(values);
+  json counter_summary = json::object();
+  for (const auto& [name, total] : counter_totals) {
+    counter_summary[name] = {{"mean", total.first / static_cast<double>(std::max<std::size_t>(steps, 1))}, {"max", total.second}};
+  }
+  double ms_sum = 0;
+  for (const double ms : medians) ms_sum += ms;
   json summary = {{"record", "summary"},
                   {"scene", data.label},
                   {"strategy", resolved},
@@ -356,7 +372,9 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                   {"steps", steps},
                   {"thickness", scene.thickness()},
                   {"ms_per_step", median(medians)},
+                  {"ms_per_step_mean", ms_sum / static_cast<double>(std::max<std::size_t>(steps, 1))},
                   {"stage_ms", stage_summary},
+                  {"counters", counter_summary},
                   {"candidate_pairs", candidates / static_cast<double>(std::max<std::size_t>(steps, 1))},
                   {"elementary_tests", tests / static_cast<double>(std::max<std::size_t>(steps, 1))},
                   {"history_bytes", history},

@@ -62,6 +62,41 @@ TEST(ProceduralScenes, SameParametersGiveTheSameBytesOnOneAndTwoThreads) {
   }
 }
 
+// steps_per_frame = k emits the simulator's state k times per simulated frame: (frames - 1)·k + 1 frames, and with
+// k dividing the simulator's 4 substeps every k-th one is the k = 1 frame bit for bit (the same motion, finer
+// steps). k = 1 is the default, and its cache key is the key of the scenes generated before the parameter existed.
+TEST(ProceduralScenes, StepsPerFrameEmitsTheSubstepsWithTheSameMotion) {
+  for (const char* name : {"flag", "spinning-ball", "fold"}) {
+    SCOPED_TRACE(name);
+    testing::TempDir base_dir;
+    const SceneParameters base{{"resolution", 8}, {"frames", 5}};
+    const Frames one = load(generate(name, base, base_dir.path()));
+    SceneParameters explicit_one = base;
+    explicit_one["steps_per_frame"] = 1;
+    EXPECT_TRUE(generate(name, explicit_one, base_dir.path()).from_cache) << "steps_per_frame=1 changed the cache key";
+    for (const double k : {2.0, 4.0, 3.0}) {
+      SCOPED_TRACE("steps_per_frame " + std::to_string(k));
+      testing::TempDir dir;
+      SceneParameters parameters = base;
+      parameters["steps_per_frame"] = k;
+      const GenerateResult result = generate(name, parameters, dir.path());
+      const Frames finer = load(result);
+      const auto parts = static_cast<std::size_t>(k);
+      ASSERT_EQ(finer.frames.size(), (one.frames.size() - 1) * parts + 1);
+      EXPECT_EQ(result.frames, finer.frames.size());
+      if (parts == 3) continue;  // 3 does not divide 4 substeps: 6 substeps per frame, another (finer) simulation
+      for (std::size_t j = 0; j < one.frames.size(); ++j) {
+        ASSERT_TRUE(finer.frames[j * parts] == one.frames[j]) << "frame " << j * parts << " is not frame " << j << " of steps_per_frame=1";
+      }
+      // The steps in between are steps: the cloth moves in each.
+      EXPECT_FALSE(finer.frames[1] == finer.frames[0]);
+    }
+  }
+  testing::TempDir dir;
+  EXPECT_THROW(generate("flag", {{"resolution", 8}, {"steps_per_frame", 0}}, dir.path()), std::invalid_argument);
+  EXPECT_THROW(generate("flag", {{"resolution", 8}, {"steps_per_frame", 1.5}}, dir.path()), std::invalid_argument);
+}
+
 TEST(ProceduralScenes, SecondCallReadsTheCacheAndOtherParametersResimulate) {
   testing::TempDir dir;
   EXPECT_FALSE(generate("flag", {{"resolution", 8}, {"frames", 5}}, dir.path()).from_cache);

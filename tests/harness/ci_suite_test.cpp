@@ -7,7 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
 
 namespace ccd::harness {
 namespace {
@@ -53,6 +56,43 @@ TEST(CiSuite, EveryCellCollidesWithContactsOfEveryKindAtBothThicknesses) {
     EXPECT_GT(inside_sessions, 0u);
   }
   ::unsetenv("CCDBENCH_CACHE_DIR");
+}
+
+// A summary carries each strategy counter's mean and max over its steps (apccd's session starts, pending pairs,
+// ...) and the mean ms per step beside the median: they must be the steps' own values.
+TEST(RunSummary, StrategyCountersHaveTheirMeanAndMaxOverTheSteps) {
+  testing::TempDir dir;
+  ::setenv("CCDBENCH_CACHE_DIR", dir.path().c_str(), 1);
+  RunOptions options;
+  options.scenes = {suite_scenes("ci").back()};
+  options.strategies = {"apccd"};
+  options.verify = false;
+  options.out = dir.path() / "results";
+  std::ostringstream table;
+  const std::vector<nlohmann::json> summaries = run_benchmark(options, table);
+  ::unsetenv("CCDBENCH_CACHE_DIR");
+  ASSERT_EQ(summaries.size(), 1u);
+  const nlohmann::json& summary = summaries[0];
+  std::vector<nlohmann::json> steps;
+  std::ifstream in(options.out / "results.jsonl");
+  for (std::string line; std::getline(in, line);) {
+    const nlohmann::json record = nlohmann::json::parse(line);
+    if (record.value("record", "") == "step") steps.push_back(record);
+  }
+  ASSERT_EQ(steps.size(), summary["steps"].get<std::size_t>());
+  for (const char* name : {"session_start", "pending_pairs", "nf"}) {
+    double sum = 0, most = 0;
+    for (const nlohmann::json& step : steps) {
+      sum += step[name].get<double>();
+      most = std::max(most, step[name].get<double>());
+    }
+    EXPECT_DOUBLE_EQ(summary["counters"][name]["mean"].get<double>(), sum / static_cast<double>(steps.size())) << name;
+    EXPECT_EQ(summary["counters"][name]["max"].get<double>(), most) << name;
+  }
+  EXPECT_GT(summary["counters"]["pending_pairs"]["max"].get<double>(), 0.0);
+  double ms = 0;
+  for (const nlohmann::json& step : steps) ms += step["ms"].get<double>();
+  EXPECT_DOUBLE_EQ(summary["ms_per_step_mean"].get<double>(), ms / static_cast<double>(steps.size()));
 }
 
 }  // namespace

@@ -132,9 +132,20 @@ TEST_F(OpenClParity, TheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
   for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"})) EXPECT_EQ(scenes, 2u);
 }
 
+/// Steps of the longer suite runs under AddressSanitizer, which makes them several times slower on CI's two cores:
+/// the same code runs in fewer steps there, and the Release run of CI compares every step.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr std::size_t kSanitizerSteps = 10;
+#else
+constexpr std::size_t kSanitizerSteps = 0;
+#endif
+
 TEST_F(OpenClParity, TheDefaultSuiteGivesTheCpuAnswersAtBothThicknesses) {
-  // Five of its six scenes collide at both δ; the flag at resolution 16 does not fold onto itself in 20 frames.
-  for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"})) EXPECT_GE(scenes, 5u);
+  // Five of its six scenes collide at both δ (four in the first 10 steps); the flag at resolution 16 does not fold
+  // onto itself in 20 frames.
+  for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"}, kSanitizerSteps)) {
+    EXPECT_GE(scenes, kSanitizerSteps > 0 ? 4u : 5u);
+  }
 }
 
 // full:filter=on (the separation filter before the narrow phase) on both backends: the same sets and the same
@@ -170,7 +181,9 @@ TEST_F(OpenClParity, ApccdKnobsGiveTheCpuAnswers) {
                            ":object_pairs=session", ":history=on:inflation_max=1e9"}) {
     SCOPED_TRACE(keys);
     std::map<std::string, double> counters;
-    for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, 0, "apccd", keys, &counters)) EXPECT_EQ(scenes, 2u);
+    for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, kSanitizerSteps, "apccd", keys, &counters)) {
+      EXPECT_EQ(scenes, 2u);
+    }
     if (std::string(keys) != ":skip=off") {
       EXPECT_GT(counters["dangling_vertices"], 0.0) << "no session outlived its first frame";
     }
