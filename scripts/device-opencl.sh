@@ -18,7 +18,9 @@
 #        $LARGE_PARITY_STEPS steps, the first $LARGE_VERIFIED_STEPS steps verified, then all 20 with --verify none.
 # PART_TIMEOUT (seconds) stops an apccd-paper run before the device's 10-minute call ends; its finished cells stay in
 # $out/runs-paper-* and are packed, and the same command on the still-warm machine resumes from them.
-# PARTS chooses among "parity public paper big apccd-parity apccd-paper-delta apccd-paper-zero apccd-large"
+#      attribution: the paper suite at the scenes' δ, --verify none, full, full:filter=on, apccd:skip=off and apccd
+#        on the CPU (every core) and on the device.
+# PARTS chooses among "parity public paper big apccd-parity apccd-paper-delta apccd-paper-zero attribution apccd-large"
 # (default: the first four). Writes every table and JSON summary to a work
 # folder and, when $OUT is set (the device's return folder), packs them into $OUT/opencl-device.tgz.
 # Usage (from the repository root): scripts/device-opencl.sh
@@ -90,6 +92,9 @@ CCDBENCH_PARITY_SCENE=/tmp/ccdbench-fold/scene.json CCDBENCH_PARITY_THICKNESS=$B
   --strategy "full,full+cubic64,$gpu" --out "$out/runs" --json "$out/big-${threads}threads.json" 2>/dev/null | tee "$out/big-${threads}threads.txt"
 fi
 apccd_cells="full,apccd,full:backend=opencl,apccd:backend=opencl"
+# The attribution of apccd's gain (issue 17): full, full with apccd's separation filter, apccd without and with
+# skipping, on the CPU and on the device; --verify none (the verified runs above hold the 0 missed).
+attribution_cells="full,full:filter=on,apccd:skip=off,apccd,full:backend=opencl,full:filter=on:backend=opencl,apccd:skip=off:backend=opencl,apccd:backend=opencl"
 if part apccd-parity; then
 echo "== apccd parity (opencl_tests on the first GPU)"
 start=$SECONDS
@@ -110,6 +115,14 @@ for delta in delta zero; do
   echo "apccd paper $delta: $((SECONDS - start)) s" | tee -a "$out/apccd-paper-$delta.txt"
   pack
 done
+if part attribution; then
+echo "== attribution, paper suite, first $APCCD_PAPER_STEPS steps (0: all), --verify none"
+start=$SECONDS
+timeout "${PART_TIMEOUT:-100000}" "$bin/ccdbench" --threads "$threads" run --suite paper --max-steps "$APCCD_PAPER_STEPS" --verify none \
+  --strategy "$attribution_cells" --out "$out/runs-attribution" --json "$out/attribution.json" 2>/dev/null | tee "$out/attribution.txt" | cut -c1-150
+echo "attribution: $((SECONDS - start)) s" | tee -a "$out/attribution.txt"
+pack
+fi
 if part apccd-large; then
 echo "== apccd, spinning-ball r317 (about 200k triangles), 20 steps"
 start=$SECONDS
