@@ -60,28 +60,22 @@ class FullOpenCl final : public Strategy {
 
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
     pipeline_.init(scene, first_frame);
-    num_vertices_ = scene.topology().num_vertices();
     pipeline_.make_queries(queries_, true, true, false);
     opencl::Context& context = pipeline_.context();
     // Static objects are fitted once, here, over frame 0 (as the CPU does): every leaf and every level now.
     node_boxes_.reserve(context, std::max<std::size_t>(pipeline_.node_count(), 1) * 6 * sizeof(double));
-    upload(context, x_[0], first_frame.data()->data(), 3 * num_vertices_);
-    upload(context, x_[1], first_frame.data()->data(), 3 * num_vertices_);
-    pipeline_.refit(pipeline_.all_nodes(), x_[0], x_[1], scene.thickness() / 2, nullptr, node_boxes_, nullptr);
+    positions_.reset(context, first_frame);
+    pipeline_.refit(pipeline_.all_nodes(), positions_.x0(), positions_.x1(), scene.thickness() / 2, nullptr, node_boxes_, nullptr);
     context.finish();
-    last_step_ = static_cast<std::size_t>(-1);
   }
 
   StepResult step(const StepView& step, bool audit) override {
     StepResult result;
     opencl::StageEvents events;
     opencl::Context& context = pipeline_.context();
-    // Steps come in order: x0 of this step is x1 of the last, already on the device. Otherwise both are sent.
-    const bool follows = step.index == last_step_ + 1;
-    if (!follows) upload(context, x_[current_], step.x0.data()->data(), 3 * num_vertices_, events.add("upload"));
-    Buffer& x0 = x_[current_];
-    Buffer& x1 = x_[1 - current_];
-    upload(context, x1, step.x1.data()->data(), 3 * num_vertices_, events.add("upload"));
+    positions_.begin(context, step, events);
+    const Buffer& x0 = positions_.x0();
+    const Buffer& x1 = positions_.x1();
     pipeline_.vertex_boxes(x0, x1, events);
     pipeline_.refit(pipeline_.moving_nodes(), x0, x1, pipeline_.scene().thickness() / 2, nullptr, node_boxes_, &events);
     const std::size_t candidates = pipeline_.traverse(queries_, node_boxes_, nullptr, candidates_, events, "traversal");
@@ -96,27 +90,20 @@ class FullOpenCl final : public Strategy {
     for (const auto& [stage, milliseconds] : events.collect()) result.stages.add(stage, milliseconds);
     if (audit) result.tested = pipeline_.tested_pairs(tested->buffer, tests);
     if (separation_filter_) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(elementary - tests));
-    current_ = 1 - current_;
-    last_step_ = step.index;
+    positions_.finish(step);
     result.counters.candidate_triangle_pairs = candidates;
     result.counters.elementary_tests = tests;
-    result.counters.history_bytes = pipeline_.bytes() + x_[0].bytes() + x_[1].bytes() + node_boxes_.bytes() + queries_bytes() +
+    result.counters.history_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() +
                                     candidates_.buffer.bytes() + elementary_.buffer.bytes() + kept_.buffer.bytes();
     return result;
   }
 
  private:
-  std::size_t queries_bytes() const {
-    return queries_.leaf.bytes() + queries_.face.bytes() + queries_.root.bytes() + queries_.mode.bytes() + queries_.offset_index.bytes();
-  }
-
   opencl::DevicePipeline pipeline_;
   bool separation_filter_ = false;
   opencl::Queries queries_;
-  std::size_t num_vertices_ = 0;
-  std::size_t current_ = 0;
-  std::size_t last_step_ = static_cast<std::size_t>(-1);
-  Buffer x_[2], node_boxes_;
+  opencl::DevicePositions positions_;
+  Buffer node_boxes_;
   opencl::DeviceList candidates_, elementary_, kept_;
 };
 

@@ -54,6 +54,23 @@ NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_p
   return choice;
 }
 
+void DevicePositions::reset(Context& context, std::span<const Vec3> frame) {
+  upload(context, x_[0], frame.data()->data(), 3 * frame.size());
+  upload(context, x_[1], frame.data()->data(), 3 * frame.size());
+  current_ = 0;
+  last_step_ = static_cast<std::size_t>(-1);
+}
+
+void DevicePositions::begin(Context& context, const StepView& step, StageEvents& events) {
+  if (step.index != last_step_ + 1) upload(context, x_[current_], step.x0.data()->data(), 3 * step.x0.size(), events.add("upload"));
+  upload(context, x_[1 - current_], step.x1.data()->data(), 3 * step.x1.size(), events.add("upload"));
+}
+
+void DevicePositions::finish(const StepView& step) {
+  current_ = 1 - current_;
+  last_step_ = step.index;
+}
+
 DevicePipeline::DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, std::string label)
     : narrow_phase_(std::move(narrow_phase)), device_(std::move(device)), label_(std::move(label)) {}
 

@@ -51,6 +51,27 @@ struct DeviceList {
 struct Queries {
   Buffer leaf, face, root, mode, offset_index;
   std::size_t count = 0;
+  std::size_t bytes() const { return leaf.bytes() + face.bytes() + root.bytes() + mode.bytes() + offset_index.bytes(); }
+};
+
+/// A step's positions on the device, in two buffers that swap roles: x1 of one step is x0 of the next, so a step
+/// that follows the last uploads x1 only.
+class DevicePositions {
+ public:
+  /// Both ends hold `frame` (what init fits static objects over), and no step came before.
+  void reset(Context& context, std::span<const Vec3> frame);
+  /// Uploads `step`'s x1, and its x0 unless it follows the last step; end the step with finish().
+  void begin(Context& context, const StepView& step, StageEvents& events);
+  const Buffer& x0() const { return x_[current_]; }
+  const Buffer& x1() const { return x_[1 - current_]; }
+  /// The step is done: its x1 becomes the next step's x0.
+  void finish(const StepView& step);
+  std::size_t bytes() const { return x_[0].bytes() + x_[1].bytes(); }
+
+ private:
+  Buffer x_[2];
+  std::size_t current_ = 0;
+  std::size_t last_step_ = static_cast<std::size_t>(-1);
 };
 
 /// The refit of a set of leaves and of their ancestors.

@@ -64,12 +64,11 @@ class ApccdOpenCl final : public Strategy {
     const std::size_t box_bytes = std::max<std::size_t>(pipeline_.node_count(), 1) * 6 * sizeof(double);
     session_boxes_.reserve(context, box_bytes);
     if (num_vertices_ == 0) throw std::invalid_argument("apccd:backend=opencl: the scene has no vertices");
-    upload(context, x_[0], first_frame.data()->data(), 3 * num_vertices_);
-    upload(context, x_[1], first_frame.data()->data(), 3 * num_vertices_);
-    pipeline_.refit(pipeline_.all_nodes(), x_[0], x_[1], scene.thickness() / 2, nullptr, session_boxes_, nullptr);
+    positions_.reset(context, first_frame);
+    pipeline_.refit(pipeline_.all_nodes(), positions_.x0(), positions_.x1(), scene.thickness() / 2, nullptr, session_boxes_, nullptr);
     if (objects_with_pairs_ && settings_.fresh_object_pairs) {
       world_boxes_.reserve(context, box_bytes);
-      pipeline_.refit(pipeline_.all_nodes(), x_[0], x_[1], scene.thickness() / 2, nullptr, world_boxes_, nullptr);
+      pipeline_.refit(pipeline_.all_nodes(), positions_.x0(), positions_.x1(), scene.thickness() / 2, nullptr, world_boxes_, nullptr);
     }
     for (Buffer* relative : {&relative_[0], &relative_[1], &anchor_}) relative->reserve(context, std::max<std::size_t>(num_vertices_, 1) * 3 * sizeof(double));
     budget_.reserve(context, std::max<std::size_t>(num_vertices_, 1) * sizeof(double));
@@ -81,7 +80,6 @@ class ApccdOpenCl final : public Strategy {
     table_builds_ = 0;
     table_valid_ = false;
     context.finish();
-    last_step_ = static_cast<std::size_t>(-1);
   }
 
   StepResult step(const StepView& step, bool audit) override {
@@ -89,11 +87,9 @@ class ApccdOpenCl final : public Strategy {
     opencl::StageEvents events;
     opencl::Context& context = pipeline_.context();
     const double half = scene_->thickness() / 2;
-    const bool follows = step.index == last_step_ + 1;
-    if (!follows) upload(context, x_[current_], step.x0.data()->data(), 3 * num_vertices_, events.add("upload"));
-    Buffer& x0 = x_[current_];
-    Buffer& x1 = x_[1 - current_];
-    upload(context, x1, step.x1.data()->data(), 3 * num_vertices_, events.add("upload"));
+    positions_.begin(context, step, events);
+    const Buffer& x0 = positions_.x0();
+    const Buffer& x1 = positions_.x1();
 
     const bool session_start = session_.starts();
     std::size_t dangling_vertices = 0, dangling_triangles = 0;
@@ -169,8 +165,7 @@ class ApccdOpenCl final : public Strategy {
       }
       if (audit) result.tested = std::move(pairs);
     }
-    current_ = 1 - current_;
-    last_step_ = step.index;
+    positions_.finish(step);
     result.counters.candidate_triangle_pairs = admissible;
     result.counters.elementary_tests = tests;
     const std::size_t device = device_bytes();
@@ -314,15 +309,12 @@ class ApccdOpenCl final : public Strategy {
   }
 
   std::size_t device_bytes() const {
-    std::size_t total = pipeline_.bytes();
-    for (const Buffer* b : {&x_[0], &x_[1], &relative_[0], &relative_[1], &anchor_, &budget_, &dangling_, &session_boxes_, &world_boxes_,
+    std::size_t total = pipeline_.bytes() + positions_.bytes() + self_queries_.bytes() + pair_queries_.bytes();
+    for (const Buffer* b : {&relative_[0], &relative_[1], &anchor_, &budget_, &dangling_, &session_boxes_, &world_boxes_,
                             &face_boxes_, &fresh_boxes_, &centroids_[0], &centroids_[1], &vertex_object_, &face_root_, &offsets_, &table_, &counter_,
                             &pending_.buffer, &across_.buffer, &admissible_.buffer, &elementary_.buffer, &tested_.buffer, &found_.buffer,
                             &dangling_faces_.buffer}) {
       total += b->bytes();
-    }
-    for (const opencl::Queries* q : {&self_queries_, &pair_queries_}) {
-      total += q->leaf.bytes() + q->face.bytes() + q->root.bytes() + q->mode.bytes() + q->offset_index.bytes();
     }
     return total;
   }
@@ -334,8 +326,7 @@ class ApccdOpenCl final : public Strategy {
   const Scene* scene_ = nullptr;
   std::size_t num_vertices_ = 0;
   bool objects_with_pairs_ = false;
-  std::size_t current_ = 0;
-  std::size_t last_step_ = static_cast<std::size_t>(-1);
+  opencl::DevicePositions positions_;
   opencl::Queries self_queries_, pair_queries_;
   std::vector<Vec3> host_relative0_, host_relative1_;
   std::vector<double> host_budget_;
@@ -345,7 +336,7 @@ class ApccdOpenCl final : public Strategy {
   /// How often the table was built (counter pending_table_builds).
   std::size_t table_builds_ = 0;
   bool table_valid_ = false;
-  Buffer x_[2], relative_[2], anchor_, budget_, dangling_, session_boxes_, world_boxes_, face_boxes_, fresh_boxes_, centroids_[2], vertex_object_,
+  Buffer relative_[2], anchor_, budget_, dangling_, session_boxes_, world_boxes_, face_boxes_, fresh_boxes_, centroids_[2], vertex_object_,
       face_root_, offsets_, table_, counter_;
   DeviceList pending_, across_, admissible_, elementary_, tested_, found_, dangling_faces_;
 };

@@ -50,13 +50,7 @@ kernel void enlarge_leaves(uint count, global const uint* dangling, global const
   const uint i = get_global_id(0);
   if (i >= count) return;
   const uint f = dangling[i];
-  ccd_box b = ccd_box_empty();
-  for (int k = 0; k < 3; ++k) {
-    const uint v = faces[3 * (size_t)f + k];
-    b = ccd_box_extend(b, relative0, v);
-    b = ccd_box_extend(b, relative1, v);
-  }
-  const ccd_box fresh = ccd_box_widen(b, half_thickness);
+  const ccd_box fresh = ccd_box_widen(ccd_swept_face_box(faces, f, relative0, relative1), half_thickness);
   ccd_box_store(fresh_boxes, i, fresh);
   const uint leaf = leaf_node[f];
   ccd_box_store(node_boxes, leaf, ccd_box_merge(ccd_box_load(node_boxes, leaf), fresh));
@@ -114,13 +108,7 @@ kernel void face_boxes(uint count, global const uint* faces, global const double
                        global double* boxes) {
   const uint f = get_global_id(0);
   if (f >= count) return;
-  ccd_box b = ccd_box_empty();
-  for (int k = 0; k < 3; ++k) {
-    const uint v = faces[3 * (size_t)f + k];
-    b = ccd_box_extend(b, x0, v);
-    b = ccd_box_extend(b, x1, v);
-  }
-  ccd_box_store(boxes, f, ccd_box_widen(b, half_thickness));
+  ccd_box_store(boxes, f, ccd_box_widen(ccd_swept_face_box(faces, f, x0, x1), half_thickness));
 }
 
 /* The front end: the pairs of the pending list and of this step's object pairs whose faces' fresh boxes overlap

@@ -96,6 +96,17 @@ static inline uint ccd_group_reserve(local uint* scratch, uint count, volatile g
   return scratch[CCD_GROUP_SIZE] + scratch[lid] - count;
 }
 
+/* Face f's corners at t = 0 and 1 (bvh.cpp's swept_face_box before its widening). */
+static inline ccd_box ccd_swept_face_box(global const uint* faces, uint f, global const double* x0, global const double* x1) {
+  ccd_box b = ccd_box_empty();
+  for (int k = 0; k < 3; ++k) {
+    const uint v = faces[3 * (size_t)f + k];
+    b = ccd_box_extend(b, x0, v);
+    b = ccd_box_extend(b, x1, v);
+  }
+  return b;
+}
+
 /* Swept vertex boxes x0 ∪ x1 widened by half_thickness (elementary_tests.cpp's primitive-level box test). */
 kernel void vertex_boxes(uint count, global const double* x0, global const double* x1, double half_thickness,
                          global double* boxes) {
@@ -117,12 +128,7 @@ kernel void leaf_boxes(uint count, global const uint* leaves, global const uint*
   if (i >= count) return;
   const uint node = leaves[i];
   const uint f = node_face[node];
-  ccd_box b = ccd_box_empty();
-  for (int k = 0; k < 3; ++k) {
-    const uint v = faces[3 * (size_t)f + k];
-    b = ccd_box_extend(b, x0, v);
-    b = ccd_box_extend(b, x1, v);
-  }
+  const ccd_box b = ccd_swept_face_box(faces, f, x0, x1);
   double widening = inflation;
   if (has_budget) {
     widening = inflation + ccd_max(ccd_max(budget[faces[3 * (size_t)f]], budget[faces[3 * (size_t)f + 1]]), budget[faces[3 * (size_t)f + 2]]);
