@@ -1,7 +1,10 @@
 #include "core/collision_set.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 
 namespace ccd {
 namespace {
@@ -41,6 +44,21 @@ std::vector<Contact<Pair>> contacts_difference(const std::vector<Contact<Pair>>&
   return out;
 }
 
+/// FNV-1a over 64-bit words, byte by byte (little-endian order whatever the machine's).
+class Fnv1a {
+ public:
+  void add(std::uint64_t word) {
+    for (int byte = 0; byte < 8; ++byte) {
+      hash_ ^= (word >> (8 * byte)) & 0xffu;
+      hash_ *= 0x100000001b3ull;
+    }
+  }
+  std::uint64_t value() const { return hash_; }
+
+ private:
+  std::uint64_t hash_ = 0xcbf29ce484222325ull;
+};
+
 }  // namespace
 
 void CollisionSet::append(const CollisionSet& other) {
@@ -65,6 +83,25 @@ CollisionSet set_difference(const CollisionSet& a, const CollisionSet& b) {
   for (const auto& c : contacts_difference(a.vertex_face(), b.vertex_face())) out.add(c.pair, c.toi);
   for (const auto& c : contacts_difference(a.edge_edge(), b.edge_edge())) out.add(c.pair, c.toi);
   return out;
+}
+
+std::string answers_digest(const CollisionSet& set) {
+  Fnv1a hash;
+  // Each list's length goes first, so a pair cannot move from one list to the other unseen.
+  hash.add(set.vertex_face().size());
+  for (const VertexFaceContact& c : set.vertex_face()) {
+    hash.add((std::uint64_t{c.pair.v} << 32) | c.pair.f);
+    hash.add(std::bit_cast<std::uint64_t>(c.toi));
+  }
+  hash.add(set.edge_edge().size());
+  for (const EdgeEdgeContact& c : set.edge_edge()) {
+    hash.add((std::uint64_t{c.pair.a.v0} << 32) | c.pair.a.v1);
+    hash.add((std::uint64_t{c.pair.b.v0} << 32) | c.pair.b.v1);
+    hash.add(std::bit_cast<std::uint64_t>(c.toi));
+  }
+  char text[17];
+  std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(hash.value()));
+  return text;
 }
 
 }  // namespace ccd

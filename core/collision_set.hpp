@@ -5,6 +5,7 @@
 #include "core/pair_id.hpp"
 
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace ccd {
@@ -52,5 +53,10 @@ class CollisionSet {
 /// Pairs of `a` that are not in `b` (both normalized); TOIs are those of `a`. With a = truth and b = reported
 /// this is the set of misses; with a = reported and b = truth, the false alarms.
 CollisionSet set_difference(const CollisionSet& a, const CollisionSet& b);
+
+/// A 64-bit FNV-1a digest (16 hex digits) of a normalized set: every pair and the bits of its TOI, VF then EE.
+/// Equal sets with bit-equal TOIs give equal digests on every machine; step records carry it so that two runs can
+/// be compared step by step without storing the sets (a change that should keep every answer, keeps every digest).
+std::string answers_digest(const CollisionSet& set);
 
 }  // namespace ccd

@@ -325,6 +325,9 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                    {"elementary_tests", r.counters.elementary_tests},
                    {"history_bytes", r.counters.history_bytes},
                    {"reported", reported_count(r, judging)}};
+    // The digest of the answers (pairs and TOI bits), to compare two runs step by step; fcl's cells are judged by
+    // triangle pairs and carry none.
+    if (judging == strategies::Judging::elementary_pairs) record["answers"] = answers_digest(r.collisions);
     for (const auto& [name, value] : r.counters.extra) {
       record[name] = value;
       auto it = std::find_if(counter_totals.begin(), counter_totals.end(), [&](const auto& entry) { return entry.first == name; });

@@ -54,5 +54,29 @@ TEST(CollisionSet, DifferenceGivesMissesAndFalseAlarms) {
   EXPECT_TRUE(copy.same_pairs(truth));
 }
 
+// The digest in step records: equal answers give equal digests (whatever order they were added in); one TOI bit,
+// one pair or a pair moved between the lists changes it.
+TEST(CollisionSet, DigestSeesEveryPairAndEveryToiBit) {
+  auto make = [](double toi, VertexId v) {
+    CollisionSet set;
+    set.add(EdgeEdgePair{{0, 1}, {2, 3}}, 0.5);
+    set.add(VertexFacePair{v, 2}, toi);
+    set.add(VertexFacePair{1, 1}, kNoToi);
+    set.normalize();
+    return answers_digest(set);
+  };
+  const std::string digest = make(0.25, 5);
+  EXPECT_EQ(digest.size(), 16u);
+  EXPECT_EQ(make(0.25, 5), digest);
+  EXPECT_NE(make(std::nextafter(0.25, 1.0), 5), digest);
+  EXPECT_NE(make(0.25, 6), digest);
+  CollisionSet empty;
+  EXPECT_NE(answers_digest(empty), digest);
+  CollisionSet vertex_face, edge_edge;
+  vertex_face.add(VertexFacePair{0, 1}, 0.5);
+  edge_edge.add(EdgeEdgePair{{0, 1}, {0, 0}}, 0.5);
+  EXPECT_NE(answers_digest(vertex_face), answers_digest(edge_edge));
+}
+
 }  // namespace
 }  // namespace ccd
