@@ -1,4 +1,7 @@
-// BVH refit and traversal on the rod-twist sample step (80k triangles; needs the public data).
+// BVH refit and traversal on the public sample steps (rod-twist: 79,864 triangles, 2.4 million candidate pairs;
+// cloth-funnel: 18,484 triangles; needs the public data). BM_SelfTraversal/<design>/<step>/<threads> compares the
+// two self-traversal designs (issue 18, reports/cpu-step): per-face queries with ordered output (self_overlaps)
+// and the simultaneous tree-against-tree descent with a sort (self_overlaps_tree_pairs).
 
 #include "core/scene.hpp"
 #include "datasets/data_dir.hpp"
@@ -6,43 +9,60 @@
 #include "strategies/bvh/bvh.hpp"
 
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <thread>
 
 namespace ccd::bvh {
 namespace {
 
-const datasets::SampleStep* rod_twist() {
-  static const std::unique_ptr<datasets::SampleStep> step = []() -> std::unique_ptr<datasets::SampleStep> {
+const char* const kSteps[] = {"rod-twist", "cloth-funnel"};
+
+const datasets::SampleStep* sample_step(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<datasets::SampleStep>> loaded;
+  auto& step = loaded[name];
+  if (!step) {
     const auto data = datasets::external_data_dir();
     if (!data) return nullptr;
-    return std::make_unique<datasets::SampleStep>(datasets::load_sample_step(*data / "scalable-ccd-sample/rod-twist"));
-  }();
+    step = std::make_unique<datasets::SampleStep>(datasets::load_sample_step(*data / "scalable-ccd-sample" / name));
+  }
   return step.get();
 }
 
-void BM_Refit(benchmark::State& state) {
-  const auto* step = rod_twist();
-  if (!step) return state.SkipWithError("no public data (CCDBENCH_DATA_DIR)");
+TriangleBvh fitted_tree(const datasets::SampleStep& step) {
   TriangleBvh tree;
-  tree.build(step->topology, 0, step->topology.num_faces(), step->x0);
+  tree.build(step.topology, 0, step.topology.num_faces(), step.x0);
+  tree.refit(step.topology, step.x0, step.x1, 0.0);
+  return tree;
+}
+
+void BM_Refit(benchmark::State& state, const char* name) {
+  const auto* step = sample_step(name);
+  if (!step) return state.SkipWithError("no public data (CCDBENCH_DATA_DIR)");
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(state.range(0)));
+  TriangleBvh tree = fitted_tree(*step);
   for (auto _ : state) tree.refit(step->topology, step->x0, step->x1, 0.0);
   state.counters["triangles"] = static_cast<double>(step->topology.num_faces());
 }
-BENCHMARK(BM_Refit)->Unit(benchmark::kMillisecond);
 
-void BM_SelfTraversal(benchmark::State& state) {
-  const auto* step = rod_twist();
+template <std::vector<TrianglePair> (*traverse)(const TriangleBvh&)>
+void BM_SelfTraversal(benchmark::State& state, const char* name) {
+  const auto* step = sample_step(name);
   if (!step) return state.SkipWithError("no public data (CCDBENCH_DATA_DIR)");
-  TriangleBvh tree;
-  tree.build(step->topology, 0, step->topology.num_faces(), step->x0);
-  tree.refit(step->topology, step->x0, step->x1, 0.0);
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(state.range(0)));
+  const TriangleBvh tree = fitted_tree(*step);
+  // Both designs must give the same list, or the comparison means nothing.
+  if (self_overlaps(tree) != self_overlaps_tree_pairs(tree)) return state.SkipWithError("the designs disagree");
   std::size_t candidates = 0;
-  for (auto _ : state) candidates = self_overlaps(tree).size();
+  for (auto _ : state) candidates = traverse(tree).size();
   state.counters["candidate_pairs"] = static_cast<double>(candidates);
 }
-BENCHMARK(BM_SelfTraversal)->Unit(benchmark::kMillisecond);
 
-void BM_Build(benchmark::State& state) {
-  const auto* step = rod_twist();
+void BM_Build(benchmark::State& state, const char* name) {
+  const auto* step = sample_step(name);
   if (!step) return state.SkipWithError("no public data (CCDBENCH_DATA_DIR)");
   for (auto _ : state) {
     TriangleBvh tree;
@@ -50,7 +70,27 @@ void BM_Build(benchmark::State& state) {
     benchmark::DoNotOptimize(tree);
   }
 }
-BENCHMARK(BM_Build)->Unit(benchmark::kMillisecond);
+
+/// Threads 1, 2, 4, ... up to the machine's.
+void thread_counts(benchmark::internal::Benchmark* b) {
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  for (int t = 1; t < cores; t *= 2) b->Arg(t);
+  b->Arg(cores);
+  b->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+const bool registered = [] {
+  for (const char* name : kSteps) {
+    const std::string step(name);
+    benchmark::RegisterBenchmark(("BM_SelfTraversal/per_face_ordered/" + step).c_str(), BM_SelfTraversal<self_overlaps>, name)
+        ->Apply(thread_counts);
+    benchmark::RegisterBenchmark(("BM_SelfTraversal/tree_pairs_sorted/" + step).c_str(), BM_SelfTraversal<self_overlaps_tree_pairs>, name)
+        ->Apply(thread_counts);
+    benchmark::RegisterBenchmark(("BM_Refit/" + step).c_str(), BM_Refit, name)->Apply(thread_counts);
+    benchmark::RegisterBenchmark(("BM_Build/" + step).c_str(), BM_Build, name)->Unit(benchmark::kMillisecond);
+  }
+  return true;
+}();
 
 }  // namespace
 }  // namespace ccd::bvh

@@ -26,10 +26,12 @@ void ObjectHierarchies::refit(ObjectId object, std::span<const Vec3> x0, std::sp
 }
 
 std::vector<bvh::TrianglePair> ObjectHierarchies::candidates() const {
-  std::vector<bvh::TrianglePair> all = self_candidates();
+  std::vector<bvh::TrianglePair> self = self_candidates();
   const auto across = pair_candidates([](ObjectId, ObjectId) { return Box3(Vec3::Zero(), Vec3::Zero()); });
-  all.insert(all.end(), across.begin(), across.end());
-  std::sort(all.begin(), all.end());
+  if (across.empty()) return self;
+  // Both lists are sorted: one merge, where a sort of the whole list was the traversal stage's serial part.
+  std::vector<bvh::TrianglePair> all(self.size() + across.size());
+  std::merge(self.begin(), self.end(), across.begin(), across.end(), all.begin());
   return all;
 }
 
@@ -37,8 +39,12 @@ std::vector<bvh::TrianglePair> ObjectHierarchies::self_candidates() const {
   std::vector<bvh::TrianglePair> all;
   for (ObjectId a = 0; a < trees_.size(); ++a) {
     if (scene_->object(a).self_collision) {
-      const auto pairs = bvh::self_overlaps(trees_[a]);
-      all.insert(all.end(), pairs.begin(), pairs.end());
+      auto pairs = bvh::self_overlaps(trees_[a]);
+      if (all.empty()) {
+        all = std::move(pairs);  // one self-colliding object (most scenes): no copy
+      } else {
+        all.insert(all.end(), pairs.begin(), pairs.end());
+      }
     }
   }
   return all;  // each object's pairs are sorted and object ranges ascend, so the whole is sorted

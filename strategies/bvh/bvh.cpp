@@ -70,6 +70,13 @@ void TriangleBvh::build(const MeshTopology& topology, FaceId first_face, std::si
     tasks.push_back({left + 1, task.first + task.count / 2, task.count - task.count / 2});
   }
   bottom_up_.assign(top_down.rbegin(), top_down.rend());
+  for (Node& node : nodes_) {
+    if (node.is_leaf()) node.max_face = node.face;
+  }
+  for (std::int32_t n : bottom_up_) {
+    Node& node = nodes_[static_cast<std::size_t>(n)];
+    node.max_face = std::max(nodes_[static_cast<std::size_t>(node.left)].max_face, nodes_[static_cast<std::size_t>(node.right)].max_face);
+  }
   parent_.assign(nodes_.size(), -1);
   for (std::int32_t n : top_down) {
     parent_[static_cast<std::size_t>(nodes_[static_cast<std::size_t>(n)].left)] = n;
@@ -200,6 +207,49 @@ std::vector<TrianglePair> traverse(const Traversal& traversal, Task root) {
 }  // namespace
 
 std::vector<TrianglePair> self_overlaps(const TriangleBvh& tree) {
+  if (tree.empty()) return {};
+  // A median-split tree over n < 2^32 faces is at most 33 levels deep, and a depth-first walk that pushes both
+  // children holds at most one pending sibling per level: 64 entries never overflow.
+  constexpr int kStackSize = 64;
+  constexpr std::size_t kChunk = 256;  // faces per task: lists of a few thousand pairs, enough tasks for 16 threads
+  const auto& nodes = tree.nodes();
+  const std::size_t faces = tree.face_count();
+  const std::size_t chunks = (faces + kChunk - 1) / kChunk;
+  std::vector<Sink> lists(chunks);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t chunk) {
+    Sink& list = lists[chunk];
+    const std::size_t end = std::min(faces, (chunk + 1) * kChunk);
+    for (std::size_t i = chunk * kChunk; i < end; ++i) {
+      const FaceId a = tree.first_face() + static_cast<FaceId>(i);
+      const Box3& box = nodes[static_cast<std::size_t>(tree.leaf_of(a))].box;
+      const std::size_t first = list.size();
+      std::int32_t stack[kStackSize];
+      int size = 0;
+      stack[size++] = 0;
+      while (size > 0) {
+        const TriangleBvh::Node& node = nodes[static_cast<std::size_t>(stack[--size])];
+        // Each pair once, from its smaller face: subtrees with no larger face are the other faces' to find.
+        if (node.max_face <= a || !node.box.intersects(box)) continue;
+        if (node.is_leaf()) {
+          list.emplace_back(a, node.face);
+        } else {
+          stack[size++] = node.right;
+          stack[size++] = node.left;
+        }
+      }
+      std::sort(list.begin() + static_cast<std::ptrdiff_t>(first), list.end());
+    }
+  });
+  std::vector<std::size_t> offsets(chunks + 1, 0);
+  for (std::size_t c = 0; c < chunks; ++c) offsets[c + 1] = offsets[c] + lists[c].size();
+  std::vector<TrianglePair> pairs(offsets[chunks]);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    std::copy(lists[c].begin(), lists[c].end(), pairs.begin() + static_cast<std::ptrdiff_t>(offsets[c]));
+  });
+  return pairs;
+}
+
+std::vector<TrianglePair> self_overlaps_tree_pairs(const TriangleBvh& tree) {
   if (tree.empty()) return {};
   Traversal traversal{tree, tree};
   traversal.task_is_same_tree_ = true;

@@ -40,9 +40,13 @@ class TriangleBvh {
     std::int32_t left = -1;
     std::int32_t right = -1;
     FaceId face = 0;
+    /// The largest face id under the node (in the padding the box leaves): a self query from face a skips
+    /// subtrees with no face above a, whose pairs the smaller face's own query finds.
+    FaceId max_face = 0;
 
     bool is_leaf() const { return left < 0; }
   };
+  static_assert(sizeof(Node) == 64, "a node is one cache line: max_face lives in the box's padding");
 
   /// Builds over the global faces [first_face, first_face + face_count) of `topology` from one frame's positions:
   /// top-down, splitting at the median centroid along the widest axis, down to one face per leaf (so a leaf's box
@@ -84,8 +88,13 @@ class TriangleBvh {
 using TrianglePair = std::pair<FaceId, FaceId>;
 
 /// Every pair of distinct faces of `tree` whose boxes overlap, each once, sorted. Parallel; the result does not
-/// depend on the thread count.
+/// depend on the thread count. One query per face (its leaf box from the root down, keeping the larger ids), in
+/// chunks of consecutive face ids whose sorted lists are concatenated in order: no sort and no merge of the whole
+/// list (benchmarks/bvh_benchmark.cpp chose it over self_overlaps_tree_pairs on the public steps, reports/cpu-step).
 std::vector<TrianglePair> self_overlaps(const TriangleBvh& tree);
+/// The same pairs by the simultaneous descent of the tree against itself (node pairs, then a parallel sort of the
+/// whole list): the design self_overlaps replaced, kept for the benchmark that compares them.
+std::vector<TrianglePair> self_overlaps_tree_pairs(const TriangleBvh& tree);
 /// Every pair (face of a, face of b) whose boxes overlap, as (smaller id, larger id), sorted. With `b_offset`,
 /// b's boxes are first swept by that box of translations (b's frame moved relative to a's).
 std::vector<TrianglePair> pair_overlaps(const TriangleBvh& a, const TriangleBvh& b,
