@@ -76,12 +76,26 @@ static inline int ccd_scale_to_unit(ccd_v3 rows[8], double* thickness, int* expo
   if (shift > keeps_bits) shift = keeps_bits;
   if (largest_exponent - shift > CCD_LARGEST_SCALED_EXPONENT) return 0;
   const double given = *thickness;
-  double scaled = ldexp(given, -shift);
-  for (int i = 0; i < 8; ++i) {
-    for (int k = 0; k < 3; ++k) rows[i].c[k] = ldexp(rows[i].c[k], -shift);
+  double scaled = 0;
+  if (shift >= -1022 && shift <= 1022) {
+    /* Both 2^-shift and 2^shift are normal doubles, so a product with either is the correctly rounded value of
+     * the exact one, as ldexp's is: the same bits from one ldexp instead of 26 (the coordinates' products are
+     * exact, their results normal and far from overflow by the choice of shift). shift is at least -52, so only
+     * pairs with a coordinate of 2^1022 or more take the other branch. */
+    const double down = ldexp(1.0, -shift), up = ldexp(1.0, shift);
+    scaled = given * down;
+    for (int i = 0; i < 8; ++i) {
+      for (int k = 0; k < 3; ++k) rows[i].c[k] *= down;
+    }
+    /* δ is not a coordinate: it may lose bits (or overflow). Rounded up, a larger δ only adds false alarms. */
+    if (scaled * up < given) scaled = nextafter(scaled, (double)INFINITY);
+  } else {
+    scaled = ldexp(given, -shift);
+    for (int i = 0; i < 8; ++i) {
+      for (int k = 0; k < 3; ++k) rows[i].c[k] = ldexp(rows[i].c[k], -shift);
+    }
+    if (ldexp(scaled, shift) < given) scaled = nextafter(scaled, (double)INFINITY);
   }
-  /* δ is not a coordinate: it may lose bits (or overflow). Rounded up, a larger δ only adds false alarms. */
-  if (ldexp(scaled, shift) < given) scaled = nextafter(scaled, (double)INFINITY);
   *thickness = scaled;
   *exponent = shift;
   return 1;
