@@ -9,6 +9,20 @@
 namespace ccd::narrowphase {
 namespace {
 
+/// The search, compiled twice: for the x86-64 baseline and for x86-64-v3 (AVX2), chosen when the program loads
+/// (GCC function multiversioning), so one binary runs on any x86-64 and uses wide vectors where they exist. The
+/// arithmetic is the same IEEE operations in the same order either way (-ffp-contract=off holds for both clones,
+/// so FMA never fuses a product into a sum): the same answers bit for bit (tests/strategies/full_answers_test.cpp).
+/// `flatten` inlines the whole search into each clone; otherwise both would call the one baseline copy.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default"), flatten))
+#endif
+shared::f64::ccd_conservative_outcome conservative_search(const shared::f64::ccd_v3 rows[8], double thickness, bool vertex_face,
+                                                          double tolerance, long max_iterations, shared::f64::ccd_sub_box* storage,
+                                                          int capacity) {
+  return shared::f64::ccd_conservative_test(rows, thickness, vertex_face, tolerance, max_iterations, 0, storage, capacity);
+}
+
 /// The search itself, its error budget and its stages are shared/inclusion.h's (the text the OpenCL kernels
 /// compile too); this class gives it round-to-nearest and as much sub-box storage as a query needs.
 class InclusionTest final : public NarrowPhase {
@@ -35,8 +49,8 @@ class InclusionTest final : public NarrowPhase {
     shared::f64::ccd_sub_box* storage = inline_boxes;
     int capacity = kInlineBoxes;
     while (true) {
-      const shared::f64::ccd_conservative_outcome outcome = shared::f64::ccd_conservative_test(
-          rows.data(), thickness, vertex_face, settings_.tolerance, settings_.max_iterations, 0, storage, capacity);
+      const shared::f64::ccd_conservative_outcome outcome =
+          conservative_search(rows.data(), thickness, vertex_face, settings_.tolerance, settings_.max_iterations, storage, capacity);
       if (!outcome.overflow) return {outcome.collides != 0, outcome.toi, outcome.hit_iteration_cap != 0, outcome.achieved_tolerance};
       capacity *= 4;
       more.resize(static_cast<std::size_t>(capacity));
