@@ -4,6 +4,9 @@
 # OpenMPI's launcher and OpenMPI's plugins need (ldd; not libc, libm or the loader, which the machine has), and
 # OpenMPI's and PMIx's plugins and help files under the paths Debian installs them to, below device-carry/root.
 # scripts/device-env.sh sets the variables that point OpenMPI and PMIx there. Builds nothing.
+# CARRY_VARIANTS="NAME=PATH ..." adds other ccdbench builds as bin/ccdbench-NAME (stripped), for runs that compare
+# builds side by side (scripts/device-cpu-step.sh), with the release build's bvh and machine benchmarks; the
+# OpenCL tests stay behind then, to keep the folder under run's 64 MiB.
 # Usage: scripts/device-carry.sh   (after scripts/build.sh release)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,15 +15,24 @@ rm -rf "$carry"
 mkdir -p "$carry/bin" "$carry/lib" "$carry/root"
 cp build/release/bin/ccdbench "$carry/bin/"
 # The OpenCL parity tests, for scripts/device-opencl.sh (when the build has them).
-if [ -x build/release/bin/opencl_tests ]; then cp build/release/bin/opencl_tests "$carry/bin/"; fi
-cp "$(readlink -f "$(command -v orterun)")" "$carry/bin/orterun"
-ln -s orterun "$carry/bin/mpirun"
-for tree in /usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3 /usr/share/openmpi /etc/openmpi \
-            /usr/lib/x86_64-linux-gnu/pmix2/lib/pmix /usr/lib/x86_64-linux-gnu/pmix2/share; do
-  mkdir -p "$carry/root$(dirname "$tree")"
-  cp -rL "$tree" "$carry/root$tree"
+if [ -x build/release/bin/opencl_tests ] && [ -z "${CARRY_VARIANTS:-}" ]; then cp build/release/bin/opencl_tests "$carry/bin/"; fi
+for variant in ${CARRY_VARIANTS:-}; do
+  strip -o "$carry/bin/ccdbench-${variant%%=*}" "${variant#*=}"
 done
-for binary in "$carry"/bin/ccdbench "$carry"/bin/opencl_tests "$carry/bin/orterun" "$carry"/root/usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3/*.so \
+if [ -n "${CARRY_VARIANTS:-}" ]; then
+  for benchmark in bvh_benchmark machine_benchmark; do strip -o "$carry/bin/$benchmark" "build/release/bin/$benchmark"; done
+fi
+# OpenMPI's launcher and plugins (not for a comparison of builds, which runs no MPI).
+if [ -z "${CARRY_VARIANTS:-}" ]; then
+  cp "$(readlink -f "$(command -v orterun)")" "$carry/bin/orterun"
+  ln -s orterun "$carry/bin/mpirun"
+  for tree in /usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3 /usr/share/openmpi /etc/openmpi \
+              /usr/lib/x86_64-linux-gnu/pmix2/lib/pmix /usr/lib/x86_64-linux-gnu/pmix2/share; do
+    mkdir -p "$carry/root$(dirname "$tree")"
+    cp -rL "$tree" "$carry/root$tree"
+  done
+fi
+for binary in "$carry"/bin/ccdbench "$carry"/bin/ccdbench-* "$carry"/bin/*_benchmark "$carry"/bin/opencl_tests "$carry/bin/orterun" "$carry"/root/usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3/*.so \
               "$carry"/root/usr/lib/x86_64-linux-gnu/pmix2/lib/pmix/*.so; do
   [ -e "$binary" ] || continue
   ldd "$binary" | awk '$3 ~ /^\// {print $3}'
