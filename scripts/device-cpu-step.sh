@@ -8,8 +8,10 @@
 #            (median of $REPEATS passes), then the first and the last variant at 1, 2, 4, 8 and N threads with
 #            full, full:filter=on and full+cubic64; --verify none (the answers are compared by their digests,
 #            and FullAnswers holds them in CI);
-#   paper:   the paper suite, `full`, first and last variant: all steps at N threads at the scenes' δ and at δ = 0,
-#            and the first $PAPER_STEPS_FEW steps at 1 and 2 threads; --verify none, step digests kept.
+#   filter:  rod-twist, full:filter=on, every variant at 1 and N threads (changes that only the filter sees);
+#   paper:   the paper suite, `full`, for $PAPER_VARIANTS (default: the first and last variant): all steps at N
+#            threads at the scenes' δ and at δ = 0, and the first $PAPER_STEPS_FEW steps at 1 and 2 threads;
+#            --verify none, step digests kept.
 # Writes into a work folder and, when $OUT is set, packs it into $OUT/cpu-step.tgz after every part.
 # Usage (from the repository root): VARIANTS="before traversal ..." PARTS="machine broad public" scripts/device-cpu-step.sh
 set -euo pipefail
@@ -29,6 +31,7 @@ threads=$(nproc)
 bin=device-carry/bin
 first=${VARIANTS%% *}
 last=${VARIANTS##* }
+PAPER_VARIANTS=${PAPER_VARIANTS:-$first $last}
 { nproc; lscpu | grep -E 'Model name|^CPU\(s\)|Thread|Core|Socket|NUMA node\(s\)'; } > "$out/machine.txt" 2>&1
 for v in $VARIANTS; do echo "$v: $("$bin/ccdbench-$v" --version | head -1)"; done >> "$out/machine.txt"
 cat "$out/machine.txt"
@@ -74,9 +77,16 @@ if part public; then
     pack
   done
 fi
+if part filter; then
+  echo "== rod-twist, full:filter=on, every variant"
+  for v in $VARIANTS; do
+    for t in 1 "$threads"; do run "$v" "$t" "filter-rod-twist-$v-$t" --frames $(frames rod-twist 3036 3037) --strategy full:filter=on --repeat "$REPEATS" --verify none; done
+  done
+  pack
+fi
 if part paper; then
-  echo "== paper suite, first and last variant"
-  for v in $first $last; do
+  echo "== paper suite: $PAPER_VARIANTS"
+  for v in $PAPER_VARIANTS; do
     run "$v" "$threads" "paper-$v-$threads-delta" --suite paper --strategy full --verify none
     run "$v" "$threads" "paper-$v-$threads-zero" --suite paper --thickness 0 --strategy full --verify none
     pack

@@ -1,8 +1,10 @@
 // `full` keeps its answers while it gets faster (issue 18): every step of the ci suite (at the scenes' δ and at
-// δ = 0) and the two public steps, for both of full's conservative narrow phase and cubic64, must give the
-// candidate and test counts and the digest of the reported pairs with their TOI bits that tests/baselines/
-// full-answers.txt recorded from main before the work began (4c54ff5). A change that moves one pair, one TOI bit or
-// one candidate fails here.
+// δ = 0) and the two public steps, for full (conservative), full+cubic64, full:filter=on and the CPU apccd (which
+// shares the traversal and the elementary tests), must give the candidate and test counts and the digest of the
+// reported pairs with their TOI bits that tests/baselines/full-answers.txt recorded before the work began: full's
+// and full+cubic64's lines by this test at 9658765 (4c54ff5 plus the digest), full:filter=on's and apccd's from
+// the step records of `ccdbench run --verify none` built from that commit (the same digest). A change that moves
+// one pair, one TOI bit or one candidate fails here.
 //
 // To record the file anew (only for a change meant to change answers, said in its commit):
 //   CCDBENCH_ANSWERS_RECORD=tests/baselines/full-answers.txt build/release/bin/strategies_tests --gtest_filter='FullAnswers.*'
@@ -63,7 +65,7 @@ std::vector<std::vector<Vec3>> all_frames(const datasets::SceneSequence& sequenc
   return frames;
 }
 
-const std::vector<std::string> kSpecs{"full", "full+cubic64"};
+const std::vector<std::string> kSpecs{"full", "full+cubic64", "full:filter=on", "apccd"};
 
 Answers read_baseline() {
   std::ifstream in(kBaseline);
@@ -116,7 +118,7 @@ TEST(FullAnswers, TheCiSuiteGivesTheRecordedAnswersAtBothThicknesses) {
     for (const double thickness : {loaded.scene().thickness(), 0.0}) {
       const Scene scene = loaded.scene().with_thickness(thickness);
       for (const std::string& spec : kSpecs) {
-        // A comparison of empty answers would prove nothing: every ci scene collides at both δ.
+        // A comparison of empty answers would prove nothing: every ci scene collides at both δ, for every spec.
         EXPECT_GT(run_steps(source.label, scene, frames, spec, answers), 0u) << source.label << " δ=" << thickness << " " << spec;
       }
     }
