@@ -42,12 +42,9 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   tbb::enumerable_thread_specific<Local> locals;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
     Local& local = locals.local();
-    // The boxes of one candidate's two faces and six edges, each formed once (unions of vertex boxes are exact, so
-    // every decision is the one a box formed per elementary pair gave).
-    Box3 face_box[2], edge_box[2][3];
-    Edge edges[2][3];
-    auto vertex_against_face = [&](VertexId v, FaceId f, const Box3& f_box) {
-      if (corner_of(v, topology.face(f)) || !vertex_boxes[v].intersects(f_box)) return;
+    auto vertex_against_face = [&](VertexId v, FaceId f) {
+      const Face& face = topology.face(f);
+      if (corner_of(v, face) || !vertex_boxes[v].intersects(box_of({face[0], face[1], face[2]}))) return;
       const VertexFacePair pair{v, f};
       const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
       if (separation_filter && provably_apart(rows, true, thickness)) {
@@ -61,29 +58,19 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     };
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       const auto [a, b] = candidates[i];
-      const FaceId faces[2] = {a, b};
-      for (int side = 0; side < 2; ++side) {
-        const Face& face = topology.face(faces[side]);
-        face_box[side] = box_of({face[0], face[1], face[2]});
+      for (const auto& [owner, other] : {std::pair{a, b}, std::pair{b, a}}) {
         for (int k = 0; k < 3; ++k) {
-          edges[side][k] = topology.edge(topology.face_edges(faces[side])[k]);
-          edge_box[side][k] = box_of({edges[side][k].v0, edges[side][k].v1});
-        }
-      }
-      for (int side = 0; side < 2; ++side) {
-        const FaceId owner = faces[side], other = faces[1 - side];
-        for (int k = 0; k < 3; ++k) {
-          if (masks[owner] & owns_vertex_bit(k)) vertex_against_face(topology.face(owner)[k], other, face_box[1 - side]);
+          if (masks[owner] & owns_vertex_bit(k)) vertex_against_face(topology.face(owner)[k], other);
         }
       }
       for (int i_edge = 0; i_edge < 3; ++i_edge) {
         if (!(masks[a] & owns_edge_bit(i_edge))) continue;
-        const Edge ea = edges[0][i_edge];
+        const Edge ea = topology.edge(topology.face_edges(a)[i_edge]);
         for (int j_edge = 0; j_edge < 3; ++j_edge) {
           if (!(masks[b] & owns_edge_bit(j_edge))) continue;
-          const Edge eb = edges[1][j_edge];
+          const Edge eb = topology.edge(topology.face_edges(b)[j_edge]);
           if (shares_vertex(ea, eb)) continue;
-          if (!edge_box[0][i_edge].intersects(edge_box[1][j_edge])) continue;
+          if (!box_of({ea.v0, ea.v1}).intersects(box_of({eb.v0, eb.v1}))) continue;
           const EdgeEdgePair pair = make_edge_edge_pair(ea, eb);
           const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
           if (separation_filter && provably_apart(rows, false, thickness)) {
