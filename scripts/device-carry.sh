@@ -13,7 +13,8 @@ cd "$(dirname "$0")/.."
 carry=device-carry
 rm -rf "$carry"
 mkdir -p "$carry/bin" "$carry/lib" "$carry/root"
-cp build/release/bin/ccdbench "$carry/bin/"
+# (Not for a comparison of builds: its variants are carried instead.)
+[ -n "${CARRY_VARIANTS:-}" ] || cp build/release/bin/ccdbench "$carry/bin/"
 # The OpenCL parity tests, for scripts/device-opencl.sh (when the build has them).
 if [ -x build/release/bin/opencl_tests ] && [ -z "${CARRY_VARIANTS:-}" ]; then cp build/release/bin/opencl_tests "$carry/bin/"; fi
 for variant in ${CARRY_VARIANTS:-}; do

@@ -32,16 +32,21 @@ bin=device-carry/bin
 first=${VARIANTS%% *}
 last=${VARIANTS##* }
 PAPER_VARIANTS=${PAPER_VARIANTS:-$first $last}
-{ nproc; lscpu | grep -E 'Model name|^CPU\(s\)|Thread|Core|Socket|NUMA node\(s\)'; } > "$out/machine.txt" 2>&1
+{ nproc; lscpu | grep -E 'Model name|^CPU\(s\)|Thread|Core|Socket|NUMA node\(s\)|Flags' || true; } > "$out/machine.txt" 2>&1
 for v in $VARIANTS; do echo "$v: $("$bin/ccdbench-$v" --version | head -1)"; done >> "$out/machine.txt"
 cat "$out/machine.txt"
 part() { [[ " $PARTS " == *" $1 "* ]]; }
 frames() { echo "$CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$2.ply $CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$3.ply"; }
-# run VARIANT THREADS NAME ARGS...: one ccdbench run, its table and JSON kept as NAME.
+# Thread counts without repeats (N may be 1, 2, 4 or 8 itself).
+counts() { printf '%s\n' "$@" | sort -nu | tr '\n' ' '; }
+# run VARIANT THREADS NAME ARGS...: one ccdbench run, its table and JSON kept as NAME (its progress and errors in
+# NAME.err: a failing run stops the script, and says why there).
 run() {
   local variant=$1 t=$2 name=$3
   shift 3
-  "$bin/ccdbench-$variant" --threads "$t" run "$@" --out "$out/runs-$name" --json "$out/$name.json" --fresh 2>/dev/null > "$out/$name.txt"
+  if ! "$bin/ccdbench-$variant" --threads "$t" run "$@" --out "$out/runs-$name" --json "$out/$name.json" --fresh 2> "$out/$name.err" > "$out/$name.txt"; then
+    echo "$name failed:"; tail -n 5 "$out/$name.err"; exit 1
+  fi
   gzip -c "$out/runs-$name/results.jsonl" > "$out/$name.jsonl.gz"
   rm -rf "$out/runs-$name"
   echo "$name: $(grep -c '' "$out/$name.txt") lines"
@@ -62,7 +67,7 @@ if part public; then
   for step in "rod-twist 3036 3037" "cloth-funnel 227 228"; do
     set -- $step
     for v in $VARIANTS; do
-      for t in 1 2 "$threads"; do run "$v" "$t" "public-$1-$v-$t" --frames $(frames "$1" "$2" "$3") --strategy full --repeat "$REPEATS" --verify none; done
+      for t in $(counts 1 2 "$threads"); do run "$v" "$t" "public-$1-$v-$t" --frames $(frames "$1" "$2" "$3") --strategy full --repeat "$REPEATS" --verify none; done
     done
     pack
   done
@@ -70,7 +75,7 @@ if part public; then
   for step in "rod-twist 3036 3037" "cloth-funnel 227 228"; do
     set -- $step
     for v in $first $last; do
-      for t in 1 2 4 8 "$threads"; do
+      for t in $(counts 1 2 4 8 "$threads"); do
         run "$v" "$t" "scaling-$1-$v-$t" --frames $(frames "$1" "$2" "$3") --strategy full,full:filter=on,full+cubic64 --repeat "$REPEATS" --verify none
       done
     done
@@ -80,7 +85,7 @@ fi
 if part filter; then
   echo "== rod-twist, full:filter=on, every variant"
   for v in $VARIANTS; do
-    for t in 1 "$threads"; do run "$v" "$t" "filter-rod-twist-$v-$t" --frames $(frames rod-twist 3036 3037) --strategy full:filter=on --repeat "$REPEATS" --verify none; done
+    for t in $(counts 1 "$threads"); do run "$v" "$t" "filter-rod-twist-$v-$t" --frames $(frames rod-twist 3036 3037) --strategy full:filter=on --repeat "$REPEATS" --verify none; done
   done
   pack
 fi

@@ -7,9 +7,9 @@ namespace ccd::strategies {
 
 // The filter itself is narrowphase/shared/separation.h, the text the OpenCL kernels compile too (apccd's backends
 // must drop the same elementary pairs); its error budget is written there.
-// The whole filter inlined into this one function (GCC's flatten): rod-twist's 2.47 million calls under
-// full:filter=on ran 1.2x faster on the GPU machine's cores (reports/cpu-step; a multiversioned copy for
-// x86-64-v3 gained nothing more there). Inlining moves no operation: the same answers (FullAnswers, OpenCL parity).
+// The whole filter inlined into this one function (GCC's flatten): faster where it runs millions of times a step
+// (reports/cpu-step measures it; a multiversioned copy for x86-64-v3 gained nothing more). Inlining moves no
+// operation: the same answers (FullAnswers, OpenCL parity).
 #if defined(__GNUC__) && !defined(__clang__)
 __attribute__((flatten))
 #endif

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 namespace ccd::bvh {
 
@@ -35,15 +36,18 @@ void TriangleBvh::build(const MeshTopology& topology, FaceId first_face, std::si
   struct Task {
     std::int32_t node;
     std::size_t first, count;
+    int depth;
   };
   nodes_.push_back({});
-  std::vector<Task> tasks{{0, 0, face_count}};
+  depth_ = 0;
+  std::vector<Task> tasks{{0, 0, face_count, 0}};
   std::vector<std::int32_t> top_down;
   while (!tasks.empty()) {
     const Task task = tasks.back();
     tasks.pop_back();
     Node& node = nodes_[static_cast<std::size_t>(task.node)];
     if (task.count == 1) {
+      depth_ = std::max(depth_, task.depth);
       node.face = order[task.first];
       leaf_of_face_[node.face - first_face] = task.node;
       continue;
@@ -66,8 +70,8 @@ void TriangleBvh::build(const MeshTopology& topology, FaceId first_face, std::si
     nodes_.push_back({});
     nodes_.push_back({});
     top_down.push_back(task.node);
-    tasks.push_back({left, task.first, task.count / 2});
-    tasks.push_back({left + 1, task.first + task.count / 2, task.count - task.count / 2});
+    tasks.push_back({left, task.first, task.count / 2, task.depth + 1});
+    tasks.push_back({left + 1, task.first + task.count / 2, task.count - task.count / 2, task.depth + 1});
   }
   bottom_up_.assign(top_down.rbegin(), top_down.rend());
   for (Node& node : nodes_) {
@@ -208,9 +212,12 @@ std::vector<TrianglePair> traverse(const Traversal& traversal, Task root) {
 
 std::vector<TrianglePair> self_overlaps(const TriangleBvh& tree) {
   if (tree.empty()) return {};
-  // A median-split tree over n < 2^32 faces is at most 33 levels deep, and a depth-first walk that pushes both
-  // children holds at most one pending sibling per level: 64 entries never overflow.
+  // A depth-first walk that pushes both children holds at most one pending sibling per level, plus the node in
+  // hand: depth + 1 entries. The median split's depth is ceil(log2 faces), at most 31 for int32 node ids.
   constexpr int kStackSize = 64;
+  if (tree.depth() + 1 > kStackSize) throw std::logic_error("self_overlaps: a tree deeper than its traversal stack");
+  // Boxes hold their children (refit merges them, enlarge_leaf grows the ancestors), which the pruning from the
+  // root needs; frames are finite (their readers refuse NaN and infinity), so no NaN box breaks that.
   constexpr std::size_t kChunk = 256;  // faces per task: lists of a few thousand pairs, enough tasks for 16 threads
   const auto& nodes = tree.nodes();
   const std::size_t faces = tree.face_count();

@@ -40,13 +40,13 @@ class TriangleBvh {
     std::int32_t left = -1;
     std::int32_t right = -1;
     FaceId face = 0;
-    /// The largest face id under the node (in the padding the box leaves): a self query from face a skips
-    /// subtrees with no face above a, whose pairs the smaller face's own query finds.
+    /// The largest face id under the node (in the node's tail padding): a self query from face a skips subtrees
+    /// with no face above a, whose pairs the smaller face's own query finds.
     FaceId max_face = 0;
 
     bool is_leaf() const { return left < 0; }
   };
-  static_assert(sizeof(Node) == 64, "a node is one cache line: max_face lives in the box's padding");
+  static_assert(sizeof(Node) == 64, "a node is one cache line: max_face lives in its tail padding");
 
   /// Builds over the global faces [first_face, first_face + face_count) of `topology` from one frame's positions:
   /// top-down, splitting at the median centroid along the widest axis, down to one face per leaf (so a leaf's box
@@ -66,6 +66,8 @@ class TriangleBvh {
   const std::vector<Node>& nodes() const { return nodes_; }
   FaceId first_face() const { return first_face_; }
   std::size_t face_count() const { return leaf_of_face_.size(); }
+  /// Levels below the root of the deepest leaf (0 for a single face).
+  int depth() const { return depth_; }
   bool empty() const { return nodes_.empty(); }
   /// The leaf node of global face f (f in this tree's range).
   std::int32_t leaf_of(FaceId f) const { return leaf_of_face_[f - first_face_]; }
@@ -82,6 +84,7 @@ class TriangleBvh {
   /// Internal nodes in an order where children come before parents (bottom-up refit order).
   std::vector<std::int32_t> bottom_up_;
   FaceId first_face_ = 0;
+  int depth_ = 0;
 };
 
 /// A candidate: two distinct global face ids, a < b.

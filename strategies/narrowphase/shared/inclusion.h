@@ -80,8 +80,8 @@ static inline int ccd_scale_to_unit(ccd_v3 rows[8], double* thickness, int* expo
   if (shift >= -1022 && shift <= 1022) {
     /* Both 2^-shift and 2^shift are normal doubles, so a product with either is the correctly rounded value of
      * the exact one, as ldexp's is: the same bits from one ldexp instead of 26 (the coordinates' products are
-     * exact, their results normal and far from overflow by the choice of shift). shift is at least -52, so only
-     * pairs with a coordinate of 2^1022 or more take the other branch. */
+     * exact, their results normal and far from overflow by the choice of shift). shift lies in [-1073, 1024]:
+     * only pairs whose largest |coordinate| is 2^1022 or more, or below 2^-1023, take the other branch. */
     const double down = ldexp(1.0, -shift), up = ldexp(1.0, shift);
     scaled = given * down;
     for (int i = 0; i < 8; ++i) {
