@@ -6,6 +6,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <type_traits>
+
 namespace ccd::strategies {
 namespace {
 
@@ -14,77 +16,134 @@ struct Local {
   std::size_t tests = 0;
   std::size_t filtered = 0;
   TestedPairs tested;
+  /// The pairs the separation filter kept, for the narrow phase's own pass.
+  TestedPairs kept;
 };
 
 bool corner_of(VertexId v, const Face& f) { return v == f[0] || v == f[1] || v == f[2]; }
+
+/// The VF or the EE list of `pairs`.
+template <bool vertex_face>
+auto& list_of(TestedPairs& pairs) {
+  if constexpr (vertex_face) {
+    return pairs.vertex_face;
+  } else {
+    return pairs.edge_edge;
+  }
+}
+
+/// Calls vertex_face(pair) and edge_edge(pair) for each elementary pair of candidate (a, b) that the masks give and
+/// whose primitives' swept boxes (`vertex_boxes`, widened by δ/2) overlap: a primitive pair whose boxes are apart
+/// cannot come within δ, so the cheap box test spares the narrow phase most pairs of a candidate triangle pair
+/// (they are counted as culled).
+template <class VertexFace, class EdgeEdge>
+void for_each_elementary_pair(const MeshTopology& topology, std::span<const AssignmentMask> masks,
+                              const std::vector<Box3>& vertex_boxes, FaceId a, FaceId b, VertexFace&& vertex_face,
+                              EdgeEdge&& edge_edge) {
+  auto box_of = [&](std::initializer_list<VertexId> vertices) {
+    Box3 box;
+    for (VertexId v : vertices) box.extend(vertex_boxes[v]);
+    return box;
+  };
+  for (const auto& [owner, other] : {std::pair{a, b}, std::pair{b, a}}) {
+    const Face& face = topology.face(other);
+    for (int k = 0; k < 3; ++k) {
+      if (!(masks[owner] & owns_vertex_bit(k))) continue;
+      const VertexId v = topology.face(owner)[k];
+      if (corner_of(v, face) || !vertex_boxes[v].intersects(box_of({face[0], face[1], face[2]}))) continue;
+      vertex_face(VertexFacePair{v, other});
+    }
+  }
+  for (int i_edge = 0; i_edge < 3; ++i_edge) {
+    if (!(masks[a] & owns_edge_bit(i_edge))) continue;
+    const Edge ea = topology.edge(topology.face_edges(a)[i_edge]);
+    for (int j_edge = 0; j_edge < 3; ++j_edge) {
+      if (!(masks[b] & owns_edge_bit(j_edge))) continue;
+      const Edge eb = topology.edge(topology.face_edges(b)[j_edge]);
+      if (shares_vertex(ea, eb)) continue;
+      if (!box_of({ea.v0, ea.v1}).intersects(box_of({eb.v0, eb.v1}))) continue;
+      edge_edge(make_edge_edge_pair(ea, eb));
+    }
+  }
+}
 
 }  // namespace
 
 ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks,
                                   std::span<const bvh::TrianglePair> candidates, const StepView& step,
                                   const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit,
-                                  bool separation_filter) {
+                                  bool separation_filter, StageTimes& stages, std::string_view narrow_stage) {
   const auto& x0 = step.x0;
   const auto& x1 = step.x1;
-  // Swept vertex boxes widened by δ/2: a primitive pair whose boxes are apart cannot come within δ, so the cheap
-  // box test spares the narrow phase most pairs of a candidate triangle pair (they are counted as culled).
   std::vector<Box3> vertex_boxes(x0.size());
-  tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
-    Box3 box(x0[v]);
-    box.extend(x1[v]);
-    vertex_boxes[v] = bvh::widened(box, thickness / 2);
-  });
-  auto box_of = [&](std::initializer_list<VertexId> vertices) {
-    Box3 box;
-    for (VertexId v : vertices) box.extend(vertex_boxes[v]);
-    return box;
-  };
   tbb::enumerable_thread_specific<Local> locals;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
-    Local& local = locals.local();
-    auto vertex_against_face = [&](VertexId v, FaceId f) {
-      const Face& face = topology.face(f);
-      if (corner_of(v, face) || !vertex_boxes[v].intersects(box_of({face[0], face[1], face[2]}))) return;
-      const VertexFacePair pair{v, f};
-      const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
-      if (separation_filter && provably_apart(rows, true, thickness)) {
-        ++local.filtered;
-        return;
+  // The narrow phase on one elementary pair (VertexFacePair or EdgeEdgePair).
+  auto test = [&](Local& local, const auto& pair) {
+    constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
+    const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
+    ++local.tests;
+    if (audit) list_of<vertex_face>(local.tested).push_back(pair);
+    const narrowphase::NarrowPhaseResult r = vertex_face ? narrow_phase.vertex_face(rows, thickness) : narrow_phase.edge_edge(rows, thickness);
+    if (r.collides) local.collisions.add(pair, r.toi);
+  };
+  if (!separation_filter) {
+    ScopedStageTimer timer(stages, narrow_stage);
+    tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
+      Box3 box(x0[v]);
+      box.extend(x1[v]);
+      vertex_boxes[v] = bvh::widened(box, thickness / 2);
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
+      Local& local = locals.local();
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        for_each_elementary_pair(
+            topology, masks, vertex_boxes, candidates[i].first, candidates[i].second,
+            [&](const VertexFacePair& pair) { test(local, pair); }, [&](const EdgeEdgePair& pair) { test(local, pair); });
       }
-      ++local.tests;
-      if (audit) local.tested.vertex_face.push_back(pair);
-      const narrowphase::NarrowPhaseResult r = narrow_phase.vertex_face(rows, thickness);
-      if (r.collides) local.collisions.add(pair, r.toi);
-    };
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const auto [a, b] = candidates[i];
-      for (const auto& [owner, other] : {std::pair{a, b}, std::pair{b, a}}) {
-        for (int k = 0; k < 3; ++k) {
-          if (masks[owner] & owns_vertex_bit(k)) vertex_against_face(topology.face(owner)[k], other);
-        }
-      }
-      for (int i_edge = 0; i_edge < 3; ++i_edge) {
-        if (!(masks[a] & owns_edge_bit(i_edge))) continue;
-        const Edge ea = topology.edge(topology.face_edges(a)[i_edge]);
-        for (int j_edge = 0; j_edge < 3; ++j_edge) {
-          if (!(masks[b] & owns_edge_bit(j_edge))) continue;
-          const Edge eb = topology.edge(topology.face_edges(b)[j_edge]);
-          if (shares_vertex(ea, eb)) continue;
-          if (!box_of({ea.v0, ea.v1}).intersects(box_of({eb.v0, eb.v1}))) continue;
-          const EdgeEdgePair pair = make_edge_edge_pair(ea, eb);
-          const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
-          if (separation_filter && provably_apart(rows, false, thickness)) {
+    });
+  } else {
+    // The separation filter first, timed on its own as the OpenCL backend times it ("distance heuristic": apccd's
+    // front end in the paper), then the narrow phase on the pairs it kept. The same pairs are tested as when both
+    // ran in one loop, and the answers do not depend on the order they are tested in.
+    std::vector<VertexFacePair> kept_vertex_face;
+    std::vector<EdgeEdgePair> kept_edge_edge;
+    {
+      ScopedStageTimer timer(stages, "distance heuristic");
+      tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
+        Box3 box(x0[v]);
+        box.extend(x1[v]);
+        vertex_boxes[v] = bvh::widened(box, thickness / 2);
+      });
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
+        Local& local = locals.local();
+        auto keep = [&](const auto& pair) {
+          constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
+          if (provably_apart(pair_rows(topology, x0, x1, pair), vertex_face, thickness)) {
             ++local.filtered;
-            continue;
+          } else {
+            list_of<vertex_face>(local.kept).push_back(pair);
           }
-          ++local.tests;
-          if (audit) local.tested.edge_edge.push_back(pair);
-          const narrowphase::NarrowPhaseResult r = narrow_phase.edge_edge(rows, thickness);
-          if (r.collides) local.collisions.add(pair, r.toi);
+        };
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          for_each_elementary_pair(topology, masks, vertex_boxes, candidates[i].first, candidates[i].second, keep, keep);
         }
+      });
+      for (Local& local : locals) {
+        kept_vertex_face.insert(kept_vertex_face.end(), local.kept.vertex_face.begin(), local.kept.vertex_face.end());
+        kept_edge_edge.insert(kept_edge_edge.end(), local.kept.edge_edge.begin(), local.kept.edge_edge.end());
+        local.kept = {};
       }
     }
-  });
+    ScopedStageTimer timer(stages, narrow_stage);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept_vertex_face.size(), 16), [&](const auto& range) {
+      Local& local = locals.local();
+      for (std::size_t i = range.begin(); i != range.end(); ++i) test(local, kept_vertex_face[i]);
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept_edge_edge.size(), 16), [&](const auto& range) {
+      Local& local = locals.local();
+      for (std::size_t i = range.begin(); i != range.end(); ++i) test(local, kept_edge_edge[i]);
+    });
+  }
   ElementaryOutcome outcome;
   if (audit) outcome.tested.emplace();
   for (Local& local : locals) {
@@ -107,11 +166,8 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
 void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::span<const AssignmentMask> masks,
                       std::span<const bvh::TrianglePair> candidates, const StepView& step,
                       const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit, bool separation_filter) {
-  ElementaryOutcome outcome;
-  {
-    ScopedStageTimer timer(result.stages, "narrow phase");
-    outcome = test_candidates(topology, masks, candidates, step, narrow_phase, thickness, audit, separation_filter);
-  }
+  ElementaryOutcome outcome =
+      test_candidates(topology, masks, candidates, step, narrow_phase, thickness, audit, separation_filter, result.stages, "narrow phase");
   if (separation_filter) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(outcome.filtered));
   result.collisions = std::move(outcome.collisions);
   result.tested = std::move(outcome.tested);

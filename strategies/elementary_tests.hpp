@@ -14,6 +14,7 @@
 #include "strategies/strategy.hpp"
 
 #include <span>
+#include <string_view>
 
 namespace ccd::strategies {
 
@@ -25,17 +26,18 @@ struct ElementaryOutcome {
   std::optional<TestedPairs> tested;
 };
 
-/// Tests every elementary pair of `candidates` with `narrow_phase` at `thickness`, in parallel. Results are sorted
-/// and do not depend on the thread count. With `separation_filter`, pairs that provably_apart() rejects are culled
-/// before the narrow phase (counted in `filtered`, not tested).
+/// Tests every elementary pair of `candidates` with `narrow_phase` at `thickness`, in parallel, timed in `stages` as
+/// `narrow_stage`. Results are sorted and do not depend on the thread count. With `separation_filter`, pairs that
+/// provably_apart() rejects are culled before the narrow phase (counted in `filtered`, not tested), in a pass of
+/// their own timed as "distance heuristic".
 ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks,
                                   std::span<const bvh::TrianglePair> candidates, const StepView& step,
                                   const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit,
-                                  bool separation_filter = false);
+                                  bool separation_filter, StageTimes& stages, std::string_view narrow_stage);
 
 /// The last stage of a strategy that hands its candidate triangle pairs to a narrow phase: test_candidates, timed as
-/// "narrow phase", with its collisions, tested pairs, candidate count and test count stored in `result`. With
-/// `separation_filter`, also the counter distance_filtered.
+/// "narrow phase" (and "distance heuristic"), with its collisions, tested pairs, candidate count and test count
+/// stored in `result`. With `separation_filter`, also the counter distance_filtered.
 void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::span<const AssignmentMask> masks,
                       std::span<const bvh::TrianglePair> candidates, const StepView& step,
                       const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit, bool separation_filter = false);

@@ -123,13 +123,14 @@ class Apccd final : public Strategy {
     }
     ElementaryOutcome outcome;
     std::size_t history_catches = 0;
-    {
+    // The front end's distance heuristic at the elementary level ("distance heuristic", timed on its own as on the
+    // device): pairs provably farther apart than δ over the step never reach the narrow phase
+    // (separation_filter.hpp). The back end: the narrow phase, then history.
+    outcome = test_candidates(topology, masks_, admissible, step, *narrow_phase_, scene_->thickness(), audit || settings_.history,
+                              settings_.heuristic, result.stages, "back end");
+    if (settings_.history) {
       ScopedStageTimer timer(result.stages, "back end");
-      // The front end's distance heuristic at the elementary level: pairs provably farther apart than δ over the
-      // step never reach the narrow phase (separation_filter.hpp).
-      outcome = test_candidates(topology, masks_, admissible, step, *narrow_phase_, scene_->thickness(),
-                                audit || settings_.history, settings_.heuristic);
-      if (settings_.history) history_catches = history_.apply(topology, step.x1, *outcome.tested, outcome.collisions);
+      history_catches = history_.apply(topology, step.x1, *outcome.tested, outcome.collisions);
     }
     result.collisions = std::move(outcome.collisions);
     if (audit) result.tested = std::move(outcome.tested);
