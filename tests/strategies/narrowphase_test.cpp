@@ -45,6 +45,15 @@ void expect_no_miss(const NarrowPhase& variant, datasets::QueryKind kind, const 
 // One test per data folder, so that ctest spreads them over the cores.
 class ConservativeOnData : public ::testing::TestWithParam<std::string> {};
 
+/// Under AddressSanitizer (CI's second run) every 4th query: the exact reference of each takes several times
+/// longer there, and rod-twist's 5,171 queries at two δ took 95 s of CI's 25 minutes. The Release run checks them
+/// all; the sanitizer run looks for memory errors in the same code.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr std::size_t kQueryStride = 4;
+#else
+constexpr std::size_t kQueryStride = 1;
+#endif
+
 TEST_P(ConservativeOnData, NoMissAtZeroAndPositiveThickness) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   const auto conservative = make_narrow_phase("conservative");
@@ -52,7 +61,7 @@ TEST_P(ConservativeOnData, NoMissAtZeroAndPositiveThickness) {
   for (const auto& path : datasets::discover_query_files({data / GetParam()})) {
     const datasets::QueryFile file = datasets::read_query_file(path);
     count += file.queries.size();
-    for (std::size_t q = 0; q < file.queries.size(); ++q) {
+    for (std::size_t q = 0; q < file.queries.size(); q += kQueryStride) {
       const datasets::Query& query = file.queries[q];
       ASSERT_TRUE(query.exactly_double) << path;
       const std::string where = path.string() + " query " + std::to_string(q) + " (line " + std::to_string(query.first_line) + ")";
