@@ -86,8 +86,8 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     const narrowphase::NarrowPhaseResult r = vertex_face ? narrow_phase.vertex_face(rows, thickness) : narrow_phase.edge_edge(rows, thickness);
     if (r.collides) local.collisions.add(pair, r.toi);
   };
-  if (!separation_filter) {
-    ScopedStageTimer timer(stages, narrow_stage);
+  // The swept vertex boxes, then every elementary pair of every candidate handed to visit(local, pair), in parallel.
+  auto visit_candidates = [&](auto&& visit) {
     tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
       Box3 box(x0[v]);
       box.extend(x1[v]);
@@ -95,54 +95,45 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
       Local& local = locals.local();
+      auto one = [&](const auto& pair) { visit(local, pair); };
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        for_each_elementary_pair(
-            topology, masks, vertex_boxes, candidates[i].first, candidates[i].second,
-            [&](const VertexFacePair& pair) { test(local, pair); }, [&](const EdgeEdgePair& pair) { test(local, pair); });
+        for_each_elementary_pair(topology, masks, vertex_boxes, candidates[i].first, candidates[i].second, one, one);
       }
     });
+  };
+  if (!separation_filter) {
+    ScopedStageTimer timer(stages, narrow_stage);
+    visit_candidates(test);
   } else {
     // The separation filter first, timed on its own as the OpenCL backend times it ("distance heuristic": apccd's
     // front end in the paper), then the narrow phase on the pairs it kept. The same pairs are tested as when both
     // ran in one loop, and the answers do not depend on the order they are tested in.
-    std::vector<VertexFacePair> kept_vertex_face;
-    std::vector<EdgeEdgePair> kept_edge_edge;
+    TestedPairs kept;
     {
       ScopedStageTimer timer(stages, "distance heuristic");
-      tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
-        Box3 box(x0[v]);
-        box.extend(x1[v]);
-        vertex_boxes[v] = bvh::widened(box, thickness / 2);
-      });
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
-        Local& local = locals.local();
-        auto keep = [&](const auto& pair) {
-          constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
-          if (provably_apart(pair_rows(topology, x0, x1, pair), vertex_face, thickness)) {
-            ++local.filtered;
-          } else {
-            list_of<vertex_face>(local.kept).push_back(pair);
-          }
-        };
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          for_each_elementary_pair(topology, masks, vertex_boxes, candidates[i].first, candidates[i].second, keep, keep);
+      visit_candidates([&](Local& local, const auto& pair) {
+        constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
+        if (provably_apart(pair_rows(topology, x0, x1, pair), vertex_face, thickness)) {
+          ++local.filtered;
+        } else {
+          list_of<vertex_face>(local.kept).push_back(pair);
         }
       });
       for (Local& local : locals) {
-        kept_vertex_face.insert(kept_vertex_face.end(), local.kept.vertex_face.begin(), local.kept.vertex_face.end());
-        kept_edge_edge.insert(kept_edge_edge.end(), local.kept.edge_edge.begin(), local.kept.edge_edge.end());
+        kept.vertex_face.insert(kept.vertex_face.end(), local.kept.vertex_face.begin(), local.kept.vertex_face.end());
+        kept.edge_edge.insert(kept.edge_edge.end(), local.kept.edge_edge.begin(), local.kept.edge_edge.end());
         local.kept = {};
       }
     }
     ScopedStageTimer timer(stages, narrow_stage);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept_vertex_face.size(), 16), [&](const auto& range) {
-      Local& local = locals.local();
-      for (std::size_t i = range.begin(); i != range.end(); ++i) test(local, kept_vertex_face[i]);
-    });
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept_edge_edge.size(), 16), [&](const auto& range) {
-      Local& local = locals.local();
-      for (std::size_t i = range.begin(); i != range.end(); ++i) test(local, kept_edge_edge[i]);
-    });
+    auto test_all = [&](const auto& pairs) {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pairs.size(), 16), [&](const auto& range) {
+        Local& local = locals.local();
+        for (std::size_t i = range.begin(); i != range.end(); ++i) test(local, pairs[i]);
+      });
+    };
+    test_all(kept.vertex_face);
+    test_all(kept.edge_edge);
   }
   ElementaryOutcome outcome;
   if (audit) outcome.tested.emplace();

@@ -9,6 +9,7 @@
 #include "strategies/opencl/runtime.hpp"
 #include "strategies/strategy.hpp"
 #include "tests/support/cli.hpp"
+#include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -86,11 +87,6 @@ std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& 
   return colliding;
 }
 
-std::vector<std::vector<Vec3>> all_frames(const datasets::SceneSequence& sequence) {
-  std::vector<std::vector<Vec3>> frames;
-  for (std::size_t k = 0; k < sequence.num_frames(); ++k) frames.push_back(sequence.frame(k));
-  return frames;
-}
 
 class OpenClParity : public ::testing::Test {
  protected:
@@ -106,7 +102,7 @@ class OpenClParity : public ::testing::Test {
     std::vector<std::size_t> colliding_scenes(2 * narrow_phases.size(), 0);
     for (const harness::SceneSource& source : harness::suite_scenes(suite)) {
       const datasets::SceneSequence loaded = source.load();
-      auto frames = all_frames(loaded);
+      auto frames = testing::all_frames(loaded);
       if (max_steps > 0 && frames.size() > max_steps + 1) frames.resize(max_steps + 1);
       for (std::size_t z = 0; z < 2; ++z) {
         const double thickness = z == 0 ? loaded.scene().thickness() : 0.0;
@@ -244,7 +240,7 @@ TEST_F(OpenClParity, TheSceneAskedForGivesTheCpuAnswers) {
   const char* thickness = std::getenv("CCDBENCH_PARITY_THICKNESS");
   const Scene scene = loaded.scene().with_thickness(thickness != nullptr ? std::stod(thickness) : loaded.scene().thickness());
   const char* steps = std::getenv("CCDBENCH_PARITY_STEPS");
-  auto frames = all_frames(loaded);
+  auto frames = testing::all_frames(loaded);
   if (steps != nullptr && std::stoul(steps) > 0 && frames.size() > std::stoul(steps) + 1) frames.resize(std::stoul(steps) + 1);
   const char* strategy_asked = std::getenv("CCDBENCH_PARITY_STRATEGY");
   const std::string strategy = strategy_asked != nullptr ? strategy_asked : "full";
@@ -296,7 +292,7 @@ TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
   ::setenv("CCDBENCH_OPENCL_TEST_TINY", "1", 1);
   const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
   std::map<std::string, double> counters;
-  const std::size_t colliding = expect_same_answers("full", "full:backend=opencl", loaded.scene(), all_frames(loaded), &counters);
+  const std::size_t colliding = expect_same_answers("full", "full:backend=opencl", loaded.scene(), testing::all_frames(loaded), &counters);
   ::unsetenv("CCDBENCH_OPENCL_TEST_TINY");
   EXPECT_GT(colliding, 0u);
   EXPECT_GT(counters["host_decided_pairs"], 0.0) << "no query overflowed its sub-boxes: the host's part was not exercised";
@@ -323,7 +319,7 @@ TEST_F(OpenClParity, QueriesGivenUpByTheDeviceGetTheSameAnswers) {
     SCOPED_TRACE(std::string("device_iterations=") + limit);
     std::map<std::string, double> counters;
     const std::size_t colliding = expect_same_answers("full", std::string("full:backend=opencl:device_iterations=") + limit,
-                                                      loaded.scene(), all_frames(loaded), &counters);
+                                                      loaded.scene(), testing::all_frames(loaded), &counters);
     EXPECT_GT(colliding, 0u);
     EXPECT_GT(counters["device_given_up_pairs"], 0.0) << "no query ran past the limit: the hand-over was not exercised";
     if (std::string(limit) == "1") {
@@ -341,7 +337,7 @@ TEST_F(OpenClParity, NarrowPhaseKeysReachTheDeviceWithEveryDigit) {
     const std::string cpu = std::string("full") + keys;
     const std::string head = keys[0] == '+' ? std::string("full+cubic64") : std::string("full");
     const std::string device = head + ":backend=opencl" + (keys[0] == '+' ? std::string(keys).substr(8) : std::string(keys));
-    EXPECT_GT(expect_same_answers(cpu, device, loaded.scene(), all_frames(loaded)), 0u);
+    EXPECT_GT(expect_same_answers(cpu, device, loaded.scene(), testing::all_frames(loaded)), 0u);
   }
 }
 

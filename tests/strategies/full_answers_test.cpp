@@ -14,6 +14,7 @@
 #include "datasets/scene_sequence.hpp"
 #include "harness/run.hpp"
 #include "strategies/strategy.hpp"
+#include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -70,11 +71,6 @@ std::size_t run_steps(const std::string& scene_label, const Scene& scene, const 
   return reported;
 }
 
-std::vector<std::vector<Vec3>> all_frames(const datasets::SceneSequence& sequence) {
-  std::vector<std::vector<Vec3>> frames;
-  for (std::size_t k = 0; k < sequence.num_frames(); ++k) frames.push_back(sequence.frame(k));
-  return frames;
-}
 
 const std::vector<std::string> kSpecs{"full", "full+cubic64", "full:filter=on", "apccd"};
 
@@ -137,7 +133,7 @@ TEST(FullAnswers, TheCiSuiteGivesTheRecordedAnswersAtBothThicknesses) {
   for (const harness::SceneSource& source : harness::suite_scenes("ci")) {
     scenes.insert(source.label);
     const datasets::SceneSequence loaded = source.load();
-    const auto frames = all_frames(loaded);
+    const auto frames = testing::all_frames(loaded);
     for (const double thickness : {loaded.scene().thickness(), 0.0}) {
       const Scene scene = loaded.scene().with_thickness(thickness);
       for (const std::string& spec : kSpecs) {
@@ -167,7 +163,7 @@ TEST(FullAnswers, ThePublicStepsGiveTheRecordedAnswers) {
     const datasets::SceneSequence loaded =
         datasets::scene_from_frame_files({frames_dir / (first + ".ply"), frames_dir / (second + ".ply")}, 0.0);
     for (const std::string& spec : kSpecs) {
-      EXPECT_GT(run_steps(name, loaded.scene(), all_frames(loaded), spec, answers), 0u) << name << " " << spec;
+      EXPECT_GT(run_steps(name, loaded.scene(), testing::all_frames(loaded), spec, answers), 0u) << name << " " << spec;
     }
   }
   compare_or_record(answers, scenes, "public");

@@ -27,6 +27,13 @@ inline std::vector<CollisionSet> run_all_steps(const std::string& spec, const Sc
   return sets;
 }
 
+/// Every frame of `sequence`, in order.
+inline std::vector<std::vector<Vec3>> all_frames(const datasets::SceneSequence& sequence) {
+  std::vector<std::vector<Vec3>> frames;
+  for (std::size_t k = 0; k < sequence.num_frames(); ++k) frames.push_back(sequence.frame(k));
+  return frames;
+}
+
 /// The built-in scenes' names, for tests parametrized over them.
 inline std::vector<std::string> procedural_scene_names() {
   std::vector<std::string> names;
@@ -61,7 +68,7 @@ inline LoadedScene small_scene(const std::string& name, const TempDir& dir) {
   if (name == "funnel") parameters["frames"] = 16;  // the cloth first touches the funnel's wall (δ = 0) in step 13
   const auto generated = datasets::generate_procedural_scene({name, parameters, dir.path(), {}, {}});
   LoadedScene loaded{datasets::load_scene_file(generated.scene_file), {}};
-  for (std::size_t k = 0; k < loaded.sequence.num_frames(); ++k) loaded.frames.push_back(loaded.sequence.frame(k));
+  loaded.frames = all_frames(loaded.sequence);
   return loaded;
 }
 
