@@ -12,10 +12,20 @@
 namespace ccd::strategies {
 namespace {
 
-bool parse_switch(const std::string& key, const std::string& value) {
+bool parse_switch_or(const std::string& key, const std::string& value, const std::string& allowed) {
   if (value == "on" || value == "true" || value == "1") return true;
   if (value == "off" || value == "false" || value == "0") return false;
-  throw std::invalid_argument("apccd: " + key + "=" + value + " must be on or off");
+  throw std::invalid_argument("apccd: " + key + "=" + value + " must be " + allowed);
+}
+bool parse_switch(const std::string& key, const std::string& value) { return parse_switch_or(key, value, "on or off"); }
+
+const char* history_name(HistoryMode mode) {
+  switch (mode) {
+    case HistoryMode::off: return "off";
+    case HistoryMode::step: return "on";
+    case HistoryMode::persistent: return "persistent";
+  }
+  return "off";
 }
 
 double parse_number(const std::string& key, const std::string& value, narrowphase::SpecRange range) {
@@ -86,7 +96,11 @@ ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters
   };
   take("skip", [&](const std::string& v) { settings.skip = parse_switch("skip", v); });
   take("heuristic", [&](const std::string& v) { settings.heuristic = parse_switch("heuristic", v); });
-  take("history", [&](const std::string& v) { settings.history = parse_switch("history", v); });
+  take("history", [&](const std::string& v) {
+    settings.history = v == "persistent" ? HistoryMode::persistent
+                       : v == "step"     ? HistoryMode::step
+                                         : (parse_switch_or("history", v, "on, off, step or persistent") ? HistoryMode::step : HistoryMode::off);
+  });
   take("object_pairs", [&](const std::string& v) {
     if (v != "fresh" && v != "session") throw std::invalid_argument("apccd: object_pairs=" + v + " must be fresh or session");
     settings.fresh_object_pairs = v == "fresh";
@@ -109,7 +123,7 @@ std::string apccd_name(const ApccdSettings& settings, const std::string& narrow_
          ":global=" + format_spec_number(settings.global) + ":dangling_max=" + format_spec_number(settings.dangling_max) +
          ":pending_max=" + format_spec_number(settings.pending_max) + ":inflation_max=" + format_spec_number(settings.inflation_max) +
          ":heuristic=" + (settings.heuristic ? "on" : "off") + ":object_pairs=" + (settings.fresh_object_pairs ? "fresh" : "session") +
-         ":history=" + (settings.history ? "on" : "off");
+         ":history=" + history_name(settings.history);
 }
 
 void ApccdSession::init(const ApccdSettings& settings, const Scene& scene, std::span<const Vec3> first_frame) {
@@ -156,6 +170,21 @@ void ApccdSession::relative_positions(const StepView& step, std::vector<Vec3>& r
       relative1[v] = step.x1[v] - centroid1_[id];
     });
   }
+}
+
+double ApccdSession::relative_motion(const StepView& step) const {
+  double sum = 0;
+  std::size_t vertices = 0;
+  for (ObjectId id = 0; id < scene_->objects().size(); ++id) {
+    const SceneObject& object = scene_->object(id);
+    if (object.kind == ObjectKind::static_object || !(mean_edge_[id] > 0)) continue;
+    for (std::size_t i = 0; i < object.num_vertices; ++i) {
+      const std::size_t v = object.first_vertex + i;
+      sum += ((step.x1[v] - centroid1_[id]) - (step.x0[v] - centroid0_[id])).norm() / mean_edge_[id];
+    }
+    vertices += object.num_vertices;
+  }
+  return vertices > 0 ? sum / static_cast<double>(vertices) : 0.0;
 }
 
 Box3 ApccdSession::pair_offset(ObjectId a, ObjectId b) const {
@@ -243,7 +272,9 @@ std::size_t ProximityHistory::apply(const MeshTopology& topology, std::span<cons
   auto track = [&](const auto& pairs, auto& table) {
     using Table = std::remove_reference_t<decltype(table)>;
     Table next;
-    next.reserve(pairs.size());
+    // step: the table becomes this step's tested pairs; persistent: they are updated in place and the rest kept.
+    Table& updated = mode_ == HistoryMode::persistent ? table : next;
+    if (mode_ != HistoryMode::persistent) next.reserve(pairs.size());
     for (const auto& pair : pairs) {
       const int now = orientation(topology, x1, pair);
       const auto it = table.find(pair);
@@ -252,9 +283,9 @@ std::size_t ProximityHistory::apply(const MeshTopology& topology, std::span<cons
         collisions.add(pair);
         ++catches;
       }
-      next.emplace(pair, static_cast<std::int8_t>(now));
+      updated.insert_or_assign(pair, static_cast<std::int8_t>(now));
     }
-    table.swap(next);
+    if (mode_ != HistoryMode::persistent) table.swap(next);
   };
   track(tested.vertex_face, vertex_face_);
   track(tested.edge_edge, edge_edge_);

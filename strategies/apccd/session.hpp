@@ -17,6 +17,16 @@
 
 namespace ccd::strategies {
 
+/// How long history keeps a pair's orientation (DESIGN.md §3).
+enum class HistoryMode {
+  off,
+  /// Rebuilt every step from the pairs the back end tested: a pair the front end drops this step is forgotten.
+  step,
+  /// The paper's: a pair, once tested, keeps its last orientation for the rest of the simulation; a flip is looked
+  /// for whenever it is tested again, however many steps later.
+  persistent,
+};
+
 struct ApccdSettings {
   bool skip = true;
   int nf_min = 1;
@@ -36,7 +46,7 @@ struct ApccdSettings {
   /// Off by default: with the default (conservative) narrow phase there is no missed crossing for history to
   /// catch, and on the drape scene it cost about 2 ms of a 5 ms step and added false alarms. It pays only with a
   /// narrow phase that misses (measured: cubic64's misses 68 -> 67 on spinning-ball, 337 -> 314 on funnel).
-  bool history = false;
+  HistoryMode history = HistoryMode::off;
   /// Pairs across objects from fresh world-frame trees every step (true) or from the session's trees (false).
   /// Measured on the default spinning-ball with advancement: 2.46 ms per step for session trees against 0.88 ms
   /// for full's whole traversal, because a turning ball outgrows every centroid-relative budget.
@@ -68,6 +78,10 @@ class ApccdSession {
   const std::vector<Vec3>& centroid1() const { return centroid1_; }
   /// Positions relative to their object's centroid (x - centroid, one rounding per coordinate).
   void relative_positions(const StepView& step, std::vector<Vec3>& relative0, std::vector<Vec3>& relative1) const;
+  /// How far the moving objects' vertices move in this step relative to their object's centroid, in mean edge
+  /// lengths of frame 0 (the mean over those vertices): the motion a session's budgets must cover. Call after
+  /// update_centroids.
+  double relative_motion(const StepView& step) const;
   /// The translations object b's frame makes relative to a's during the step (object_pairs=session): centroids
   /// move linearly, as vertices do, so the range of cb - ca.
   Box3 pair_offset(ObjectId a, ObjectId b) const;
@@ -99,8 +113,9 @@ class ApccdSession {
 /// crossing) is reported unless the test already did.
 class ProximityHistory {
  public:
+  explicit ProximityHistory(HistoryMode mode = HistoryMode::step) : mode_(mode) {}
   /// Records the orientations of `tested` at the end of the step and adds the flipped pairs to `collisions`;
-  /// returns how many it added.
+  /// returns how many it added. HistoryMode::step forgets the pairs not in `tested`; persistent keeps them.
   std::size_t apply(const MeshTopology& topology, std::span<const Vec3> x1, const TestedPairs& tested, CollisionSet& collisions);
   std::size_t pairs() const { return vertex_face_.size() + edge_edge_.size(); }
   /// Bytes of the tables: buckets plus one node per entry (key, value, next pointer, cached hash).
@@ -108,6 +123,7 @@ class ProximityHistory {
   void clear();
 
  private:
+  HistoryMode mode_;
   std::unordered_map<VertexFacePair, std::int8_t> vertex_face_;
   std::unordered_map<EdgeEdgePair, std::int8_t> edge_edge_;
 };

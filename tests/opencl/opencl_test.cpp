@@ -28,7 +28,8 @@ bool same_toi(double a, double b) { return (std::isnan(a) && std::isnan(b)) || s
 
 /// The counters of apccd's session logic: the two backends must take the same decisions.
 const std::vector<std::string> kSessionCounters{"session_start", "nf", "pending_pairs", "dangling_vertices", "dangling_triangles", "history_pairs",
-                                               "distance_filtered", "history_catches"};
+                                               "distance_filtered", "history_catches", "admissible_pairs",
+                                               "relative_motion"};
 
 double extra_counter(const strategies::StepResult& result, const std::string& name) {
   for (const auto& [key, value] : result.counters.extra) {
@@ -174,7 +175,7 @@ TEST_F(OpenClParity, ApccdOnTheDefaultSuiteGivesTheCpuAnswers) {
 TEST_F(OpenClParity, ApccdKnobsGiveTheCpuAnswers) {
   for (const char* keys : {":skip=off", ":nf_min=2:nf_max=4", ":nf_max=16:inflation_max=1e9", ":local=2.5:global=0",
                            ":local=0.5:global=1.5:inflation_max=0.25", ":dangling_max=0.001:pending_max=1.5", ":heuristic=off",
-                           ":object_pairs=session", ":history=on:inflation_max=1e9"}) {
+                           ":object_pairs=session", ":history=persistent:inflation_max=1e9"}) {
     SCOPED_TRACE(keys);
     std::map<std::string, double> counters;
     for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, kSanitizerSteps, "apccd", keys, &counters)) {

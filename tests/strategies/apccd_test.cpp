@@ -3,6 +3,7 @@
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/scene_file.hpp"
 #include "reference/step_truth.hpp"
+#include "strategies/apccd/session.hpp"
 #include "strategies/strategy.hpp"
 #include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"
@@ -70,11 +71,11 @@ TEST_P(ApccdOnScene, MissesNothingUnderEveryKnobAndThreadCount) {
       colliding += truth.back().size();
     }
     EXPECT_GT(colliding, 0u) << GetParam() << ", δ = " << thickness << ": nothing to miss, the test would prove nothing";
-    // Every knob, at least once: defaults; no skipping, no front end, history on; no inflation at all (every
+    // Every knob, at least once: defaults; no skipping, no front end, history on; persistent history; no inflation at all (every
     // motion dangles); object pairs from the session's trees; long sessions (nf 2..16, no inflation cap, many
     // dangling vertices and a long pending list allowed before a session ends).
     for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off:history=on", "apccd:local=0:global=0",
-                             "apccd:object_pairs=session",
+                             "apccd:object_pairs=session", "apccd:history=persistent",
                              "apccd:nf_min=2:nf_max=16:inflation_max=1e9:dangling_max=0.5:pending_max=1e9"}) {
       SCOPED_TRACE(GetParam() + ", δ = " + std::to_string(thickness) + ", " + spec);
       const auto two = testing::run_all_steps(spec, scene, frames, 2);
@@ -114,6 +115,30 @@ TEST(Apccd, FindsContactsInsideSessionsNotOnlyAtTheirStarts) {
   }
 }
 
+// History's two lifetimes: a vertex crosses a face while the front end did not test the pair (the step between).
+// history=on forgot the pair's side when it went untested; the paper's persistent history still has it.
+TEST(ProximityHistory, PersistentKeepsAPairTheFrontEndSkippedAndCatchesItsFlip) {
+  const MeshTopology topology(4, {{0, 1, 2}});
+  const VertexFacePair pair{3, 0};
+  const std::vector<Vec3> above = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.25, 0.25, 0.5)};
+  std::vector<Vec3> below = above;
+  below[3].z() = -0.5;
+  const TestedPairs tested{{pair}, {}};
+  const TestedPairs untested{};
+  for (const HistoryMode mode : {HistoryMode::step, HistoryMode::persistent}) {
+    ProximityHistory history(mode);
+    CollisionSet collisions;
+    EXPECT_EQ(history.apply(topology, above, tested, collisions), 0u);
+    EXPECT_EQ(history.apply(topology, below, untested, collisions), 0u);
+    EXPECT_EQ(history.pairs(), mode == HistoryMode::persistent ? 1u : 0u);
+    const std::size_t caught = history.apply(topology, below, tested, collisions);
+    EXPECT_EQ(caught, mode == HistoryMode::persistent ? 1u : 0u) << (mode == HistoryMode::persistent ? "persistent" : "step");
+    EXPECT_EQ(collisions.contains(pair), mode == HistoryMode::persistent);
+  }
+  EXPECT_NE(make_strategy("apccd:history=persistent")->name().find(":history=persistent"), std::string::npos);
+  EXPECT_NE(make_strategy("apccd:history=on")->name().find(":history=on"), std::string::npos);
+}
+
 TEST(Apccd, KnobsAreParsedRecordedAndChecked) {
   const std::string name = make_strategy("apccd+cubic64:skip=off:nf_max=4:eta=1e-05")->name();
   EXPECT_NE(name.find("apccd+cubic64:eta=1e-05"), std::string::npos) << name;
@@ -129,7 +154,8 @@ TEST(Apccd, KnobsAreParsedRecordedAndChecked) {
   const std::string huge = testing::error_message<std::invalid_argument>([] { make_strategy("apccd:nf_max=2147483648"); });
   EXPECT_NE(huge.find("apccd: nf_max=2147483648 must be an integer in [1, 1000]"), std::string::npos) << huge;
   for (const char* bad : {"apccd:nf_min=2.5", "apccd:local=-1", "apccd:global=1e7", "apccd:dangling_max=1.5",
-                          "apccd:pending_max=0.5", "apccd:inflation_max=-1", "apccd:object_pairs=stale", "apccd:history=2"}) {
+                          "apccd:pending_max=0.5", "apccd:inflation_max=-1", "apccd:object_pairs=stale", "apccd:history=2",
+                          "apccd:history=forever"}) {
     EXPECT_THROW(make_strategy(bad), std::invalid_argument) << bad;
   }
 }

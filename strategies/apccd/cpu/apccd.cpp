@@ -32,7 +32,7 @@ class Apccd final : public Strategy {
     session_.init(settings_, scene, first_frame);
     if (settings_.fresh_object_pairs && !scene.collidable_pairs().empty()) fresh_.build(scene, first_frame, scene.thickness() / 2);
     pending_.clear();
-    history_.clear();
+    history_ = ProximityHistory(settings_.history);
   }
 
   StepResult step(const StepView& step, bool audit) override {
@@ -41,10 +41,12 @@ class Apccd final : public Strategy {
     const double half = scene_->thickness() / 2;
     std::size_t dangling_vertices = 0, dangling_triangles = 0;
     const bool session_start = session_.starts();
+    double relative_motion = 0;
     {
       ScopedStageTimer timer(result.stages, "update");
       session_.update_centroids(step);
       session_.relative_positions(step, relative0_, relative1_);
+      relative_motion = session_.relative_motion(step);
     }
     if (session_start) {
       start_session(result);
@@ -126,9 +128,9 @@ class Apccd final : public Strategy {
     // The front end's distance heuristic at the elementary level ("distance heuristic", timed on its own as on the
     // device): pairs provably farther apart than δ over the step never reach the narrow phase
     // (separation_filter.hpp). The back end: the narrow phase, then history.
-    outcome = test_candidates(topology, masks_, admissible, step, *narrow_phase_, scene_->thickness(), audit || settings_.history,
+    outcome = test_candidates(topology, masks_, admissible, step, *narrow_phase_, scene_->thickness(), audit || settings_.history != HistoryMode::off,
                               settings_.heuristic, result.stages, "back end");
-    if (settings_.history) {
+    if (settings_.history != HistoryMode::off) {
       ScopedStageTimer timer(result.stages, "back end");
       history_catches = history_.apply(topology, step.x1, *outcome.tested, outcome.collisions);
     }
@@ -136,8 +138,10 @@ class Apccd final : public Strategy {
     if (audit) result.tested = std::move(outcome.tested);
     result.counters.candidate_triangle_pairs = admissible.size();
     result.counters.elementary_tests = outcome.tests;
-    result.counters.history_bytes =
-        history_.bytes() + pending_.capacity() * sizeof(bvh::TrianglePair) + hierarchies_.bytes() + fresh_.bytes();
+    // Memory by part (the paper's 48 MB for 142k pending pairs): the pending list, the trees, history's tables.
+    const std::size_t pending_bytes = pending_.capacity() * sizeof(bvh::TrianglePair);
+    const std::size_t tree_bytes = hierarchies_.bytes() + fresh_.bytes();
+    result.counters.history_bytes = history_.bytes() + pending_bytes + tree_bytes;
     result.counters.extra = {{"session_start", session_start ? 1.0 : 0.0},
                              {"nf", static_cast<double>(session_.nf())},
                              {"pending_pairs", static_cast<double>(pending_.size())},
@@ -146,7 +150,11 @@ class Apccd final : public Strategy {
                              {"history_pairs", static_cast<double>(history_.pairs())},
                              {"history_catches", static_cast<double>(history_catches)},
                              {"history_table_bytes", static_cast<double>(history_.bytes())},
-                             {"distance_filtered", static_cast<double>(outcome.filtered)}};
+                             {"distance_filtered", static_cast<double>(outcome.filtered)},
+                             {"admissible_pairs", static_cast<double>(admissible.size())},
+                             {"pending_bytes", static_cast<double>(pending_bytes)},
+                             {"tree_bytes", static_cast<double>(tree_bytes)},
+                             {"relative_motion", relative_motion}};
     session_.advance(dangling_vertices, admissible.size(), pending_.size());
     return result;
   }

@@ -42,7 +42,7 @@ class ApccdOpenCl final : public Strategy {
     scene_ = &scene;
     pipeline_.init(scene, first_frame);
     session_.init(settings_, scene, first_frame);
-    history_.clear();
+    history_ = ProximityHistory(settings_.history);
     opencl::Context& context = pipeline_.context();
     const MeshTopology& topology = scene.topology();
     num_vertices_ = topology.num_vertices();
@@ -93,9 +93,11 @@ class ApccdOpenCl final : public Strategy {
 
     const bool session_start = session_.starts();
     std::size_t dangling_vertices = 0, dangling_triangles = 0;
+    double relative_motion = 0;
     {
       ScopedStageTimer timer(result.stages, "update (host)");
       session_.update_centroids(step);
+      relative_motion = session_.relative_motion(step);
     }
     object_frame(x0, session_.centroid0(), 0, events);
     object_frame(x1, session_.centroid1(), 1, events);
@@ -157,9 +159,9 @@ class ApccdOpenCl final : public Strategy {
     pipeline_.back_end(tested->buffer, tests, step, x0, x1, result, events);
     for (const auto& [stage, milliseconds] : events.collect()) result.stages.add(stage, milliseconds);
     std::size_t history_catches = 0;
-    if (audit || settings_.history) {
+    if (audit || settings_.history != HistoryMode::off) {
       TestedPairs pairs = pipeline_.tested_pairs(tested->buffer, tests);
-      if (settings_.history) {
+      if (settings_.history != HistoryMode::off) {
         ScopedStageTimer timer(result.stages, "history (host)");
         history_catches = history_.apply(scene_->topology(), step.x1, pairs, result.collisions);
       }
@@ -180,7 +182,9 @@ class ApccdOpenCl final : public Strategy {
                                                          {"history_table_bytes", static_cast<double>(history_.bytes())},
                                                          {"distance_filtered", static_cast<double>(elementary - tests)},
                                                          {"device_bytes", static_cast<double>(device)},
-                                                         {"pending_table_builds", static_cast<double>(table_builds_)}};
+                                                         {"pending_table_builds", static_cast<double>(table_builds_)},
+                                                         {"admissible_pairs", static_cast<double>(admissible)},
+                                                         {"relative_motion", relative_motion}};
     extra.insert(extra.end(), result.counters.extra.begin(), result.counters.extra.end());
     result.counters.extra = std::move(extra);
     session_.advance(dangling_vertices, admissible, pending_.count);
