@@ -93,6 +93,16 @@ TEST(RunSummary, StrategyCountersHaveTheirMeanAndMaxOverTheSteps) {
   double ms = 0;
   for (const nlohmann::json& step : steps) ms += step["ms"].get<double>();
   EXPECT_DOUBLE_EQ(summary["ms_per_step_mean"].get<double>(), ms / static_cast<double>(steps.size()));
+  // Each stage's mean per step (steps without it add 0): within a step, the stages take part of its time.
+  double stages = 0;
+  for (const auto& [stage, value] : summary["stage_ms_mean"].items()) {
+    double sum = 0;
+    for (const nlohmann::json& step : steps) sum += step["stages"].value(stage, 0.0);
+    EXPECT_NEAR(value.get<double>(), sum / static_cast<double>(steps.size()), 1e-9 * sum) << stage;
+    stages += value.get<double>();
+  }
+  EXPECT_GT(stages, 0.0);
+  EXPECT_LE(stages, summary["ms_per_step_mean"].get<double>());
 }
 
 }  // namespace

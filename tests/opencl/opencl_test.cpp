@@ -29,7 +29,7 @@ bool same_toi(double a, double b) { return (std::isnan(a) && std::isnan(b)) || s
 /// The counters of apccd's session logic: the two backends must take the same decisions.
 const std::vector<std::string> kSessionCounters{"session_start", "nf", "pending_pairs", "dangling_vertices", "dangling_triangles", "history_pairs",
                                                "distance_filtered", "history_catches", "admissible_pairs",
-                                               "relative_motion"};
+                                               "object_pair_candidates", "relative_motion"};
 
 double extra_counter(const strategies::StepResult& result, const std::string& name) {
   for (const auto& [key, value] : result.counters.extra) {

@@ -152,6 +152,7 @@ class Apccd final : public Strategy {
                              {"history_table_bytes", static_cast<double>(history_.bytes())},
                              {"distance_filtered", static_cast<double>(outcome.filtered)},
                              {"admissible_pairs", static_cast<double>(admissible.size())},
+                             {"object_pair_candidates", static_cast<double>(across.size())},
                              {"pending_bytes", static_cast<double>(pending_bytes)},
                              {"tree_bytes", static_cast<double>(tree_bytes)},
                              {"relative_motion", relative_motion}};

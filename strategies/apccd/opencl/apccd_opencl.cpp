@@ -184,6 +184,7 @@ class ApccdOpenCl final : public Strategy {
                                                          {"device_bytes", static_cast<double>(device)},
                                                          {"pending_table_builds", static_cast<double>(table_builds_)},
                                                          {"admissible_pairs", static_cast<double>(admissible)},
+                                                         {"object_pair_candidates", static_cast<double>(across_count)},
                                                          {"relative_motion", relative_motion}};
     extra.insert(extra.end(), result.counters.extra.begin(), result.counters.extra.end());
     result.counters.extra = std::move(extra);
