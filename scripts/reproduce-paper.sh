@@ -15,8 +15,8 @@ cd "$(dirname "$0")/.."
 profile=${1:-quick}
 case "$profile" in
   quick)
-    steps=20 res_scale=1 memory_res="48 64 80 100" memory_frames=11
-    spf_list="1 2 4 8 16" crossover_frames=5 winds="0 4 8 16 32" ;;
+    steps=10 res_scale=1 memory_res="48 64 80 100" memory_frames=6
+    spf_list="1 4 16" crossover_frames=4 winds="0 8 32" ;;
   full)
     steps=99 res_scale=1 memory_res="48 64 80 100 128" memory_frames=21
     spf_list="1 2 4 8 16 32" crossover_frames=9 winds="0 2 4 8 12 16 24 32" ;;
@@ -62,6 +62,7 @@ run() {  # run EXPERIMENT VERIFY STRATEGIES SCENE-FILES...
   # The command as a reader would type it: paths relative to the repository, the scenes by their file names.
   printf '%s\t%s\n' "$experiment" "${command[*]}" | sed "s#$work/#$out/#g" >> "$work/raw/commands.tsv"
   "${command[@]}" > "$work/raw/$experiment.txt"
+  echo "== $experiment done at $(( $(date +%s) - started )) s"
 }
 
 # 1. Attribution (claims 2, 4, 6): the paper suite at each scene's δ, every step verified. full:filter=on runs the
