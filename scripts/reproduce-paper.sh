@@ -4,7 +4,7 @@
 # beside every table. Every cell runs here, in this one invocation, so its ratios compare like with like.
 #
 # Usage: scripts/reproduce-paper.sh [quick|full|smoke]
-#   quick  fewer steps and sweep points: under 10 minutes on 16 cores from a cold truth cache
+#   quick  10 steps per scene, fewer sweep points: under 10 minutes on 16 cores from a cold truth cache
 #   full   99 steps per scene and every sweep point (no time target; reuses the truth cache and finished cells)
 #   smoke  tiny resolutions, seconds on 2 cores: checks the pipeline end to end, its numbers mean nothing
 # Environment: CCDBENCH_BIN (a built ccdbench; default: build it with scripts/build.sh release), OUT (default
@@ -15,8 +15,8 @@ cd "$(dirname "$0")/.."
 profile=${1:-quick}
 case "$profile" in
   quick)
-    steps=10 res_scale=1 memory_res="48 64 80 100" memory_frames=6
-    spf_list="1 4 16" crossover_frames=4 winds="0 8 32" ;;
+    steps=10 res_scale=1 memory_res="48 64 80 100" memory_frames=11
+    spf_list="1 2 4 8 16" crossover_frames=5 winds="0 4 8 16 32" ;;
   full)
     steps=99 res_scale=1 memory_res="48 64 80 100 128" memory_frames=21
     spf_list="1 2 4 8 16 32" crossover_frames=9 winds="0 2 4 8 12 16 24 32" ;;
