@@ -77,12 +77,14 @@ paper_scenes=(
   "$(scene pile pile resolution=$(res 64) frames=$frames)")
 run attribution exact "full,full:filter=on,apccd,apccd:skip=off,apccd:object_pairs=session,apccd:history=persistent" "${paper_scenes[@]}"
 
-# 2. Crossover: the same simulated motion cut into more, smaller CCD steps (steps_per_frame), on the two slowly
-#    moving scenes. Where does skipping frames start to pay (apccd against apccd:skip=off)?
+# 2. Crossover: the same simulated motion cut into more, smaller CCD steps (steps_per_frame), on two scenes that
+#    deform from their first frame (drape and the pile fall rigidly for their first frames: no relative motion).
+#    Where does skipping frames start to pay (apccd against apccd:skip=off)?
 crossover_scenes=()
-for scene_name in drape flag; do
+for scene_res in flag:100 twist:80; do
+  scene_name=${scene_res%%:*}
   for spf in $spf_list; do
-    crossover_scenes+=("$(scene "$scene_name" "crossover-$scene_name-spf$spf" resolution=$(res 100) frames=$crossover_frames steps_per_frame=$spf)")
+    crossover_scenes+=("$(scene "$scene_name" "crossover-$scene_name-spf$spf" resolution=$(res "${scene_res#*:}") frames=$crossover_frames steps_per_frame=$spf)")
   done
 done
 run crossover exact "full:filter=on,apccd,apccd:skip=off" "${crossover_scenes[@]}"
