@@ -3,6 +3,8 @@
 # table, the crossover and memory plots and the wind sweep (README.md), from ccdbench runs whose commands are written
 # beside every table. Every cell runs here, in this one invocation, so its ratios compare like with like.
 #
+# Each step is timed 3 times (its median counts): one pass of a 10-step cell on a shared machine is too noisy for
+# the sweeps' ratios.
 # Usage: scripts/reproduce-paper.sh [quick|full|smoke]
 #   quick  10 steps per scene, fewer sweep points: under 10 minutes on 16 cores from a cold truth cache
 #   full   99 steps per scene and every sweep point (no time target; reuses the truth cache and finished cells)
@@ -15,13 +17,13 @@ cd "$(dirname "$0")/.."
 profile=${1:-quick}
 case "$profile" in
   quick)
-    steps=10 res_scale=1 memory_res="48 64 80 100" memory_frames=11
+    steps=10 repeats=3 res_scale=1 memory_res="48 64 80 100" memory_frames=11
     spf_list="1 2 4 8 16" crossover_frames=5 winds="0 4 8 16 32" ;;
   full)
-    steps=99 res_scale=1 memory_res="48 64 80 100 128" memory_frames=21
+    steps=99 repeats=3 res_scale=1 memory_res="48 64 80 100 128" memory_frames=21
     spf_list="1 2 4 8 16 32" crossover_frames=9 winds="0 2 4 8 12 16 24 32" ;;
   smoke)
-    steps=3 res_scale=8 memory_res="8 12" memory_frames=3
+    steps=3 repeats=1 res_scale=8 memory_res="8 12" memory_frames=3
     spf_list="1 4" crossover_frames=3 winds="0 8" ;;
   *) echo "reproduce-paper.sh: unknown profile '$profile' (quick, full or smoke)" >&2; exit 2 ;;
 esac
@@ -56,7 +58,7 @@ scene() {  # scene NAME FILE-STEM KEY=VALUE...: a scene file with a generator bl
 run() {  # run EXPERIMENT VERIFY STRATEGIES SCENE-FILES...
   local experiment=$1 verify=$2 strategies=$3
   shift 3
-  local command=("$CCDBENCH_BIN" "${threads[@]}" run --scene "$@" --strategy "$strategies" --verify "$verify"
+  local command=("$CCDBENCH_BIN" "${threads[@]}" run --scene "$@" --strategy "$strategies" --verify "$verify" --repeat "$repeats"
                  --out "$cells/$experiment" --json "$work/raw/$experiment.json")
   echo "== $experiment ($(( $(date +%s) - started )) s so far): ${#@} scenes, strategies $strategies, verify $verify"
   # The command as a reader would type it: paths relative to the repository, the scenes by their file names.
