@@ -71,11 +71,11 @@ TEST_P(ApccdOnScene, MissesNothingUnderEveryKnobAndThreadCount) {
       colliding += truth.back().size();
     }
     EXPECT_GT(colliding, 0u) << GetParam() << ", δ = " << thickness << ": nothing to miss, the test would prove nothing";
-    // Every knob, at least once: defaults; no skipping, no front end, history on; persistent history; no inflation at all (every
-    // motion dangles); object pairs from the session's trees; long sessions (nf 2..16, no inflation cap, many
-    // dangling vertices and a long pending list allowed before a session ends).
+    // Every knob, at least once: defaults; no skipping, no front end, history on; no inflation at all (every
+    // motion dangles); object pairs from the session's trees with persistent history; long sessions (nf 2..16, no
+    // inflation cap, many dangling vertices and a long pending list allowed before a session ends).
     for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off:history=on", "apccd:local=0:global=0",
-                             "apccd:object_pairs=session", "apccd:history=persistent",
+                             "apccd:object_pairs=session:history=persistent",
                              "apccd:nf_min=2:nf_max=16:inflation_max=1e9:dangling_max=0.5:pending_max=1e9"}) {
       SCOPED_TRACE(GetParam() + ", δ = " + std::to_string(thickness) + ", " + spec);
       const auto two = testing::run_all_steps(spec, scene, frames, 2);
