@@ -177,8 +177,9 @@ int run_command_line(int argc, char** argv) {
       "admissible pair that ends a session), inflation_max=0.5 (a session is shortened so that the mean budget\n"
       "stays within this fraction of the mean edge length), heuristic=on (front end),\n"
       "history=off (on: orientations of the pairs tested last step; persistent: the paper's, of every pair\n"
-      "tested since the first step, checked whenever one is tested again), object_pairs=fresh (pairs across objects from tight trees refitted every step; session: from\n"
-      "the session's inflated trees). Narrow-phase keys go after the strategy's: apccd+cubic64:nf_max=4:eta=1e-5.\n"
+      "tested since the first step, checked whenever one is tested again), object_pairs=fresh (pairs across\n"
+      "objects from tight trees refitted every step; session: from the session's inflated trees).\n"
+      "Narrow-phase keys go after the strategy's: apccd+cubic64:nf_max=4:eta=1e-5.\n"
       "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
   run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper");
   run->add_option("--scene", run_scenes, "scene files (or folders with scene.json); repeat or list several");

@@ -90,6 +90,21 @@ def verified_steps(cells):
     return sum(c["steps"] for c in cells.values() if c.get("verified"))
 
 
+def speedups(cells, stem):
+    """apccd's cell of a sweep point, and apccd's speed-up over apccd:skip=off and over full:filter=on there."""
+    cell = cells[(stem, "apccd")]
+    return cell, ms(cells[(stem, "apccd:skip=off")]) / ms(cell), ms(cells[(stem, "full:filter=on")]) / ms(cell)
+
+
+def label_and_save(figure, axis, xlabel, ylabel, title, path, fontsize):
+    axis.set_xlabel(xlabel)
+    axis.set_ylabel(ylabel)
+    axis.set_title(title)
+    axis.legend(fontsize=fontsize)
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+
+
 def table(header, rows):
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(str(x) for x in row) + " |" for row in rows]
@@ -154,14 +169,12 @@ def main(work, shown_as):
 
     # ---- Crossover
     crossover_points = {}
-    for (stem, strategy), cell in crossover.items():
-        if strategy != "apccd":
-            continue
+    for stem in sorted({stem for stem, strategy in crossover if strategy == "apccd"}):
+        cell, skip_ratio, filter_ratio = speedups(crossover, stem)
         p = scene_parameters(work, stem)
         crossover_points.setdefault(p["name"], []).append((
-            counter(cell, "relative_motion"), p.get("steps_per_frame", 1), stem,
-            ms(crossover[(stem, "apccd:skip=off")]) / ms(cell), ms(crossover[(stem, "full:filter=on")]) / ms(cell),
-            cell["steps"] * (1 - counter(cell, "session_start")) / cell["steps"], counter(cell, "nf")))
+            counter(cell, "relative_motion"), p.get("steps_per_frame", 1), stem, skip_ratio, filter_ratio,
+            1 - counter(cell, "session_start"), counter(cell, "nf")))
     crossover_rows, crossings = [], {}
     for name, points in sorted(crossover_points.items()):
         points.sort(reverse=True)  # largest motion first
@@ -185,22 +198,15 @@ def main(work, shown_as):
         axis.plot(xs, [p[4] for p in points], marker="s", linestyle="--", label=f"{name}: apccd vs full:filter=on")
     axis.axhline(1.0, color="grey", linewidth=0.8)
     axis.set_xscale("log")
-    axis.set_xlabel("mean motion per CCD step, relative to the cloth's centroid (mean edge lengths)")
-    axis.set_ylabel("speed-up (mean ms per step)")
-    axis.set_title(f"When skipping frames pays ({profile} profile)")
-    axis.legend(fontsize=7)
-    figure.tight_layout()
-    figure.savefig(f"{work}/crossover.png", dpi=120)
+    label_and_save(figure, axis, "mean motion per CCD step, relative to the cloth's centroid (mean edge lengths)",
+                   "speed-up (mean ms per step)", f"When skipping frames pays ({profile} profile)", f"{work}/crossover.png", 7)
 
     # ---- Wind
     wind_rows, wind_points = [], {}
-    for (stem, strategy), cell in sorted(wind.items()):
-        if strategy != "apccd":
-            continue
+    for stem in sorted({stem for stem, strategy in wind if strategy == "apccd"}):
+        cell, skip_ratio, filter_ratio = speedups(wind, stem)
         p = scene_parameters(work, stem)
         skipped = 1 - counter(cell, "session_start")
-        skip_ratio = ms(wind[(stem, "apccd:skip=off")]) / ms(cell)
-        filter_ratio = ms(wind[(stem, "full:filter=on")]) / ms(cell)
         spf = p.get("steps_per_frame", 1)
         wind_points.setdefault(spf, []).append((p["wind"], skipped, counter(cell, "nf"), skip_ratio, filter_ratio,
                                                 counter(cell, "relative_motion"), cell["steps"]))
@@ -242,12 +248,8 @@ def main(work, shown_as):
     for strategy, points in sorted(memory_points.items()):
         axis.plot([p[0] / 1000 for p in points], [p[1] / 1e6 for p in points], marker="o", label=strategy)
     axis.plot([PAPER_PCTP / 1000], [PAPER_BYTES / 1e6], marker="*", markersize=12, linestyle="none", label="paper (spinning ball)")
-    axis.set_xlabel("pending pairs (PCTPs), mean per step, thousands")
-    axis.set_ylabel("memory, mean per step (MB)")
-    axis.set_title(f"apccd's memory against PCTPs, spinning ball ({profile} profile)")
-    axis.legend(fontsize=8)
-    figure.tight_layout()
-    figure.savefig(f"{work}/memory.png", dpi=120)
+    label_and_save(figure, axis, "pending pairs (PCTPs), mean per step, thousands", "memory, mean per step (MB)",
+                   f"apccd's memory against PCTPs, spinning ball ({profile} profile)", f"{work}/memory.png", 8)
 
     # ---- Verdicts
     def median(values):

@@ -301,9 +301,4 @@ std::size_t ProximityHistory::bytes() const {
   return table_bytes(vertex_face_) + table_bytes(edge_edge_);
 }
 
-void ProximityHistory::clear() {
-  vertex_face_.clear();
-  edge_edge_.clear();
-}
-
 }  // namespace ccd::strategies

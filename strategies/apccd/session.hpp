@@ -120,7 +120,6 @@ class ProximityHistory {
   std::size_t pairs() const { return vertex_face_.size() + edge_edge_.size(); }
   /// Bytes of the tables: buckets plus one node per entry (key, value, next pointer, cached hash).
   std::size_t bytes() const;
-  void clear();
 
  private:
   HistoryMode mode_;
