@@ -99,22 +99,20 @@ class Mpi : public ::testing::Test {
 };
 
 TEST_F(Mpi, TwoRanksGiveEveryVerdictAndCountOfOne) {
+  // One rank under mpirun is tested by TruthAndQueriesOverRanksAreThoseOfOneProcess; here two ranks against a plain
+  // process (the suite under mpirun is the slowest part of CI's ASan run).
   const auto plain = run_suite(0, "plain");
   ASSERT_EQ(plain.exit_code, 0) << plain.output;
-  const auto one = run_suite(1, "one");
-  ASSERT_EQ(one.exit_code, 0) << one.output;
   const auto two = run_suite(2, "two");
   ASSERT_EQ(two.exit_code, 0) << two.output;
-  const nlohmann::json p = summaries("plain"), a = summaries("one"), b = summaries("two");
-  ASSERT_EQ(a.size(), 6u);
-  ASSERT_EQ(p.size(), a.size());
-  ASSERT_EQ(b.size(), a.size());
-  expect_same_verdicts(p, a);
-  EXPECT_GT(expect_same_verdicts(a, b), 0u) << "cells without colliding pairs would compare nothing";
+  const nlohmann::json p = summaries("plain"), b = summaries("two");
+  ASSERT_EQ(p.size(), 6u);
+  ASSERT_EQ(b.size(), p.size());
+  EXPECT_GT(expect_same_verdicts(p, b), 0u) << "cells without colliding pairs would compare nothing";
   std::set<int> ranks;
-  for (std::size_t i = 0; i < a.size(); ++i) {
+  for (std::size_t i = 0; i < p.size(); ++i) {
     ranks.insert(b[i]["rank"].get<int>());
-    EXPECT_EQ(a[i]["rank"], 0);
+    EXPECT_EQ(p[i]["rank"], 0);
   }
   EXPECT_EQ(ranks, (std::set<int>{0, 1})) << "the work was not spread over both ranks:\n" << two.output;
 }

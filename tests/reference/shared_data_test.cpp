@@ -9,6 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <vector>
+
 namespace ccd::reference {
 namespace {
 
@@ -50,7 +53,13 @@ TEST(ReferenceSharedData, ScalableCcdQueriesAllRight) {
 // query's vertex coordinates, which identify mesh vertices in these steps (no two share both positions).
 TEST(ReferenceSharedData, StepTruthHoldsEverySampleColliding) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
-  for (const char* name : {"cloth-funnel", "rod-twist"}) {
+  std::vector<const char*> names{"cloth-funnel", "rod-twist"};
+#if defined(__SANITIZE_ADDRESS__)
+  // Under AddressSanitizer rod-twist's truth takes most of a minute of CI's two cores; the Release run of CI checks
+  // it, and cloth-funnel runs the same code here.
+  names.pop_back();
+#endif
+  for (const char* name : names) {
     SCOPED_TRACE(name);
     const datasets::SampleStep step = datasets::load_sample_step(data / "scalable-ccd-sample" / name);
     const Scene scene({{"mesh", ObjectKind::deformable, true, step.topology.num_vertices(), step.topology.faces()}}, {},
