@@ -10,6 +10,8 @@ pkg_check_modules(CCD_GMP REQUIRED IMPORTED_TARGET gmp gmpxx)
 pkg_check_modules(CCD_MPFR REQUIRED IMPORTED_TARGET mpfr)
 # Content digests of cache keys, resumed cells and checksums (datasets/content_hash.hpp).
 pkg_check_modules(CCD_XXHASH REQUIRED IMPORTED_TARGET libxxhash)
+# libccd (GJK): the strategies cull cloth faces against analytic shapes with it (strategies/face_shape.hpp).
+pkg_check_modules(CCD REQUIRED IMPORTED_TARGET ccd)
 
 # Optional backends: ON by default when the distribution's package is found, and said clearly when OFF.
 # ccd_optional_feature(NAME FOUND DESCRIPTION PACKAGES): the option CCDBENCH_WITH_NAME defaults to FOUND (a value
@@ -27,7 +29,6 @@ ccd_optional_feature(OPENCL "${OpenCL_FOUND}" "Build the OpenCL backend (full:ba
                      "ocl-icd-opencl-dev opencl-headers pocl-opencl-icd")
 
 find_package(fcl QUIET)
-pkg_check_modules(CCD QUIET IMPORTED_TARGET ccd)
 if(fcl_FOUND AND CCD_FOUND)
   set(_ccd_fcl_found ON)
 else()

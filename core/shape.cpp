@@ -1,0 +1,36 @@
+#include "core/shape.hpp"
+
+namespace ccd {
+
+std::string_view to_string(ShapeKind kind) {
+  switch (kind) {
+    case ShapeKind::sphere: return "sphere";
+    case ShapeKind::box: return "box";
+  }
+  return "?";
+}
+
+std::optional<ShapeKind> parse_shape_kind(std::string_view text) {
+  for (ShapeKind kind : {ShapeKind::sphere, ShapeKind::box}) {
+    if (text == to_string(kind)) return kind;
+  }
+  return std::nullopt;
+}
+
+std::array<Vec3, 8> box_corners(const Vec3& centre, const Vec3& half_extents) {
+  std::array<Vec3, 8> corners;
+  for (int i = 0; i < 8; ++i) {
+    for (int k = 0; k < 3; ++k) corners[i][k] = (i >> k) & 1 ? centre[k] + half_extents[k] : centre[k] - half_extents[k];
+  }
+  return corners;
+}
+
+// Sides -x, +x, -y, +y, -z, +z, each split along one diagonal; the cross product of each triangle's first two
+// edges points out of the box.
+const std::array<std::array<int, 3>, 12> kBoxTriangles{{{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}, {0, 1, 5}, {0, 5, 4},
+                                                        {2, 6, 7}, {2, 7, 3}, {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}}};
+
+const std::array<std::array<int, 2>, 12> kBoxEdges{{{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3}, {4, 6}, {5, 7},
+                                                    {0, 4}, {1, 5}, {2, 6}, {3, 7}}};
+
+}  // namespace ccd

@@ -1,0 +1,47 @@
+#pragma once
+/// @file
+/// Face-shape pairs in the strategies (core/shape.hpp says what collides): a cull with libccd that a certified
+/// separating axis must confirm, then the project's narrow phases on what survives.
+///
+/// Cull. The pair is rescaled exactly by a power of two to unit size and taken in the shape's frame: the face's
+/// corners relative to the centre move linearly, so at every t the face lies in the convex hull H of its six
+/// relative corners at t = 0 and t = 1, and the shape stays at the origin. libccd's GJK asks whether H meets the
+/// shape grown by δ and a margin (kGjkMargin). Its "no" is not certified: GJK answers no below an absolute
+/// |d|² < DBL_EPSILON, on degenerate simplices and at its iteration limit. So "no" is accepted only where a
+/// separating axis, with a bound on every rounding, shows H farther than δ from the shape; otherwise the pair
+/// goes on. libccd's "yes" always goes on.
+///
+/// Narrow phase. Sphere: the vertex-face test with the centre as the vertex and thickness R + δ rounded up. Box:
+/// the face's corners against the twelve surface triangles, the box's corners against the face and the face's
+/// edges against the twelve box edges, with the corners c ± h computed in doubles and δ grown by their rounding
+/// (kCornerRounding); then, for a face that still seems apart, a certified separating-axis test of the face at
+/// t = 0 against the solid box. A conservative narrow phase thus stays conservative.
+
+#include "core/shape.hpp"
+#include "strategies/narrowphase/narrow_phase.hpp"
+
+namespace ccd::strategies {
+
+/// Why a cull answered as it did (counters of the strategies; tests check the certified path is taken).
+enum class FaceShapeCull {
+  /// libccd's GJK found the hull and the grown shape intersecting: the pair goes on.
+  gjk_overlap,
+  /// GJK said apart and a certified axis agreed: culled.
+  certified_apart,
+  /// GJK said apart but no candidate axis certified it (or the pair could not be rescaled): the pair goes on.
+  uncertified,
+};
+
+/// @return certified_apart only when the face provably stays farther than δ from the shape during the step.
+FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, double thickness);
+
+/// Decides the pair with `narrow` (see above). The TOI is the earliest of the elementary tests' (0 for a face that
+/// may meet the solid box at t = 0).
+narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::NarrowPhase& narrow, const Shape& shape,
+                                                       const FaceShapeRows& rows, double thickness);
+
+/// R + δ rounded up: the smallest double >= the exact sum (round-to-nearest sum, then one step up when the sum
+/// rounded down, found exactly by TwoSum).
+double radius_plus_thickness(double radius, double thickness);
+
+}  // namespace ccd::strategies

@@ -1,0 +1,189 @@
+// Face-shape pairs (core/shape.hpp): the strategies' cull and narrow phase (strategies/face_shape.hpp) against the
+// reference's exact decision (reference/face_shape.hpp) on seeded random pairs at both δ and at every scale, and
+// on the cases that decide the definition: a face through a box's corner or edge, a face inside a box at t = 0, a
+// face cutting a box with no corner inside, a face grazing a sphere at exactly R + δ and one ulp farther.
+
+#include "reference/face_shape.hpp"
+#include "strategies/face_shape.hpp"
+#include "strategies/narrowphase/narrow_phase.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <random>
+#include <sstream>
+
+namespace ccd {
+namespace {
+
+const narrowphase::NarrowPhase& conservative() {
+  static const auto narrow = narrowphase::make_narrow_phase("conservative");
+  return *narrow;
+}
+
+std::string describe(const Shape& shape, const FaceShapeRows& rows, double thickness) {
+  std::ostringstream out;
+  out.precision(17);
+  out << to_string(shape.kind) << " R=" << shape.radius << " h=" << shape.half_extents.transpose() << " δ=" << thickness
+      << "\n c0=" << rows.centre_t0.transpose() << " c1=" << rows.centre_t1.transpose();
+  for (int i = 0; i < 3; ++i) out << "\n f" << i << ": " << rows.face_t0[i].transpose() << " -> " << rows.face_t1[i].transpose();
+  return out.str();
+}
+
+/// What the strategies answer: culled pairs do not collide, the rest go to the conservative narrow phase.
+struct StrategyAnswer {
+  bool culled = false;
+  narrowphase::NarrowPhaseResult narrow;
+  bool collides() const { return !culled && narrow.collides; }
+};
+
+StrategyAnswer strategy_answer(const Shape& shape, const FaceShapeRows& rows, double thickness) {
+  StrategyAnswer answer;
+  answer.culled = strategies::cull_face_shape(shape, rows, thickness) == strategies::FaceShapeCull::certified_apart;
+  if (!answer.culled) answer.narrow = strategies::narrow_phase_face_shape(conservative(), shape, rows, thickness);
+  return answer;
+}
+
+/// Expects the strategies to find the pair when the reference says it collides (with a TOI no later than the
+/// exact one), and never to cull a colliding pair. Returns the reference's answer.
+bool expect_no_miss(const Shape& shape, const FaceShapeRows& rows, double thickness) {
+  const reference::Decision truth = reference::decide_face_shape(shape, rows, thickness, {true, true, 64});
+  const StrategyAnswer answer = strategy_answer(shape, rows, thickness);
+  if (truth.collides) {
+    EXPECT_FALSE(answer.culled) << "culled a colliding pair: " << describe(shape, rows, thickness);
+    EXPECT_TRUE(answer.collides()) << "missed: " << describe(shape, rows, thickness);
+    if (answer.collides()) {
+      EXPECT_LE(answer.narrow.toi, *truth.toi_floor) << "late TOI: " << describe(shape, rows, thickness);
+    }
+  }
+  return truth.collides;
+}
+
+FaceShapeRows static_rows(const std::array<Vec3, 3>& face, const Vec3& centre) { return {face, face, centre, centre}; }
+
+Shape sphere(double radius) { return {ShapeKind::sphere, radius, Vec3::Zero()}; }
+Shape box(const Vec3& half) { return {ShapeKind::box, 0.0, half}; }
+
+// Seeded random faces near each shape's surface, moving up to about a shape's size, at δ = 0 and δ = 1% of the
+// size, scaled exactly by powers of two from 2^-900 to 2^900: no colliding pair is culled or missed, its TOI is
+// never late, and the cull does cull (each kind of answer occurs, or the test would prove nothing).
+TEST(FaceShape, StrategiesMissNoRandomPairAtEitherThicknessAndEveryScale) {
+  const std::uint64_t seed = 20261123;
+  std::cout << "seed " << seed << "\n";
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), size(0.3, 1.0);
+  for (const ShapeKind kind : {ShapeKind::sphere, ShapeKind::box}) {
+    for (const int exponent : {-900, -40, 0, 40, 900}) {
+      std::size_t colliding = 0, apart = 0, culled = 0;
+      // At 2^±900 the reference's interval filter underflows or overflows and every decision is exact (slow).
+      const int pairs = std::abs(exponent) > 100 ? 20 : 60;
+      for (int n = 0; n < pairs; ++n) {
+        const double s = std::ldexp(1.0, exponent);
+        Shape shape = kind == ShapeKind::sphere ? sphere(size(random) * s) : box(Vec3(size(random), size(random), size(random)) * s);
+        const Vec3 c0 = Vec3(unit(random), unit(random), unit(random)) * 0.2 * s;
+        const Vec3 c1 = c0 + Vec3(unit(random), unit(random), unit(random)) * 0.3 * s;
+        // A face around a point at 0.6 to 1.6 times the size from the centre, edges up to 0.5 long.
+        const Vec3 direction = Vec3(unit(random), unit(random), unit(random)).normalized();
+        const Vec3 anchor = c0 + direction * (1.0 + 0.5 * unit(random)) * s;
+        FaceShapeRows rows;
+        rows.centre_t0 = c0;
+        rows.centre_t1 = c1;
+        const Vec3 motion = Vec3(unit(random), unit(random), unit(random)) * 0.5 * s;
+        for (int i = 0; i < 3; ++i) {
+          rows.face_t0[i] = anchor + Vec3(unit(random), unit(random), unit(random)) * 0.25 * s;
+          rows.face_t1[i] = rows.face_t0[i] + motion + Vec3(unit(random), unit(random), unit(random)) * 0.05 * s;
+        }
+        for (const double thickness : {0.0, 0.01 * s}) {
+          SCOPED_TRACE(std::string(to_string(kind)) + " at 2^" + std::to_string(exponent) + ", pair " + std::to_string(n));
+          const bool collides = expect_no_miss(shape, rows, thickness);
+          (collides ? colliding : apart) += 1;
+          culled += strategy_answer(shape, rows, thickness).culled ? 1 : 0;
+        }
+      }
+      std::cout << to_string(kind) << " 2^" << exponent << ": " << colliding << " colliding, " << apart << " apart, " << culled << " culled\n";
+      const std::size_t decisions = 2 * static_cast<std::size_t>(pairs);
+      EXPECT_GE(colliding, decisions / 10) << to_string(kind) << " at 2^" << exponent;
+      EXPECT_GE(apart, decisions / 10) << to_string(kind) << " at 2^" << exponent;
+      EXPECT_GE(culled, decisions / 20) << to_string(kind) << " at 2^" << exponent << ": the cull hardly culled";
+    }
+  }
+}
+
+// A unit box at the origin and a small face moving through the region of its corner (1, 1, 1) along the diagonal,
+// in the plane x + y + z = s, which touches the box only at that corner when s = 3.
+TEST(FaceShape, AFaceThroughABoxCornerCollidesAndOneStoppingShortDoesNot) {
+  const Shape cube = box(Vec3(1, 1, 1));
+  auto plane_face = [](double s) {
+    const double third = s / 3;
+    return std::array<Vec3, 3>{Vec3(third + 0.2, third - 0.1, third - 0.1), Vec3(third - 0.1, third + 0.2, third - 0.1),
+                               Vec3(third - 0.1, third - 0.1, third + 0.2)};
+  };
+  FaceShapeRows through{plane_face(3.3), plane_face(2.7), Vec3::Zero(), Vec3::Zero()};
+  EXPECT_TRUE(expect_no_miss(cube, through, 0.0));
+  FaceShapeRows short_of{plane_face(3.3), plane_face(3.15), Vec3::Zero(), Vec3::Zero()};
+  EXPECT_FALSE(expect_no_miss(cube, short_of, 0.0));
+  // It comes within 0.15/√3 ≈ 0.0866 of the corner.
+  EXPECT_TRUE(expect_no_miss(cube, short_of, 0.09));
+  EXPECT_FALSE(expect_no_miss(cube, short_of, 0.08));
+  EXPECT_TRUE(strategy_answer(cube, through, 0.0).collides());
+}
+
+// A face moving across the box's edge x = y = 1 (along z) in the plane x + y = s, which touches that edge at s = 2.
+TEST(FaceShape, AFaceAcrossABoxEdgeCollides) {
+  const Shape cube = box(Vec3(1, 1, 1));
+  auto plane_face = [](double s) {
+    const double half = s / 2;
+    return std::array<Vec3, 3>{Vec3(half + 0.3, half - 0.3, -0.5), Vec3(half - 0.3, half + 0.3, -0.5), Vec3(half, half, 0.5)};
+  };
+  EXPECT_TRUE(expect_no_miss(cube, {plane_face(2.4), plane_face(1.9), Vec3::Zero(), Vec3::Zero()}, 0.0));
+  EXPECT_FALSE(expect_no_miss(cube, {plane_face(2.4), plane_face(2.1), Vec3::Zero(), Vec3::Zero()}, 0.0));
+  // The box moves instead of the face: the same relative motion.
+  EXPECT_TRUE(expect_no_miss(cube, {plane_face(2.4), plane_face(2.4), Vec3::Zero(), Vec3(0.25, 0.25, 0)}, 0.0));
+}
+
+// A small face inside the box at t = 0, far from every side during the step, collides (the box is solid) at
+// t = 0; so does a large face cutting through the box with every corner outside; a face beside the box does not.
+TEST(FaceShape, AFaceInsideOrCuttingABoxAtTheStartCollidesAtTimeZero) {
+  const Shape cube = box(Vec3(1, 1, 1));
+  const std::array<Vec3, 3> inside{Vec3(-0.1, -0.1, 0), Vec3(0.1, -0.1, 0), Vec3(0, 0.1, 0)};
+  const FaceShapeRows rows = static_rows(inside, Vec3::Zero());
+  const reference::Decision truth = reference::decide_face_shape(cube, rows, 0.0, {true, true, 64});
+  EXPECT_TRUE(truth.collides);
+  EXPECT_EQ(*truth.toi_floor, 0.0);
+  const StrategyAnswer answer = strategy_answer(cube, rows, 0.0);
+  EXPECT_TRUE(answer.collides());
+  EXPECT_EQ(answer.narrow.toi, 0.0);
+
+  const std::array<Vec3, 3> cutting{Vec3(-10, -10, 0.5), Vec3(10, -10, 0.5), Vec3(0, 10, 0.5)};
+  EXPECT_TRUE(expect_no_miss(cube, static_rows(cutting, Vec3::Zero()), 0.0));
+  const std::array<Vec3, 3> beside{Vec3(-10, -10, 1.5), Vec3(10, -10, 1.5), Vec3(0, 10, 1.5)};
+  EXPECT_FALSE(expect_no_miss(cube, static_rows(beside, Vec3::Zero()), 0.0));
+  EXPECT_FALSE(expect_no_miss(cube, static_rows(beside, Vec3::Zero()), 0.25));
+  EXPECT_TRUE(expect_no_miss(cube, static_rows(beside, Vec3::Zero()), 0.5));
+}
+
+// A static face in the plane z = d above a sphere's centre: it collides when d <= R + δ exactly. d is the largest
+// double not above R + δ (the graze), then the next double (one ulp farther). 0.1 + 0.2 is not a double; 1 + 0.25
+// is. The strategies find the graze; the reference says the ulp-farther face does not collide.
+TEST(FaceShape, AFaceGrazingASphereAtExactlyRPlusDeltaCollidesAndOneUlpFartherDoesNot) {
+  for (const auto& [radius, thickness] : {std::pair{0.1, 0.2}, std::pair{1.0, 0.25}, std::pair{1.0, 0x1p-54}, std::pair{0x1p-600, 0x1p-660}}) {
+    SCOPED_TRACE("R = " + std::to_string(radius) + ", δ = " + std::to_string(thickness));
+    const mpq_class exact = mpq_class(radius) + mpq_class(thickness);
+    double graze = radius + thickness;
+    if (mpq_class(graze) > exact) graze = std::nextafter(graze, 0.0);
+    const double farther = std::nextafter(graze, std::numeric_limits<double>::infinity());
+    ASSERT_GT(mpq_class(farther), exact);
+    const double w = 4 * radius;
+    for (const double d : {graze, farther}) {
+      const std::array<Vec3, 3> face{Vec3(-w, -w, d), Vec3(w, -w, d), Vec3(0, w, d)};
+      const bool collides = expect_no_miss(sphere(radius), static_rows(face, Vec3::Zero()), thickness);
+      EXPECT_EQ(collides, d == graze);
+    }
+    EXPECT_GE(mpq_class(strategies::radius_plus_thickness(radius, thickness)), exact);
+  }
+}
+
+}  // namespace
+}  // namespace ccd
