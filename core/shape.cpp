@@ -10,13 +10,6 @@ std::string_view to_string(ShapeKind kind) {
   return "?";
 }
 
-std::optional<ShapeKind> parse_shape_kind(std::string_view text) {
-  for (ShapeKind kind : {ShapeKind::sphere, ShapeKind::box}) {
-    if (text == to_string(kind)) return kind;
-  }
-  return std::nullopt;
-}
-
 std::array<Vec3, 8> box_corners(const Vec3& centre, const Vec3& half_extents) {
   std::array<Vec3, 8> corners;
   for (int i = 0; i < 8; ++i) {

@@ -1,8 +1,8 @@
 #pragma once
 /// @file
-/// Analytic convex obstacles (DESIGN.md §1 "What collides"): a sphere or an axis-aligned box, given by its size
-/// and, per step, its centre at t = 0 and t = 1 (linear in between). A face and a shape collide in a step when
-/// their distance is <= δ at some t in [0, 1]:
+/// Analytic convex obstacles (DESIGN.md §3, "Model only what a scene requires"): a sphere or an axis-aligned box,
+/// given by its size and, per step, by its centre at t = 0 and t = 1 (linear in between). A face and a shape
+/// collide in a step when their distance is <= δ at some t in [0, 1]:
 /// - sphere: the distance from the face to the centre is <= R + δ (a vertex-face question with thickness R + δ);
 /// - box (a solid): the face is within δ of the box's surface, or touches the solid box at t = 0 (a corner inside,
 ///   or the face cutting through it).
@@ -11,8 +11,6 @@
 #include "core/vec.hpp"
 
 #include <array>
-#include <optional>
-#include <string>
 #include <string_view>
 
 namespace ccd {
@@ -20,8 +18,6 @@ namespace ccd {
 enum class ShapeKind { sphere, box };
 
 std::string_view to_string(ShapeKind kind);
-/// "sphere" or "box"; nullopt otherwise.
-std::optional<ShapeKind> parse_shape_kind(std::string_view text);
 
 struct Shape {
   ShapeKind kind = ShapeKind::sphere;

@@ -1,5 +1,6 @@
 #include "reference/face_shape.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -45,7 +46,13 @@ void merge(Decision& into, const Decision& part) {
     into.toi_floor = part.toi_floor;
     return;
   }
-  if (part.toi && (!into.toi || part.toi->lower < into.toi->lower)) into.toi = part.toi;
+  // The earliest TOI lies in [min of lowers, min of uppers]: no wider than the narrowest part's interval.
+  if (part.toi && into.toi) {
+    if (part.toi->lower < into.toi->lower) into.toi->lower = part.toi->lower;
+    if (part.toi->upper < into.toi->upper) into.toi->upper = part.toi->upper;
+  } else if (part.toi) {
+    into.toi = part.toi;
+  }
   if (part.toi_floor && (!into.toi_floor || *part.toi_floor < *into.toi_floor)) into.toi_floor = part.toi_floor;
 }
 

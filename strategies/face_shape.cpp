@@ -27,6 +27,9 @@ constexpr unsigned long kGjkIterations = 100;
 /// 2^-52 each (so a·q by 2^-52·A), each 3-term dot product by 3·2^-53·2·A < 2^-50·A, and the shape's extent
 /// along a (R·|a| or Σ h_k |a_k|, plus δ·|a|, both at most 2·√3·max|a_k| <= 4A) by about 5 rounding units of
 /// 4A, below 2^-48·A. Together under 2^-47·A; 2^-45·A leaves a factor 4 (round-to-nearest is set on entry).
+/// The axis is rescaled first so that its largest |component| lies in [1/2, 1): A >= 1/2, so the absolute error
+/// of a product that falls into the subnormal range (2^-1075) is nothing against the slack, and |a| >= 1/2 never
+/// underflows.
 constexpr double kAxisSlack = 0x1p-45;
 
 /// The rounding of a box corner c ± h computed in doubles: at most half an ulp per coordinate, 2^-53·|corner|,
@@ -94,12 +97,15 @@ double grown_extent(const Shape& shape, const Vec3& a, double thickness) {
 }
 
 /// Whether axis a certifies that every point of `points` (relative to the shape's centre) stays farther than δ
-/// from the shape: all projections beyond the grown extent on one side, by more than the rounding budget.
-bool certified_along(const Vec3& a, std::span<const Vec3> points, const Shape& shape, double thickness) {
-  // Axes below 2^-900 are not tried: their products could fall into the subnormal range, where rounding is no
-  // longer relative to A.
+/// from the shape: all projections beyond the grown extent on one side, by more than the rounding budget. The axis
+/// is first rescaled by a power of two so that its largest |component| lies in [1/2, 1): any vector is an axis,
+/// and a tiny one would lose its norm to underflow (squares below 2^-1074) and with it the δ·|a| term.
+bool certified_along(Vec3 a, std::span<const Vec3> points, const Shape& shape, double thickness) {
+  const double largest = a.cwiseAbs().maxCoeff();
+  if (!(largest > 0) || !std::isfinite(largest)) return false;
+  const int exponent = std::ilogb(largest) + 1;
+  for (int k = 0; k < 3; ++k) a[k] = std::ldexp(a[k], -exponent);
   const double sum = a.cwiseAbs().sum();
-  if (!(sum > 0x1p-900) || !std::isfinite(sum)) return false;
   double low = kInfinity, high = -kInfinity;
   for (const Vec3& q : points) {
     const double s = a.dot(q);
@@ -225,7 +231,7 @@ bool may_meet_box_at_start(const Shape& shape, const FaceShapeRows& rows) {
 }  // namespace
 
 double radius_plus_thickness(double radius, double thickness) {
-  narrowphase::RoundToNearest nearest;
+  const narrowphase::RoundToNearest nearest;
   const double sum = radius + thickness;
   if (!std::isfinite(sum)) return sum;
   // TwoSum (Knuth): sum + error == radius + thickness exactly.
@@ -234,17 +240,18 @@ double radius_plus_thickness(double radius, double thickness) {
   return error > 0 ? std::nextafter(sum, kInfinity) : sum;
 }
 
-FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, double thickness) {
-  narrowphase::RoundToNearest nearest;
+FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, double thickness, bool use_gjk) {
+  const narrowphase::RoundToNearest nearest;
   const std::optional<ScaledShapePair> pair = scale(shape, rows, thickness);
   if (!pair) return FaceShapeCull::uncertified;
-  if (gjk_intersects(*pair)) return FaceShapeCull::gjk_overlap;
+  if (use_gjk && gjk_intersects(*pair)) return FaceShapeCull::gjk_overlap;
   return certified_apart(pair->relative, pair->shape, pair->thickness) ? FaceShapeCull::certified_apart
                                                                         : FaceShapeCull::uncertified;
 }
 
 narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::NarrowPhase& narrow, const Shape& shape,
                                                        const FaceShapeRows& rows, double thickness) {
+  const narrowphase::RoundToNearest nearest;
   const auto& f0 = rows.face_t0;
   const auto& f1 = rows.face_t1;
   if (shape.kind == ShapeKind::sphere) {
@@ -258,17 +265,12 @@ narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::Narrow
     result.toi = 0.0;
     return result;
   }
-  std::array<Vec3, 8> c0, c1;
-  double grown;
-  {
-    narrowphase::RoundToNearest nearest;
-    c0 = box_corners(rows.centre_t0, shape.half_extents);
-    c1 = box_corners(rows.centre_t1, shape.half_extents);
-    double largest = 0;
-    for (int j = 0; j < 8; ++j) largest = std::max({largest, c0[j].cwiseAbs().maxCoeff(), c1[j].cwiseAbs().maxCoeff()});
-    // Each addition rounds up by at most an ulp of its result; nextafter covers the last one.
-    grown = std::nextafter(thickness + (kCornerRounding * largest + kSubnormalRounding), kInfinity);
-  }
+  const std::array<Vec3, 8> c0 = box_corners(rows.centre_t0, shape.half_extents);
+  const std::array<Vec3, 8> c1 = box_corners(rows.centre_t1, shape.half_extents);
+  double largest = 0;
+  for (int j = 0; j < 8; ++j) largest = std::max({largest, c0[j].cwiseAbs().maxCoeff(), c1[j].cwiseAbs().maxCoeff()});
+  // The bound has room for its own rounding (√3/2 < 1); nextafter covers the rounding of the sum with δ.
+  const double grown = std::nextafter(thickness + (kCornerRounding * largest + kSubnormalRounding), kInfinity);
   for (int i = 0; i < 3; ++i) {
     for (const auto& t : kBoxTriangles) {
       merge(result, narrow.vertex_face({f0[i], c0[t[0]], c0[t[1]], c0[t[2]], f1[i], c1[t[0]], c1[t[1]], c1[t[2]]}, grown));

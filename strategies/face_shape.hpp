@@ -12,10 +12,10 @@
 /// goes on. libccd's "yes" always goes on.
 ///
 /// Narrow phase. Sphere: the vertex-face test with the centre as the vertex and thickness R + δ rounded up. Box:
-/// the face's corners against the twelve surface triangles, the box's corners against the face and the face's
-/// edges against the twelve box edges, with the corners c ± h computed in doubles and δ grown by their rounding
-/// (kCornerRounding); then, for a face that still seems apart, a certified separating-axis test of the face at
-/// t = 0 against the solid box. A conservative narrow phase thus stays conservative.
+/// first a certified separating-axis test of the face at t = 0 against the solid box (a face that may meet it
+/// collides at t = 0); then the face's corners against the twelve surface triangles, the box's corners against the
+/// face and the face's edges against the twelve box edges, with the corners c ± h computed in doubles and δ grown
+/// by their rounding (kCornerRounding). A conservative narrow phase thus stays conservative.
 
 #include "core/shape.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
@@ -33,7 +33,9 @@ enum class FaceShapeCull {
 };
 
 /// @return certified_apart only when the face provably stays farther than δ from the shape during the step.
-FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, double thickness);
+/// @param use_gjk false skips libccd and tries the certified axes on every pair (never gjk_overlap then): what
+///                benchmarks/face_shape_benchmark.cpp compares, to show what libccd adds.
+FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, double thickness, bool use_gjk = true);
 
 /// Decides the pair with `narrow` (see above). The TOI is the earliest of the elementary tests' (0 for a face that
 /// may meet the solid box at t = 0).

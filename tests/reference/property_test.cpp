@@ -4,6 +4,7 @@
 #include "reference/certified_filter.hpp"
 #include "reference/elementary_pair.hpp"
 #include "tests/support/rational_rows.hpp"
+#include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -54,7 +55,7 @@ std::string describe(const RandomPair& pair, double thickness) {
 TEST(ReferenceProperty, FilterThenExactEqualsExactOnly) {
   std::cout << "seed " << kSeed << "\n";
   for (double thickness : {0.0, 0.05}) {
-    for (const RandomPair& pair : random_pairs(1500, kSeed)) {
+    for (const RandomPair& pair : random_pairs(1500 / testing::kSanitizerStride, kSeed)) {
       const bool exact_only = decide(pair.kind, pair.rows, thickness, {false, false, 0}).collides;
       const bool filtered = decide(pair.kind, pair.rows, thickness).collides;
       ASSERT_EQ(filtered, exact_only) << describe(pair, thickness);
@@ -88,7 +89,7 @@ TEST(ReferenceProperty, SeparationPreCheckNeverRulesOutACollision) {
   std::cout << "seed " << kSeed + 3 << "\n";
   for (double thickness : {0.0, 0.05}) {
     std::size_t apart = 0, colliding = 0;
-    const std::vector<RandomPair> pairs = near_pairs(2000, kSeed + 3, thickness);
+    const std::vector<RandomPair> pairs = near_pairs(2000 / testing::kSanitizerStride, kSeed + 3, thickness);
     for (const RandomPair& pair : pairs) {
       const bool collides = decide(pair.kind, pair.rows, thickness, {false, false, 0}).collides;
       colliding += collides;
