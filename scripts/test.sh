@@ -7,9 +7,7 @@ cd "$(dirname "$0")/.."
 preset=${1:-release}
 scripts/build.sh "$preset"
 export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-$PWD/build/cache}
-# One test more than the cores: many tests spend part of their time waiting on child processes (mpirun, the CLI)
-# and on files.
-ctest --preset "$preset" -j "$(( $(nproc) + 1 ))"
+ctest --preset "$preset" -j "$(nproc)"
 out=build/$preset/ci-results
 # The gate: full and apccd (conservative) and full+cubic64 at the scenes' δ and at δ = 0, every step verified, TOIs too. Every
 # gated cell has colliding pairs (check fails a cell that has none), and every cell needs its baseline entry.
