@@ -10,14 +10,6 @@ std::string_view to_string(ShapeKind kind) {
   return "?";
 }
 
-std::array<Vec3, 8> box_corners(const Vec3& centre, const Vec3& half_extents) {
-  std::array<Vec3, 8> corners;
-  for (int i = 0; i < 8; ++i) {
-    for (int k = 0; k < 3; ++k) corners[i][k] = (i >> k) & 1 ? centre[k] + half_extents[k] : centre[k] - half_extents[k];
-  }
-  return corners;
-}
-
 // Sides -x, +x, -y, +y, -z, +z, each split along one diagonal; the cross product of each triangle's first two
 // edges points out of the box.
 const std::array<std::array<int, 3>, 12> kBoxTriangles{{{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}, {0, 1, 5}, {0, 5, 4},

@@ -36,12 +36,56 @@ struct FaceShapeRows {
 };
 
 /// The box's eight corners around `centre`, corner i at centre + (±h.x, ±h.y, ±h.z) with bit k of i choosing the
-/// sign of axis k (set: +). Computed in doubles (rounded); the reference forms them exactly.
-std::array<Vec3, 8> box_corners(const Vec3& centre, const Vec3& half_extents);
+/// sign of axis k (set: +), each coordinate one addition or subtraction: rounded for Vec3 (the strategies), exact
+/// for rational points (the reference).
+template <class Point>
+std::array<Point, 8> box_corners(const Point& centre, const Point& half_extents) {
+  std::array<Point, 8> corners;
+  for (int i = 0; i < 8; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      corners[i][k] = centre[k];
+      if ((i >> k) & 1) {
+        corners[i][k] += half_extents[k];
+      } else {
+        corners[i][k] -= half_extents[k];
+      }
+    }
+  }
+  return corners;
+}
 
 /// The box's twelve surface triangles (two per side, outward counter-clockwise) and its twelve edges, as corner
 /// indices of box_corners.
 extern const std::array<std::array<int, 3>, 12> kBoxTriangles;
 extern const std::array<std::array<int, 2>, 12> kBoxEdges;
+
+/// The elementary pairs whose decisions at δ decide whether a face comes within δ of a box's surface during the
+/// step: the face's corners against each surface triangle, the box's corners against the face, and the face's
+/// edges against the box's twelve edges. Between a triangle and a convex polygon that do not touch, the distance is
+/// reached by a corner against the other or by two boundary edges, so the sides' diagonals add nothing. Calls
+/// visit(vertex_face, rows) with rows in the query files' order (step.hpp) and stops when it returns true. Both the
+/// reference (exact corners) and the strategies (rounded corners) decide this same list.
+template <class Point, class Visit>
+void for_each_box_surface_pair(const std::array<Point, 3>& face_t0, const std::array<Point, 3>& face_t1,
+                               const std::array<Point, 8>& corners_t0, const std::array<Point, 8>& corners_t1, Visit visit) {
+  const auto& f0 = face_t0;
+  const auto& f1 = face_t1;
+  const auto& c0 = corners_t0;
+  const auto& c1 = corners_t1;
+  for (int i = 0; i < 3; ++i) {
+    for (const auto& t : kBoxTriangles) {
+      if (visit(true, std::array<Point, 8>{f0[i], c0[t[0]], c0[t[1]], c0[t[2]], f1[i], c1[t[0]], c1[t[1]], c1[t[2]]})) return;
+    }
+  }
+  for (int j = 0; j < 8; ++j) {
+    if (visit(true, std::array<Point, 8>{c0[j], f0[0], f0[1], f0[2], c1[j], f1[0], f1[1], f1[2]})) return;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const int k = (i + 1) % 3;
+    for (const auto& e : kBoxEdges) {
+      if (visit(false, std::array<Point, 8>{f0[i], f0[k], c0[e[0]], c0[e[1]], f1[i], f1[k], c1[e[0]], c1[e[1]]})) return;
+    }
+  }
+}
 
 }  // namespace ccd

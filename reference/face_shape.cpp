@@ -20,21 +20,6 @@ RationalPoint cross(const RationalPoint& a, const RationalPoint& b) {
 
 mpq_class dot(const RationalPoint& a, const RationalPoint& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-/// The box's corners around `centre`, exactly, in box_corners' order.
-std::array<RationalPoint, 8> exact_corners(const RationalPoint& centre, const RationalPoint& half) {
-  std::array<RationalPoint, 8> corners;
-  for (int i = 0; i < 8; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      if ((i >> k) & 1) {
-        corners[i][k] = centre[k] + half[k];
-      } else {
-        corners[i][k] = centre[k] - half[k];
-      }
-    }
-  }
-  return corners;
-}
-
 /// Folds one elementary decision into the face-shape decision: collides if any does, decided by the filter only
 /// if all were, earliest TOI.
 void merge(Decision& into, const Decision& part) {
@@ -110,33 +95,12 @@ Decision decide_face_shape(const Shape& shape, const FaceShapeRows& rows, double
     }
     return decision;
   }
-  const std::array<RationalPoint, 8> corners0 = exact_corners(c0, half), corners1 = exact_corners(c1, half);
-  auto done = [&] { return decision.collides && !request.want_toi; };
-  // The face's corners against each surface triangle.
-  for (int i = 0; i < 3 && !done(); ++i) {
-    for (const auto& t : kBoxTriangles) {
-      merge(decision, decide(ExactPair{PairKind::vertex_face, {face0[i], corners0[t[0]], corners0[t[1]], corners0[t[2]],
-                                                                face1[i], corners1[t[0]], corners1[t[1]], corners1[t[2]]}},
-                             delta, request));
-      if (done()) break;
-    }
-  }
-  // The box's corners against the face.
-  for (int j = 0; j < 8 && !done(); ++j) {
-    merge(decision, decide(ExactPair{PairKind::vertex_face, {corners0[j], face0[0], face0[1], face0[2], corners1[j],
-                                                              face1[0], face1[1], face1[2]}},
-                           delta, request));
-  }
-  // The face's edges against the box's edges.
-  for (int i = 0; i < 3 && !done(); ++i) {
-    const int k = (i + 1) % 3;
-    for (const auto& e : kBoxEdges) {
-      merge(decision, decide(ExactPair{PairKind::edge_edge, {face0[i], face0[k], corners0[e[0]], corners0[e[1]], face1[i],
-                                                              face1[k], corners1[e[0]], corners1[e[1]]}},
-                             delta, request));
-      if (done()) break;
-    }
-  }
+  // Exact corners: rational additions do not round.
+  const std::array<RationalPoint, 8> corners0 = box_corners(c0, half), corners1 = box_corners(c1, half);
+  for_each_box_surface_pair(face0, face1, corners0, corners1, [&](bool vertex_face, const std::array<RationalPoint, 8>& pair_rows) {
+    merge(decision, decide(ExactPair{vertex_face ? PairKind::vertex_face : PairKind::edge_edge, pair_rows}, delta, request));
+    return decision.collides && !request.want_toi;  // the earliest TOI needs every part
+  });
   return decision;
 }
 

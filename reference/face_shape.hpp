@@ -4,12 +4,10 @@
 /// elementary_pair.hpp.
 ///
 /// - Sphere: one vertex-face pair, the centre against the face, at thickness R + δ formed exactly in rationals.
-/// - Box: the face against the box's surface (its twelve triangles, corners c ± h formed exactly in rationals):
-///   the face's corners against each surface triangle, the box's corners against the face, and the face's edges
-///   against the box's twelve edges. Between a triangle and a convex polygon that do not touch, the distance is
-///   reached by a corner against the other, or by two boundary edges, so the sides' diagonals add nothing. Then
-///   the solid: whether the face at t = 0 meets the closed box, by the separating-axis test of a triangle and a
-///   box (13 axes) in rationals. A face that starts outside touches the surface before it can be inside.
+/// - Box: the face against the box's surface, corners c ± h formed exactly in rationals, by the elementary pairs of
+///   for_each_box_surface_pair (core/shape.hpp). Then the solid: whether the face at t = 0 meets the closed box,
+///   by the separating-axis test of a triangle and a box (13 axes) in rationals. A face that starts outside
+///   touches the surface before it can be inside.
 
 #include "core/shape.hpp"
 #include "reference/elementary_pair.hpp"

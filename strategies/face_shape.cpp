@@ -259,7 +259,6 @@ narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::Narrow
                               radius_plus_thickness(shape.radius, thickness));
   }
   narrowphase::NarrowPhaseResult result;
-  result.toi = std::numeric_limits<double>::quiet_NaN();
   if (may_meet_box_at_start(shape, rows)) {
     result.collides = true;
     result.toi = 0.0;
@@ -271,18 +270,10 @@ narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::Narrow
   for (int j = 0; j < 8; ++j) largest = std::max({largest, c0[j].cwiseAbs().maxCoeff(), c1[j].cwiseAbs().maxCoeff()});
   // The bound has room for its own rounding (√3/2 < 1); nextafter covers the rounding of the sum with δ.
   const double grown = std::nextafter(thickness + (kCornerRounding * largest + kSubnormalRounding), kInfinity);
-  for (int i = 0; i < 3; ++i) {
-    for (const auto& t : kBoxTriangles) {
-      merge(result, narrow.vertex_face({f0[i], c0[t[0]], c0[t[1]], c0[t[2]], f1[i], c1[t[0]], c1[t[1]], c1[t[2]]}, grown));
-    }
-  }
-  for (int j = 0; j < 8; ++j) merge(result, narrow.vertex_face({c0[j], f0[0], f0[1], f0[2], c1[j], f1[0], f1[1], f1[2]}, grown));
-  for (int i = 0; i < 3; ++i) {
-    const int k = (i + 1) % 3;
-    for (const auto& e : kBoxEdges) {
-      merge(result, narrow.edge_edge({f0[i], f0[k], c0[e[0]], c0[e[1]], f1[i], f1[k], c1[e[0]], c1[e[1]]}, grown));
-    }
-  }
+  for_each_box_surface_pair(f0, f1, c0, c1, [&](bool vertex_face, const narrowphase::PairRows& pair) {
+    merge(result, vertex_face ? narrow.vertex_face(pair, grown) : narrow.edge_edge(pair, grown));
+    return false;  // the earliest TOI needs every part
+  });
   return result;
 }
 
