@@ -152,6 +152,14 @@ TEST(FaceShape, AFaceAcrossABoxEdgeCollides) {
   EXPECT_FALSE(expect_no_miss(cube, {plane_face(2.4), plane_face(2.1), Vec3::Zero(), Vec3::Zero()}, 0.0));
   // The box moves instead of the face: the same relative motion.
   EXPECT_TRUE(expect_no_miss(cube, {plane_face(2.4), plane_face(2.4), Vec3::Zero(), Vec3(0.25, 0.25, 0)}, 0.0));
+  // A face in the plane z = 0 whose leading edge (on x + y = s) crosses the box's edge x = y = 1 at (1, 1, 0),
+  // every corner of either far from the other: only the edge-edge pairs find it.
+  auto edge_first = [](double s) {
+    const double half = s / 2;
+    return std::array<Vec3, 3>{Vec3(half + 2, half - 2, 0), Vec3(half - 2, half + 2, 0), Vec3(half + 3, half + 3, 0)};
+  };
+  EXPECT_TRUE(expect_no_miss(cube, {edge_first(2.4), edge_first(1.9), Vec3::Zero(), Vec3::Zero()}, 0.0));
+  EXPECT_FALSE(expect_no_miss(cube, {edge_first(2.4), edge_first(2.1), Vec3::Zero(), Vec3::Zero()}, 0.0));
 }
 
 // A small face inside the box at t = 0, far from every side during the step, collides (the box is solid) at
