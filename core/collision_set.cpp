@@ -64,24 +64,29 @@ class Fnv1a {
 void CollisionSet::append(const CollisionSet& other) {
   vertex_face_.insert(vertex_face_.end(), other.vertex_face_.begin(), other.vertex_face_.end());
   edge_edge_.insert(edge_edge_.end(), other.edge_edge_.begin(), other.edge_edge_.end());
+  face_shape_.insert(face_shape_.end(), other.face_shape_.begin(), other.face_shape_.end());
 }
 
 void CollisionSet::normalize() {
   normalize_contacts(vertex_face_);
   normalize_contacts(edge_edge_);
+  normalize_contacts(face_shape_);
 }
 
 bool CollisionSet::contains(const VertexFacePair& pair) const { return contains_pair(vertex_face_, pair); }
 bool CollisionSet::contains(const EdgeEdgePair& pair) const { return contains_pair(edge_edge_, pair); }
+bool CollisionSet::contains(const FaceShapePair& pair) const { return contains_pair(face_shape_, pair); }
 
 bool CollisionSet::same_pairs(const CollisionSet& other) const {
-  return same_pair_lists(vertex_face_, other.vertex_face_) && same_pair_lists(edge_edge_, other.edge_edge_);
+  return same_pair_lists(vertex_face_, other.vertex_face_) && same_pair_lists(edge_edge_, other.edge_edge_) &&
+         same_pair_lists(face_shape_, other.face_shape_);
 }
 
 CollisionSet set_difference(const CollisionSet& a, const CollisionSet& b) {
   CollisionSet out;
   for (const auto& c : contacts_difference(a.vertex_face(), b.vertex_face())) out.add(c.pair, c.toi);
   for (const auto& c : contacts_difference(a.edge_edge(), b.edge_edge())) out.add(c.pair, c.toi);
+  for (const auto& c : contacts_difference(a.face_shape(), b.face_shape())) out.add(c.pair, c.toi);
   return out;
 }
 
@@ -98,6 +103,13 @@ std::string answers_digest(const CollisionSet& set) {
     hash.add((std::uint64_t{c.pair.a.v0} << 32) | c.pair.a.v1);
     hash.add((std::uint64_t{c.pair.b.v0} << 32) | c.pair.b.v1);
     hash.add(std::bit_cast<std::uint64_t>(c.toi));
+  }
+  if (!set.face_shape().empty()) {
+    hash.add(set.face_shape().size());
+    for (const FaceShapeContact& c : set.face_shape()) {
+      hash.add((std::uint64_t{c.pair.f} << 32) | c.pair.shape);
+      hash.add(std::bit_cast<std::uint64_t>(c.toi));
+    }
   }
   char text[17];
   std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(hash.value()));

@@ -29,6 +29,15 @@ struct EdgeEdgePair {
   friend auto operator<=>(const EdgeEdgePair&, const EdgeEdgePair&) = default;
 };
 
+/// Face f of a mesh object against shape object `shape` (an analytic obstacle, core/shape.hpp). The shape is named
+/// by its object id, the face by its global id.
+struct FaceShapePair {
+  FaceId f;
+  ObjectId shape;
+
+  friend auto operator<=>(const FaceShapePair&, const FaceShapePair&) = default;
+};
+
 /// The canonical id of the pair of edges (p, q), in either order.
 inline EdgeEdgePair make_edge_edge_pair(Edge p, Edge q) { return p < q ? EdgeEdgePair{p, q} : EdgeEdgePair{q, p}; }
 

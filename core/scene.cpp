@@ -12,12 +12,13 @@ std::string_view to_string(ObjectKind kind) {
     case ObjectKind::deformable: return "deformable";
     case ObjectKind::rigid: return "rigid";
     case ObjectKind::static_object: return "static";
+    case ObjectKind::shape: return "shape";
   }
   return "?";
 }
 
 std::optional<ObjectKind> parse_object_kind(std::string_view text) {
-  for (ObjectKind kind : {ObjectKind::deformable, ObjectKind::rigid, ObjectKind::static_object}) {
+  for (ObjectKind kind : {ObjectKind::deformable, ObjectKind::rigid, ObjectKind::static_object, ObjectKind::shape}) {
     if (text == to_string(kind)) return kind;
   }
   return std::nullopt;
@@ -30,6 +31,21 @@ void check_thickness(double thickness) {
   if (!std::isfinite(thickness) || thickness < 0.0) {
     throw InputError({}, "thickness", "must be finite and >= 0, got " + std::to_string(thickness));
   }
+}
+
+/// A shape object is its shape and its centre: one vertex, no faces, no self-collision; other objects have no shape.
+void check_shape_object(const ObjectDescription& object) {
+  const std::string where = "object '" + object.name + "'";
+  if (object.kind != ObjectKind::shape) {
+    if (object.shape) throw InputError({}, where, "only an object of kind shape has a shape");
+    return;
+  }
+  if (!object.shape) throw InputError({}, where, "an object of kind shape needs a shape (sphere or box)");
+  if (auto problem = find_shape_problem(*object.shape)) throw InputError({}, where, *problem);
+  if (object.num_vertices != 1 || !object.faces.empty()) {
+    throw InputError({}, where, "a shape object's frames hold its centre only (one vertex, no faces)");
+  }
+  if (object.self_collision) throw InputError({}, where, "a shape has no self-collision");
 }
 
 }  // namespace
@@ -46,9 +62,11 @@ Scene::Scene(std::vector<ObjectDescription> objects, std::vector<std::pair<Objec
     if (auto problem = find_face_list_problem(object.num_vertices, object.faces)) {
       throw InputError({}, "object '" + object.name + "', face " + std::to_string(problem->face), problem->reason);
     }
+    check_shape_object(object);
+    if (object.kind == ObjectKind::shape) shape_objects_.push_back(static_cast<ObjectId>(objects_.size()));
     objects_.push_back(SceneObject{object.name, object.kind, object.self_collision,
                                    static_cast<VertexId>(num_vertices), object.num_vertices,
-                                   static_cast<FaceId>(global_faces.size()), object.faces.size()});
+                                   static_cast<FaceId>(global_faces.size()), object.faces.size(), object.shape});
     for (const Face& face : object.faces) {
       const auto offset = static_cast<VertexId>(num_vertices);
       global_faces.push_back({face[0] + offset, face[1] + offset, face[2] + offset});

@@ -1,5 +1,7 @@
 #include "core/shape.hpp"
 
+#include <cmath>
+
 namespace ccd {
 
 std::string_view to_string(ShapeKind kind) {
@@ -8,6 +10,16 @@ std::string_view to_string(ShapeKind kind) {
     case ShapeKind::box: return "box";
   }
   return "?";
+}
+
+std::optional<std::string> find_shape_problem(const Shape& shape) {
+  auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
+  if (shape.kind == ShapeKind::sphere) {
+    if (!positive(shape.radius)) return "a sphere's radius must be finite and > 0";
+  } else if (!positive(shape.half_extents.x()) || !positive(shape.half_extents.y()) || !positive(shape.half_extents.z())) {
+    return "a box's half extents must be finite and > 0";
+  }
+  return std::nullopt;
 }
 
 // Sides -x, +x, -y, +y, -z, +z, each split along one diagonal; the cross product of each triangle's first two

@@ -11,6 +11,8 @@
 #include "core/vec.hpp"
 
 #include <array>
+#include <optional>
+#include <string>
 #include <string_view>
 
 namespace ccd {
@@ -26,6 +28,9 @@ struct Shape {
   /// Box only: every component > 0, finite.
   Vec3 half_extents = Vec3::Zero();
 };
+
+/// Why a shape is not valid (a radius or half extent not finite and > 0), or nullopt.
+std::optional<std::string> find_shape_problem(const Shape& shape);
 
 /// A face's three corners at t = 0 and t = 1 and a shape's centre at t = 0 and t = 1: one face-shape question.
 struct FaceShapeRows {

@@ -32,6 +32,14 @@ inline std::array<Vec3, 8> pair_rows(const MeshTopology&, std::span<const Vec3> 
   return {x0[p.a.v0], x0[p.a.v1], x0[p.b.v0], x0[p.b.v1], x1[p.a.v0], x1[p.a.v1], x1[p.b.v0], x1[p.b.v1]};
 }
 
+/// A face-shape pair's face corners and shape centre at t = 0 and t = 1 (the centre is the shape object's vertex).
+inline FaceShapeRows face_shape_rows(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1,
+                                     const FaceShapePair& p) {
+  const Face& f = scene.topology().face(p.f);
+  const VertexId c = scene.object(p.shape).first_vertex;
+  return {{x0[f[0]], x0[f[1]], x0[f[2]]}, {x1[f[0]], x1[f[1]], x1[f[2]]}, x0[c], x1[c]};
+}
+
 /// Largest |x1 - x0| over the vertices (0 for none). Sizes must match.
 double max_displacement(std::span<const Vec3> x0, std::span<const Vec3> x1);
 

@@ -172,6 +172,30 @@ FramePattern parse_frame_pattern(const std::filesystem::path& pattern_path) {
 
 }  // namespace
 
+namespace {
+
+class TrackFrameSource final : public FrameSource {
+ public:
+  TrackFrameSource(std::vector<Vec3> centres, std::string description)
+      : centres_(std::move(centres)), description_(std::move(description)) {}
+  std::size_t num_vertices() const override { return 1; }
+  const std::vector<Face>& faces() const override { return faces_; }
+  std::size_t num_frames() const override { return centres_.size(); }
+  std::vector<Vec3> frame(std::size_t k) const override { return {centres_.at(k)}; }
+  std::string describe() const override { return description_; }
+
+ private:
+  std::vector<Vec3> centres_;
+  std::vector<Face> faces_;
+  std::string description_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> make_track_frame_source(std::vector<Vec3> centres, std::string description) {
+  return std::make_unique<TrackFrameSource>(std::move(centres), std::move(description));
+}
+
 std::unique_ptr<FrameSource> make_file_frame_source(std::vector<std::filesystem::path> files) {
   return std::make_unique<FileFrameSource>(std::move(files));
 }

@@ -32,6 +32,10 @@ class FrameSource {
 /// at construction; every later one is checked against its vertex count and faces.
 std::unique_ptr<FrameSource> make_file_frame_source(std::vector<std::filesystem::path> files);
 
+/// A shape's motion track (a scene file's "track": {"centres": [...]}) as frames of one vertex and no faces: its
+/// centre per frame. One centre holds the shape still over the whole sequence. `centres` must not be empty.
+std::unique_ptr<FrameSource> make_track_frame_source(std::vector<Vec3> centres, std::string description);
+
 /// The files of a frame sequence named by
 ///  - a directory: its *.ply/*.obj files whose names end in a frame number ("frame_0007.ply", "227.ply"),
 ///    sorted by that number; they must share one prefix and extension, with no gap in the numbers;

@@ -132,8 +132,11 @@ struct OutputObject {
   bool self_collision;
   std::vector<Face> faces;
   std::size_t num_vertices;
-  /// Positions at `time`: a slice of the simulator for cloths, a function of time for obstacles.
+  /// Positions at `time`: a slice of the simulator for cloths, a function of time for obstacles (a shape's centre).
   std::function<std::vector<Vec3>(const ClothSimulator&, double)> positions;
+  /// Kind shape only: the obstacle's size, and whether its centre never moves (then one frame is kept).
+  std::optional<Shape> shape = std::nullopt;
+  bool still = false;
 };
 
 using Metrics = std::vector<std::pair<std::string, double>>;
@@ -197,6 +200,19 @@ OutputObject static_object(std::string name, ShapeMesh mesh) {
           [positions](const ClothSimulator&, double) { return positions; }};
 }
 
+/// An analytic obstacle (obstacles=shape): one vertex, its centre, at `centre(t)`.
+OutputObject shape_object(std::string name, Shape shape, std::function<Vec3(double)> centre, bool still) {
+  return {std::move(name), ObjectKind::shape, false, {}, 1,
+          [centre = std::move(centre)](const ClothSimulator&, double t) { return std::vector<Vec3>{centre(t)}; },
+          shape, still};
+}
+
+Shape sphere_shape(double radius) { return {ShapeKind::sphere, radius, Vec3::Zero()}; }
+Shape box_shape(const Vec3& half_extents) { return {ShapeKind::box, 0.0, half_extents}; }
+
+/// obstacles=shape (1) or mesh (0, the default).
+bool shape_obstacles(const SceneParameters& p) { return p.at("obstacles") == 1.0; }
+
 /// Cloth grid of side `size`, rotated about z by `angle`, moved by `offset`.
 ShapeMesh placed_cloth(std::size_t n, double size, double angle, const Vec3& offset) {
   ShapeMesh cloth = cloth_grid(n, size);
@@ -223,7 +239,10 @@ Setup spinning_ball(CommonParameters& c, const SceneParameters& p) {
   setup.simulator->add_obstacle(std::make_shared<SphereObstacle>(radius + 0.5 * setup.thickness, p.at("friction"), omega));
   setup.objects.push_back(cloth_object("cloth", cloth, first));
   const ShapeMesh ball = uv_sphere(radius, 24, 48);
-  setup.objects.push_back({"ball", ObjectKind::rigid, false, ball.faces, ball.positions.size(),
+  if (shape_obstacles(p)) {
+    // The sphere's spin leaves it unchanged: a still centre at the origin.
+    setup.objects.push_back(shape_object("ball", sphere_shape(radius), [](double) { return Vec3::Zero().eval(); }, true));
+  } else setup.objects.push_back({"ball", ObjectKind::rigid, false, ball.faces, ball.positions.size(),
                            [base = ball.positions, turned](const ClothSimulator&, double t) {
                              std::vector<Vec3> x(base.size());
                              for (std::size_t i = 0; i < base.size(); ++i) x[i] = rotate_z(base[i], turned(t));
@@ -262,7 +281,13 @@ Setup drape(CommonParameters& c, const SceneParameters& p) {
   const Vec3 margin = Vec3::Constant(0.5 * setup.thickness);
   setup.simulator->add_obstacle(std::make_shared<BoxObstacle>(lower - margin, upper + margin, p.at("friction")));
   setup.objects.push_back(cloth_object("cloth", cloth, first));
-  setup.objects.push_back(static_object("table", box(lower, upper)));
+  if (shape_obstacles(p)) {
+    // Centre and half extents are exact here (halves of the table's sizes), so the box's corners are the mesh's.
+    const Vec3 centre = 0.5 * (lower + upper), half = 0.5 * (upper - lower);
+    setup.objects.push_back(shape_object("table", box_shape(half), [centre](double) { return centre; }, true));
+  } else {
+    setup.objects.push_back(static_object("table", box(lower, upper)));
+  }
   setup.collidable = {{"cloth", "table"}};
   setup.report = [width, depth](std::size_t, double, const std::vector<std::vector<Vec3>>& x) {
     double lowest = std::numeric_limits<double>::infinity();
@@ -384,6 +409,9 @@ Setup funnel(CommonParameters& c, const SceneParameters& p) {
   return setup;
 }
 
+/// pile with obstacles=shape: the ground box's half thickness (m), a power of two (see pile).
+constexpr double kGroundBoxHalfThickness = 0.03125;
+
 Setup pile(CommonParameters& c, const SceneParameters& p) {
   const auto count = static_cast<std::size_t>(p.at("count"));
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -400,8 +428,15 @@ Setup pile(CommonParameters& c, const SceneParameters& p) {
     const std::size_t first = setup.simulator->add_cloth(c.n, cloths[k].positions);
     setup.objects.push_back(cloth_object("cloth" + std::to_string(k), cloths[k], first));
   }
-  ShapeMesh ground{{{-1.5, -1.5, 0}, {1.5, -1.5, 0}, {1.5, 1.5, 0}, {-1.5, 1.5, 0}}, {{0, 1, 2}, {0, 2, 3}}};
-  setup.objects.push_back(static_object("ground", std::move(ground)));
+  if (shape_obstacles(p)) {
+    // A thin box under the ground plane whose top face is the ground mesh's square: its centre and half extents
+    // are powers of two, so the top face lies exactly at z = 0.
+    const Vec3 half(1.5, 1.5, kGroundBoxHalfThickness), centre(0, 0, -kGroundBoxHalfThickness);
+    setup.objects.push_back(shape_object("ground", box_shape(half), [centre](double) { return centre; }, true));
+  } else {
+    ShapeMesh ground{{{-1.5, -1.5, 0}, {1.5, -1.5, 0}, {1.5, 1.5, 0}, {-1.5, 1.5, 0}}, {{0, 1, 2}, {0, 2, 3}}};
+    setup.objects.push_back(static_object("ground", std::move(ground)));
+  }
   for (std::size_t a = 0; a < count; ++a) {
     setup.collidable.emplace_back("cloth" + std::to_string(a), "ground");
     for (std::size_t b = a + 1; b < count; ++b) setup.collidable.emplace_back("cloth" + std::to_string(a), "cloth" + std::to_string(b));
@@ -456,14 +491,26 @@ Setup fold(CommonParameters& c, const SceneParameters& p) {
   const double blade_y = -0.5 + spacing * (row + 0.37), blade_x = -0.5 + 0.3 * (hinge + 0.5);
   const double width = 0.4 * (hinge + 0.5), height = 0.3;
   const ShapeMesh plate = cloth_grid(3, 1.0);
-  setup.objects.push_back({"blade", ObjectKind::rigid, false, plate.faces, plate.positions.size(),
+  if (shape_obstacles(p)) {
+    // The blade as a thin box around the same plate, and a ball driven down through the left part's other half:
+    // face-shape contacts of both kinds at δ = 0.
+    const Vec3 half(width / 2, 0.1 * spacing, height / 2);
+    setup.objects.push_back(shape_object("blade", box_shape(half), [=](double t) {
+      return Vec3(blade_x + width / 2, blade_y, travel * (0.5 - t / last_time));
+    }, false));
+    const double ball_radius = 0.15 * (hinge + 0.5), ball_x = -0.5 + 0.5 * (hinge + 0.5), ball_y = 0.25;
+    setup.objects.push_back(shape_object("ball", sphere_shape(ball_radius), [=](double t) {
+      return Vec3(ball_x, ball_y, (travel + 2 * ball_radius) * (0.5 - t / last_time));
+    }, false));
+    setup.collidable = {{"sheet", "blade"}, {"sheet", "ball"}};
+  } else setup.objects.push_back({"blade", ObjectKind::rigid, false, plate.faces, plate.positions.size(),
                            [plate = plate.positions, blade_x, blade_y, width, height, travel, last_time](const ClothSimulator&, double t) {
                              const double centre = travel * (0.5 - t / last_time);
                              std::vector<Vec3> x;
                              for (const Vec3& q : plate) x.emplace_back(blade_x + (q.x() + 0.5) * width, blade_y, centre + q.y() * height);
                              return x;
                            }});
-  setup.collidable = {{"sheet", "blade"}};
+  if (!shape_obstacles(p)) setup.collidable = {{"sheet", "blade"}};
   setup.report = [fold_angle, travel, last_time](std::size_t, double t, const std::vector<std::vector<Vec3>>&) {
     return Metrics{{"fold_angle_deg", fold_angle(t) * 180 / std::numbers::pi}, {"blade_centre_z", travel * (0.5 - t / last_time)}};
   };
@@ -487,6 +534,10 @@ std::vector<SceneParameter> with_common(std::vector<SceneParameter> own) {
   return all;
 }
 
+/// Obstacles as triangle meshes (the paper's) or as analytic shapes (core/shape.hpp).
+const SceneParameter kObstaclesParameter{"obstacles", 0, "mesh or shape: obstacles as triangle meshes or as analytic shapes (a sphere, a box)",
+                                         {"mesh", "shape"}};
+
 const std::vector<SceneDefinition>& definitions() {
   static const std::vector<SceneDefinition> scenes = {
       {{"spinning-ball", "cloth falls on a sphere that then spins and wraps it (the paper's benchmark)",
@@ -494,12 +545,14 @@ const std::vector<SceneDefinition>& definitions() {
                      {"spin", 3.0, "ball angular speed about z once spinning (rad/s)"},
                      {"spin_start", 0.3, "time the ball starts spinning (s)"},
                      {"drop", 0.02, "initial gap between cloth and ball top (m)"},
-                     {"friction", 0.9, "cloth-ball friction (0 slides, 1 sticks)"}})},
+                     {"friction", 0.9, "cloth-ball friction (0 slides, 1 sticks)"},
+                     kObstaclesParameter})},
        spinning_ball},
       {{"drape", "cloth falls on a table and drapes over its edges",
         with_common({{"table_width", 1.0, "table size along x (m); the cloth is 1.4 times as wide"},
                      {"table_depth", 0.7, "table size along y (m)"},
-                     {"friction", 0.6, "cloth-table friction"}})},
+                     {"friction", 0.6, "cloth-table friction"},
+                     kObstaclesParameter})},
        drape},
       {{"flag", "cloth pinned along one side, blown by gusty wind",
         with_common({{"wind", 8.0, "mean wind speed along +x (m/s)"}})},
@@ -513,13 +566,14 @@ const std::vector<SceneDefinition>& definitions() {
                      {"friction", 0.3, "cloth-funnel friction"}})},
        funnel},
       {{"pile", "several cloths fall on the ground and on each other: inter-object contact",
-        with_common({{"count", 3, "number of cloths"}, {"friction", 0.5, "cloth-ground friction"}})},
+        with_common({{"count", 3, "number of cloths"}, {"friction", 0.5, "cloth-ground friction"}, kObstaclesParameter})},
        pile},
       {{"fold", "kinematic: a sheet folds over and through itself while a blade cuts through it (real crossings)",
         with_common({{"fold_start", 140, "fold angle at the first frame (degrees; 180 lays the part flat on the rest)"},
                      {"fold_end", 200, "fold angle at the last frame (degrees)"},
                      {"curl", 30, "how far the far edge turns ahead of the hinge (degrees)"},
-                     {"blade_travel", 0.5, "how far the blade moves down over the frames (m)"}})},
+                     {"blade_travel", 0.5, "how far the blade moves down over the frames (m)"},
+                     kObstaclesParameter})},
        fold},
   };
   return scenes;
@@ -558,6 +612,9 @@ SceneParameters resolve_parameters(const ProceduralSceneInfo& info, const SceneP
   require_integer("frames", 2, 100000);
   require_integer("seed", 0, 9007199254740992.0);
   require_integer("steps_per_frame", 1, 64);
+  for (const SceneParameter& parameter : info.parameters) {
+    if (!parameter.choices.empty()) require_integer(parameter.name.c_str(), 0, static_cast<double>(parameter.choices.size() - 1));
+  }
   if (resolved.count("count")) require_integer("count", 1, 64);
   return resolved;
 }
@@ -611,6 +668,7 @@ std::string cache_key(const std::string& name, const SceneParameters& parameters
   for (const auto& [parameter, value] : parameters) {
     // steps_per_frame=1 (the default) is left out, so that the scenes generated before it existed keep their key.
     if (parameter == "steps_per_frame" && value == 1) continue;
+    if (parameter == "obstacles" && value == 0) continue;  // likewise obstacles=mesh
     key << ' ' << parameter << '=' << value;
   }
   return key.str();
@@ -623,12 +681,24 @@ std::filesystem::path frame_file(const std::filesystem::path& out, const std::st
 }
 
 std::size_t frames_of(const OutputObject& object, std::size_t frames) {
-  return object.kind == ObjectKind::static_object ? 1 : frames;
+  return object.kind == ObjectKind::static_object || object.still ? 1 : frames;
 }
 
 void write_scene_json(const std::filesystem::path& out, const std::string& name, const Setup& setup) {
   nlohmann::json objects = nlohmann::json::array();
   for (const OutputObject& object : setup.objects) {
+    if (object.shape) {
+      nlohmann::json entry = {{"name", object.name}, {"kind", "shape"}, {"shape", std::string(to_string(object.shape->kind))},
+                              {"track", {{"cache", "cache/" + object.name + ".frames"}}}};
+      if (object.shape->kind == ShapeKind::sphere) {
+        entry["radius"] = object.shape->radius;
+      } else {
+        const Vec3& h = object.shape->half_extents;
+        entry["half_extents"] = {h.x(), h.y(), h.z()};
+      }
+      objects.push_back(entry);
+      continue;
+    }
     nlohmann::json frames = object.kind == ObjectKind::static_object
                                 ? nlohmann::json{{"files", {object.name + "/frame_0000.ply"}}}
                                 : nlohmann::json{{"pattern", object.name + "/frame_%04d.ply"}};
@@ -658,6 +728,7 @@ bool complete_in(const std::filesystem::path& out, const Setup& setup, const std
       return false;
     }
     const std::size_t count = frames_of(object, frames);
+    if (object.shape) continue;  // a shape's track is its cache; it has no PLY frames
     if (!std::filesystem::exists(frame_file(out, object.name, count - 1)) ||
         std::filesystem::exists(frame_file(out, object.name, count))) {
       return false;
@@ -675,6 +746,16 @@ const std::vector<ProceduralSceneInfo>& procedural_scenes() {
     return result;
   }();
   return infos;
+}
+
+std::optional<double> scene_parameter_choice(const std::string& scene, const std::string& parameter, const std::string& text) {
+  for (const SceneParameter& p : find_definition(scene).info.parameters) {
+    if (p.name != parameter) continue;
+    for (std::size_t i = 0; i < p.choices.size(); ++i) {
+      if (p.choices[i] == text) return static_cast<double>(i);
+    }
+  }
+  return std::nullopt;
 }
 
 SceneParameters resolve_scene_parameters(const std::string& name, const SceneParameters& given) {
@@ -756,6 +837,7 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
     for (std::size_t k = 0; k < setup.objects.size(); ++k) {
       const OutputObject& object = setup.objects[k];
       std::filesystem::remove_all(request.out / object.name);  // no stale frames beyond this count
+      if (object.shape) continue;
       for (std::size_t frame = 0; frame < caches[k]->num_frames(); ++frame) {
         write_ply(frame_file(request.out, object.name, frame), {caches[k]->frame(frame), object.faces, ""});
       }
@@ -779,6 +861,12 @@ void register_procedural_scene_generators() {
     register_scene_generator(name, [name](const nlohmann::json& block, const std::filesystem::path& file) {
       SceneParameters parameters;
       for (const auto& item : block.items()) {
+        if (item.value().is_string()) {
+          const auto choice = scene_parameter_choice(name, item.key(), item.value().get<std::string>());
+          if (!choice) throw InputError(file, "generator." + item.key(), "must be a number or one of the parameter's choices");
+          parameters[item.key()] = *choice;
+          continue;
+        }
         if (!item.value().is_number()) throw InputError(file, "generator." + item.key(), "must be a number");
         parameters[item.key()] = item.value().get<double>();
       }

@@ -4,11 +4,14 @@
 /// spinning-ball, drape, flag, twist, funnel, pile, and the kinematic fold (no simulation: real crossings, for
 /// gates and tests at δ = 0). Each takes a cloth resolution N (N x N vertices,
 /// 2(N-1)² triangles per cloth), a frame count and a seed; the same parameters give bit-identical frames on any
-/// thread count. Obstacles are triangle meshes with their own frames (a spinning ball moves, a table does not).
+/// thread count. Obstacles are triangle meshes with their own frames (a spinning ball moves, a table does not), or
+/// with obstacles=shape analytic shapes (spinning-ball's sphere, drape's table and pile's ground as boxes, fold's
+/// blade as a thin box and a ball driven through the sheet).
 
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +21,8 @@ struct SceneParameter {
   std::string name;
   double default_value;
   std::string description;
+  /// A parameter with named values ("obstacles": mesh, shape) holds the index of the chosen one.
+  std::vector<std::string> choices = {};
 };
 
 struct ProceduralSceneInfo {
@@ -64,6 +69,10 @@ struct GenerateResult {
 /// The parameters of built-in scene `name`: defaults filled in, every value checked (what a generator block in a
 /// scene file resolves to). @throws std::invalid_argument for an unknown scene or parameter, or a value out of range.
 SceneParameters resolve_scene_parameters(const std::string& name, const SceneParameters& given);
+
+/// The value of a named choice of `parameter` of scene `scene` (obstacles=shape: 1), or nullopt when it has no
+/// such choice. @throws std::invalid_argument for an unknown scene.
+std::optional<double> scene_parameter_choice(const std::string& scene, const std::string& parameter, const std::string& text);
 
 /// Simulates the scene (or finds it already in `out`, generated with the same parameters) and writes its folder.
 /// Two processes generating one folder take turns (a lock in the folder); the second finds it complete.

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <mutex>
 #include <set>
@@ -83,6 +84,58 @@ std::unique_ptr<FrameSource> frame_source_from_json(const json& frames, const st
   return make_file_frame_source(expand_frame_files(path));
 }
 
+/// An array of three finite numbers at `where`.
+Vec3 vec3_from_json(const json& value, const std::filesystem::path& file, const std::string& where) {
+  if (!value.is_array() || value.size() != 3) throw InputError(file, where, "must be an array of three numbers");
+  Vec3 v;
+  for (int k = 0; k < 3; ++k) {
+    if (!value[k].is_number()) throw InputError(file, where, "must be an array of three numbers");
+    v[k] = value[k].get<double>();
+    if (!std::isfinite(v[k])) throw InputError(file, where, "must be finite");
+  }
+  return v;
+}
+
+/// {"shape": "sphere", "radius": R} or {"shape": "box", "half_extents": [X, Y, Z]} of a shape object.
+Shape shape_from_json(const json& object, const std::filesystem::path& file, const std::string& where) {
+  const std::string kind = require(file, where, object, "shape", json::value_t::string, "a string").get<std::string>();
+  Shape shape;
+  if (kind == "sphere") {
+    if (object.contains("half_extents")) throw InputError(file, where + ".half_extents", "a sphere has a radius, not half extents");
+    shape.kind = ShapeKind::sphere;
+    shape.radius = require(file, where, object, "radius", json::value_t::number_float, "a number").get<double>();
+  } else if (kind == "box") {
+    if (object.contains("radius")) throw InputError(file, where + ".radius", "a box has half extents, not a radius");
+    shape.kind = ShapeKind::box;
+    if (!object.contains("half_extents")) throw InputError(file, where, "missing key 'half_extents'");
+    shape.half_extents = vec3_from_json(object.at("half_extents"), file, where + ".half_extents");
+  } else {
+    throw InputError(file, where + ".shape", "unknown shape '" + kind + "' (sphere, box)");
+  }
+  if (auto problem = find_shape_problem(shape)) throw InputError(file, where, *problem);
+  return shape;
+}
+
+/// A shape's motion track: {"centres": [[x, y, z], ...]} (one centre: it stays still) or {"cache": "file.frames"}
+/// (a frame cache of one vertex and no faces).
+std::unique_ptr<FrameSource> track_from_json(const json& track, const std::filesystem::path& base,
+                                             const std::filesystem::path& file, const std::string& where) {
+  if (!track.is_object() || track.size() != 1) throw InputError(file, where, "must be an object with exactly one of: centres, cache");
+  reject_unknown_keys(file, where, track, {"centres", "cache"});
+  if (track.contains("cache")) {
+    const json& value = track.at("cache");
+    if (!value.is_string()) throw InputError(file, where + ".cache", "must be a string");
+    return open_frame_cache(resolve(base, value.get<std::string>()));
+  }
+  const json& centres = track.at("centres");
+  if (!centres.is_array() || centres.empty()) throw InputError(file, where + ".centres", "must be a non-empty array of [x, y, z]");
+  std::vector<Vec3> points;
+  for (std::size_t i = 0; i < centres.size(); ++i) {
+    points.push_back(vec3_from_json(centres[i], file, where + ".centres[" + std::to_string(i) + "]"));
+  }
+  return make_track_frame_source(std::move(points), file.string() + ":" + where + " (" + std::to_string(points.size()) + " centres)");
+}
+
 SceneSequence scene_from_generator(const json& block, const std::filesystem::path& file) {
   if (!block.is_object()) throw InputError(file, "generator", "must be an object with a 'name'");
   const std::string name = require(file, "generator", block, "name", json::value_t::string, "a string").get<std::string>();
@@ -144,15 +197,29 @@ SceneSequence scene_from_json(const json& document, const std::filesystem::path&
     const std::string where = "objects[" + std::to_string(i) + "]";
     const json& object = objects[i];
     if (!object.is_object()) throw InputError(file, where, "must be an object");
-    reject_unknown_keys(file, where, object, {"name", "kind", "self_collision", "frames"});
     ObjectDescription description;
     description.name = require(file, where, object, "name", json::value_t::string, "a string").get<std::string>();
     if (object.contains("kind")) {
       const std::string kind = require(file, where, object, "kind", json::value_t::string, "a string").get<std::string>();
       const auto parsed = parse_object_kind(kind);
-      if (!parsed) throw InputError(file, where + ".kind", "unknown kind '" + kind + "' (deformable, rigid, static)");
+      if (!parsed) throw InputError(file, where + ".kind", "unknown kind '" + kind + "' (deformable, rigid, static, shape)");
       description.kind = *parsed;
     }
+    if (description.kind == ObjectKind::shape) {
+      reject_unknown_keys(file, where, object, {"name", "kind", "shape", "radius", "half_extents", "track"});
+      description.shape = shape_from_json(object, file, where);
+      description.self_collision = false;
+      if (!object.contains("track")) throw InputError(file, where, "missing key 'track'");
+      auto source = track_from_json(object.at("track"), base, file, where + ".track");
+      if (source->num_vertices() != 1 || !source->faces().empty()) {
+        throw InputError(file, where + ".track", "a shape's track holds one vertex (its centre) and no faces");
+      }
+      description.num_vertices = 1;
+      descriptions.push_back(std::move(description));
+      sources.push_back(std::move(source));
+      continue;
+    }
+    reject_unknown_keys(file, where, object, {"name", "kind", "self_collision", "frames"});
     description.self_collision = description.kind == ObjectKind::deformable;
     if (object.contains("self_collision")) {
       description.self_collision =

@@ -9,13 +9,18 @@
 ///         {"name": "cloth", "kind": "deformable",  // deformable | rigid | static
 ///          "self_collision": true,                 // default: true for deformable, false otherwise
 ///          "frames": {"pattern": "cloth/frame_%04d.ply"}},
-///         {"name": "table", "kind": "static", "frames": {"files": ["table.obj"]}}
+///         {"name": "table", "kind": "static", "frames": {"files": ["table.obj"]}},
+///         {"name": "ball", "kind": "shape", "shape": "sphere", "radius": 0.5,   // or "shape": "box",
+///          "track": {"centres": [[0, 0, 0.5], [0, 0, 0.49]]}}                  //   "half_extents": [X, Y, Z]
 ///       ],
 ///       "collidable": [["cloth", "table"]]        // object pairs that may collide; default: every pair
 ///     }
 ///
 /// "frames" is exactly one of: {"files": [...]}, {"pattern": "printf pattern"}, {"directory": "dir"},
 /// {"cache": "file.frames"} (a frame cache, frame_cache.hpp). Relative paths are relative to the scene file.
+/// An object of kind "shape" is an analytic obstacle (core/shape.hpp): a sphere or an axis-aligned box with a
+/// "track" instead of "frames", its centre per frame ({"centres": [...]}, one centre for a still shape, or
+/// {"cache": "file.frames"} of one vertex and no faces). A shape has no self-collision.
 /// Instead of "objects", a scene may name a generator: {"generator": {"name": "...", ...parameters}} (procedural
 /// scenes register themselves; see register_scene_generator). Unknown keys are errors, so a typo never passes
 /// silently.

@@ -183,8 +183,10 @@ nlohmann::json truth_record(const std::string& name, double thickness, const Sce
           {"faces", scene.topology().num_faces()},
           {"vf", truth.collisions.vertex_face().size()},
           {"ee", truth.collisions.edge_edge().size()},
+          {"fs", truth.collisions.face_shape().size()},
           {"vf_pairs_enumerated", s.vertex_face_pairs},
           {"ee_pairs_enumerated", s.edge_edge_pairs},
+          {"fs_pairs_enumerated", s.face_shape_pairs},
           {"time_slices", s.time_slices},
           {"decided_by_filter", s.decided_by_filter},
           {"decided_exactly", s.decided_exactly},
@@ -289,10 +291,10 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
   nlohmann::json result = truth_record(step.name, request.thickness, step.scene, truth);
   out << "truth for " << step.name << " (thickness " << request.thickness << ")\n"
       << "  colliding pairs: vertex-face " << truth.collisions.vertex_face().size() << ", edge-edge "
-      << truth.collisions.edge_edge().size() << "\n"
+      << truth.collisions.edge_edge().size() << ", face-shape " << truth.collisions.face_shape().size() << "\n"
       << "  pairs enumerated (overlapping swept boxes, " << s.time_slices << " time slice"
       << (s.time_slices == 1 ? "" : "s") << "): vertex-face " << s.vertex_face_pairs << ", edge-edge "
-      << s.edge_edge_pairs << "\n"
+      << s.edge_edge_pairs << ", face-shape " << s.face_shape_pairs << "\n"
       << "  decided by the certified filter " << s.decided_by_filter << ", exactly " << s.decided_exactly << "\n"
       << std::fixed << std::setprecision(1) << "  time: enumeration " << s.enumeration_milliseconds
       << " ms, decisions " << s.decision_milliseconds << " ms\n";
@@ -371,8 +373,13 @@ int run_scenes(std::ostream& out) {
   for (const datasets::ProceduralSceneInfo& scene : datasets::procedural_scenes()) {
     out << scene.name << ": " << scene.description << "\n";
     for (const datasets::SceneParameter& parameter : scene.parameters) {
-      out << "  " << std::left << std::setw(12) << parameter.name << std::right << std::setw(8) << parameter.default_value
-          << "  " << parameter.description << "\n";
+      out << "  " << std::left << std::setw(12) << parameter.name << std::right << std::setw(8);
+      if (parameter.choices.empty()) {
+        out << parameter.default_value;
+      } else {
+        out << parameter.choices[static_cast<std::size_t>(parameter.default_value)];
+      }
+      out << "  " << parameter.description << "\n";
     }
   }
   out << "Generate one with: ccdbench generate NAME [--resolution N] [--frames N] [--seed S] [--set NAME=VALUE] --out DIR\n"
@@ -396,7 +403,11 @@ int run_generate(const GenerateOptions& options, std::ostream& out) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != value.size()) throw std::invalid_argument("--set " + setting + ": the value must be a number");
+    if (used == 0 || used != value.size()) {
+      const auto choice = datasets::scene_parameter_choice(options.name, setting.substr(0, equals), value);
+      if (!choice) throw std::invalid_argument("--set " + setting + ": the value must be a number or one of the parameter's choices");
+      number = *choice;
+    }
     parameters[setting.substr(0, equals)] = number;
   }
   Progress progress("generate " + options.name + ": frames", 0);

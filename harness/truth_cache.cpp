@@ -22,6 +22,10 @@ namespace {
 constexpr char kMagic[8] = {'C', 'C', 'D', 'T', 'R', 'U', 'T', '3'};
 constexpr std::size_t kHeaderBytes = 8 + 8 + 8 + 8;  // magic, VF count, EE count, flags
 constexpr std::uint64_t kWithToi = 1;
+/// A face-shape count follows the header, and face-shape pairs (and their TOIs) follow the edge-edge ones. Files
+/// without face-shape pairs do not set it and keep the layout they had before shapes existed.
+constexpr std::uint64_t kWithFaceShape = 2;
+constexpr std::size_t kFaceShapeBytes = 2 * sizeof(std::uint32_t);
 constexpr std::size_t kToiBytes = sizeof(double);
 constexpr std::size_t kChecksumBytes = 8;
 constexpr std::size_t kVertexFaceBytes = 2 * sizeof(std::uint32_t);
@@ -77,6 +81,14 @@ void check_edge_edge(const std::filesystem::path& path, const Scene& scene, std:
   }
 }
 
+void check_face_shape(const std::filesystem::path& path, const Scene& scene, std::uint64_t index, const FaceShapePair& pair) {
+  const std::string where = pair_where("face-shape", index);
+  if (pair.f >= scene.topology().num_faces() || pair.shape >= scene.objects().size() ||
+      scene.object(pair.shape).kind != ObjectKind::shape || !scene.may_collide(scene.object_of_face(pair.f), pair.shape)) {
+    throw InputError(path, where, "not a face-shape pair this scene can have");
+  }
+}
+
 }  // namespace
 
 std::string reference_version() {
@@ -95,6 +107,11 @@ void hash_scene_structure(datasets::ContentHash& hash, const Scene& scene) {
     hash.value(static_cast<std::uint8_t>(object.self_collision));
     hash.value(static_cast<std::uint64_t>(object.first_vertex));
     hash.value(static_cast<std::uint64_t>(object.first_face));
+    if (object.shape) {  // only for shapes, so that scenes without them keep their keys
+      hash.value(static_cast<std::uint8_t>(object.shape->kind));
+      hash.value(object.shape->radius);
+      for (int k = 0; k < 3; ++k) hash.value(object.shape->half_extents[k]);
+    }
   }
   hash.value(static_cast<std::uint64_t>(scene.collidable_pairs().size()));
   for (const auto& [a, b] : scene.collidable_pairs()) {
@@ -118,7 +135,9 @@ void write_truth_file(const std::filesystem::path& path, const CollisionSet& tru
   std::vector<unsigned char> bytes(kMagic, kMagic + 8);
   put_u64(bytes, truth.vertex_face().size());
   put_u64(bytes, truth.edge_edge().size());
-  put_u64(bytes, with_toi ? kWithToi : 0);
+  const bool with_face_shape = !truth.face_shape().empty();
+  put_u64(bytes, (with_toi ? kWithToi : 0) | (with_face_shape ? kWithFaceShape : 0));
+  if (with_face_shape) put_u64(bytes, truth.face_shape().size());
   for (const auto& c : truth.vertex_face()) {
     put_u32(bytes, c.pair.v);
     put_u32(bytes, c.pair.f);
@@ -126,10 +145,15 @@ void write_truth_file(const std::filesystem::path& path, const CollisionSet& tru
   for (const auto& c : truth.edge_edge()) {
     for (VertexId v : {c.pair.a.v0, c.pair.a.v1, c.pair.b.v0, c.pair.b.v1}) put_u32(bytes, v);
   }
+  for (const auto& c : truth.face_shape()) {
+    put_u32(bytes, c.pair.f);
+    put_u32(bytes, c.pair.shape);
+  }
   if (with_toi) {
     auto put_time = [&](double toi) { put_u64(bytes, std::bit_cast<std::uint64_t>(toi)); };
     for (const auto& c : truth.vertex_face()) put_time(c.toi);
     for (const auto& c : truth.edge_edge()) put_time(c.toi);
+    for (const auto& c : truth.face_shape()) put_time(c.toi);
   }
   put_u64(bytes, datasets::checksum64(bytes.data(), bytes.size()));
   datasets::AtomicFile out(path);
@@ -145,26 +169,41 @@ CachedTruth read_truth_file(const std::filesystem::path& path, const Scene& scen
   if (!in.read(reinterpret_cast<char*>(header), kHeaderBytes)) throw InputError(path, "header", "cannot read");
   if (std::memcmp(header, kMagic, 8) != 0) throw InputError(path, "header", "not a ccdbench truth file (bad magic)");
   const std::uint64_t vf = get_u64(header + 8), ee = get_u64(header + 16), flags = get_u64(header + 24);
-  if (flags & ~kWithToi) throw InputError(path, "header", "unknown flags " + std::to_string(flags));
+  if (flags & ~(kWithToi | kWithFaceShape)) throw InputError(path, "header", "unknown flags " + std::to_string(flags));
   const bool with_toi = (flags & kWithToi) != 0;
-  const std::size_t vf_bytes = kVertexFaceBytes + (with_toi ? kToiBytes : 0), ee_bytes = kEdgeEdgeBytes + (with_toi ? kToiBytes : 0);
+  const std::size_t count_bytes = (flags & kWithFaceShape) ? 8 : 0;
+  if (size < kHeaderBytes + count_bytes + kChecksumBytes) throw InputError(path, "header", "truncated truth file");
+  std::uint64_t fs = 0;
+  if (count_bytes) {
+    unsigned char count[8];
+    if (!in.read(reinterpret_cast<char*>(count), 8)) throw InputError(path, "header", "cannot read");
+    fs = get_u64(count);
+    if (fs == 0) throw InputError(path, "header", "the face-shape flag is set with no face-shape pairs");
+  }
+  const std::size_t time_bytes = with_toi ? kToiBytes : 0;
+  const std::size_t vf_bytes = kVertexFaceBytes + time_bytes, ee_bytes = kEdgeEdgeBytes + time_bytes,
+                    fs_bytes = kFaceShapeBytes + time_bytes;
   // Counts first against the bytes that back them, so that no corrupt count is ever allocated.
-  const std::uintmax_t body = size - kHeaderBytes - kChecksumBytes;
-  if (vf > body / vf_bytes || ee > (body - vf * vf_bytes) / ee_bytes || vf * vf_bytes + ee * ee_bytes != body) {
-    throw InputError(path, "header", std::to_string(vf) + " vertex-face and " + std::to_string(ee) +
-                                         " edge-edge pairs do not match the file's " + std::to_string(size) + " bytes");
+  const std::uintmax_t body = size - kHeaderBytes - count_bytes - kChecksumBytes;
+  if (vf > body / vf_bytes || ee > (body - vf * vf_bytes) / ee_bytes ||
+      fs > (body - vf * vf_bytes - ee * ee_bytes) / fs_bytes || vf * vf_bytes + ee * ee_bytes + fs * fs_bytes != body) {
+    throw InputError(path, "header", std::to_string(vf) + " vertex-face, " + std::to_string(ee) + " edge-edge and " +
+                                         std::to_string(fs) + " face-shape pairs do not match the file's " +
+                                         std::to_string(size) + " bytes");
   }
   std::vector<unsigned char> bytes(header, header + kHeaderBytes);
+  if (count_bytes) put_u64(bytes, fs);
+  const std::size_t start = bytes.size();
   bytes.resize(static_cast<std::size_t>(size));
-  if (!in.read(reinterpret_cast<char*>(bytes.data() + kHeaderBytes), static_cast<std::streamsize>(size - kHeaderBytes))) {
+  if (!in.read(reinterpret_cast<char*>(bytes.data() + start), static_cast<std::streamsize>(size - start))) {
     throw InputError(path, "body", "cannot read (file changed while reading?)");
   }
   const std::size_t checked = bytes.size() - kChecksumBytes;
   if (datasets::checksum64(bytes.data(), checked) != get_u64(bytes.data() + checked)) {
     throw InputError(path, "checksum", "does not match the content (the file is corrupt)");
   }
-  const unsigned char* p = bytes.data() + kHeaderBytes;
-  const unsigned char* times = p + vf * kVertexFaceBytes + ee * kEdgeEdgeBytes;
+  const unsigned char* p = bytes.data() + start;
+  const unsigned char* times = p + vf * kVertexFaceBytes + ee * kEdgeEdgeBytes + fs * kFaceShapeBytes;
   auto next_time = [&](const char* kind, std::uint64_t i) {
     if (!with_toi) return kNoToi;
     const double toi = std::bit_cast<double>(get_u64(times));
@@ -189,6 +228,14 @@ CachedTruth read_truth_file(const std::filesystem::path& path, const Scene& scen
     if (i > 0 && !(previous_ee < pair)) throw InputError(path, pair_where("edge-edge", i), "pairs out of order or repeated");
     cached.collisions.add(pair, next_time("edge-edge", i));
     previous_ee = pair;
+  }
+  FaceShapePair previous_fs{};
+  for (std::uint64_t i = 0; i < fs; ++i, p += kFaceShapeBytes) {
+    const FaceShapePair pair{get_u32(p), get_u32(p + 4)};
+    check_face_shape(path, scene, i, pair);
+    if (i > 0 && !(previous_fs < pair)) throw InputError(path, pair_where("face-shape", i), "pairs out of order or repeated");
+    cached.collisions.add(pair, next_time("face-shape", i));
+    previous_fs = pair;
   }
   cached.collisions.normalize();
   return cached;

@@ -28,7 +28,8 @@ void hash_scene_structure(datasets::ContentHash& hash, const Scene& scene);
 /// A 128-bit content key, as 32 hex digits.
 std::string truth_key(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1);
 
-/// Writes a truth file: magic, counts, a flags word (1: exact TOIs follow the pairs), the pairs, with_toi the TOI
+/// Writes a truth file: magic, counts, a flags word (1: exact TOIs follow the pairs; 2: a face-shape count follows
+/// and face-shape pairs follow the edge-edge ones), the pairs, with_toi the TOI
 /// of every pair (the largest double not after the exact earliest contact), and an XXH3-64 checksum of everything
 /// before it.
 void write_truth_file(const std::filesystem::path& path, const CollisionSet& truth, bool with_toi = false);
@@ -41,7 +42,8 @@ struct CachedTruth {
 
 /// Reads a truth file for `scene`. The counts must match the file's size before anything is allocated, the
 /// checksum must match, and every pair must be one the scene has: vertex and face ids in range, the vertex used and
-/// not a corner of the face, both edges of the mesh and sharing no vertex, objects that may collide, pairs sorted
+/// not a corner of the face, both edges of the mesh and sharing no vertex, a face-shape pair's object a shape, objects
+/// that may collide, pairs sorted
 /// without repeats; TOIs must lie in [0, 1]. @throws InputError (file, where, reason) otherwise.
 CachedTruth read_truth_file(const std::filesystem::path& path, const Scene& scene);
 

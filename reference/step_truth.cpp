@@ -3,6 +3,7 @@
 #include "core/step.hpp"
 
 #include "reference/elementary_pair.hpp"
+#include "reference/face_shape.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -184,6 +185,36 @@ SlicePairs slice_pairs(const Scene& scene, const std::vector<CertifiedBox>& boxe
   return found;
 }
 
+/// The face-shape pairs whose boxes overlap in this slice and that the scene lets collide, sorted. A shape's box is
+/// its centre's slice box (already widened by δ/2) grown by R or by the half extents, each bound moved one ulp
+/// outward to cover its rounding; a face's box is its corners' boxes (widened by δ/2): a face within δ of the
+/// shape at some time of the slice has a box that meets the shape's.
+std::vector<FaceShapePair> slice_face_shape_pairs(const Scene& scene, const std::vector<CertifiedBox>& boxes) {
+  std::vector<FaceShapePair> pairs;
+  const MeshTopology& topology = scene.topology();
+  for (const ObjectId s : scene.shape_objects()) {
+    const SceneObject& shape_object = scene.object(s);
+    const Shape& shape = *shape_object.shape;
+    CertifiedBox shape_box = boxes[shape_object.first_vertex];
+    for (int k = 0; k < 3; ++k) {
+      const double grow = shape.kind == ShapeKind::sphere ? shape.radius : shape.half_extents[k];
+      shape_box.lower[k] = std::nextafter(shape_box.lower[k] - grow, -kInfinity);
+      shape_box.upper[k] = std::nextafter(shape_box.upper[k] + grow, kInfinity);
+    }
+    for (ObjectId o = 0; o < scene.objects().size(); ++o) {
+      const SceneObject& object = scene.object(o);
+      if (o == s || object.num_faces == 0 || !scene.may_collide(o, s)) continue;
+      for (FaceId f = object.first_face; f < object.first_face + object.num_faces; ++f) {
+        CertifiedBox box;
+        for (VertexId v : topology.face(f)) box.extend(boxes[v]);
+        if (overlap_on(box, shape_box, 0) && overlap_on(box, shape_box, 1) && overlap_on(box, shape_box, 2)) pairs.push_back({f, s});
+      }
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
 }  // namespace
 
 StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1,
@@ -199,20 +230,29 @@ StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::
   // the union over slices misses nothing.
   std::vector<VertexFacePair> vf_pairs;
   std::vector<EdgeEdgePair> ee_pairs;
+  std::vector<FaceShapePair> fs_pairs;
   for (std::size_t slice = 0; slice < slices; ++slice) {
-    const SlicePairs found = slice_pairs(scene, vertex_boxes(x0, x1, half, slice, slices));
+    const std::vector<CertifiedBox> boxes = vertex_boxes(x0, x1, half, slice, slices);
+    const SlicePairs found = slice_pairs(scene, boxes);
     vf_pairs.insert(vf_pairs.end(), found.vertex_face.begin(), found.vertex_face.end());
     ee_pairs.insert(ee_pairs.end(), found.edge_edge.begin(), found.edge_edge.end());
+    if (!scene.shape_objects().empty()) {
+      const std::vector<FaceShapePair> shape_pairs = slice_face_shape_pairs(scene, boxes);
+      fs_pairs.insert(fs_pairs.end(), shape_pairs.begin(), shape_pairs.end());
+    }
   }
   if (slices > 1) {
     tbb::parallel_sort(vf_pairs.begin(), vf_pairs.end());
     vf_pairs.erase(std::unique(vf_pairs.begin(), vf_pairs.end()), vf_pairs.end());
     tbb::parallel_sort(ee_pairs.begin(), ee_pairs.end());
     ee_pairs.erase(std::unique(ee_pairs.begin(), ee_pairs.end()), ee_pairs.end());
+    std::sort(fs_pairs.begin(), fs_pairs.end());
+    fs_pairs.erase(std::unique(fs_pairs.begin(), fs_pairs.end()), fs_pairs.end());
   }
   truth.statistics.time_slices = slices;
   truth.statistics.vertex_face_pairs = vf_pairs.size();
   truth.statistics.edge_edge_pairs = ee_pairs.size();
+  truth.statistics.face_shape_pairs = fs_pairs.size();
   truth.statistics.enumeration_milliseconds = milliseconds_since(enumeration_start);
 
   const auto decision_start = std::chrono::steady_clock::now();
@@ -230,7 +270,7 @@ StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::
     if (decision.toi_floor) toi = *decision.toi_floor;
     local.collisions.add(pair, toi);
   };
-  const std::size_t total = vf_pairs.size() + ee_pairs.size();
+  const std::size_t total = vf_pairs.size() + ee_pairs.size() + fs_pairs.size();
   // Batches let the calling thread report progress between them.
   const std::size_t batch = std::max<std::size_t>(4096, total / 50);
   for (std::size_t begin = 0; begin < total; begin += batch) {
@@ -243,9 +283,15 @@ StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::
           record(local,
                  decide(PairKind::vertex_face, pair_rows(scene.topology(), x0, x1, pair), request.thickness, decision_request),
                  pair);
-        } else {
+        } else if (i < vf_pairs.size() + ee_pairs.size()) {
           const EdgeEdgePair& pair = ee_pairs[i - vf_pairs.size()];
           record(local, decide(PairKind::edge_edge, pair_rows(scene.topology(), x0, x1, pair), request.thickness, decision_request),
+                 pair);
+        } else {
+          const FaceShapePair& pair = fs_pairs[i - vf_pairs.size() - ee_pairs.size()];
+          record(local,
+                 decide_face_shape(*scene.object(pair.shape).shape, face_shape_rows(scene, x0, x1, pair), request.thickness,
+                                   decision_request),
                  pair);
         }
       }

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Whole-step ground truth: every VF and EE pair of a step that comes within δ, decided exactly.
+/// Whole-step ground truth: every VF, EE and face-shape pair of a step that comes within δ, decided exactly.
 
 #include "core/collision_set.hpp"
 #include "core/scene.hpp"
@@ -28,6 +28,8 @@ struct TruthStatistics {
   /// Pairs whose swept, δ-inflated boxes overlap (certified), that the scene lets collide and share no vertex.
   std::size_t vertex_face_pairs = 0;
   std::size_t edge_edge_pairs = 0;
+  /// Face-shape pairs whose certified boxes overlap (scenes with shape objects).
+  std::size_t face_shape_pairs = 0;
   /// How the pairs were decided.
   std::size_t decided_by_filter = 0;
   std::size_t decided_exactly = 0;
@@ -51,7 +53,8 @@ struct StepTruth {
 /// or 8 time slices with boxes per slice (certified the same way), and the pairs of all slices are merged.
 /// Vertices that no face uses are not primitives; VF pairs with v a corner of f and EE pairs with a shared
 /// endpoint are adjacent features and never count; self pairs only for objects with self-collision, pairs across
-/// objects only for collidable ones. Every candidate is decided by the certified
+/// objects only for collidable ones. Face-shape pairs: each shape's centre box grown by its size (outward), against
+/// the faces of every object the shape may collide with. Every candidate is decided by the certified
 /// filter and, where it is inconclusive, exactly. The result does not depend on the thread count.
 StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1,
                              const TruthRequest& request);

@@ -3,6 +3,9 @@
 #include "strategies/narrowphase/exact_scaling.hpp"
 
 #include <ccd/ccd.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -275,6 +278,87 @@ narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::Narrow
     return false;  // the earliest TOI needs every part
   });
   return result;
+}
+
+}  // namespace ccd::strategies
+
+namespace ccd::strategies {
+namespace {
+
+/// The centre's swept box widened by the shape's size (R, or h per axis) plus δ/2, with the rounding room of
+/// bvh::widened per axis: a face whose δ/2-widened box misses it is farther than δ from the shape all step.
+Box3 swept_shape_box(const Shape& shape, const Vec3& c0, const Vec3& c1, double thickness) {
+  Box3 box;
+  box.extend(c0);
+  box.extend(c1);
+  Vec3 widening;
+  for (int k = 0; k < 3; ++k) widening[k] = (shape.kind == ShapeKind::sphere ? shape.radius : shape.half_extents[k]) + thickness / 2;
+  const auto room = [&](const Vec3& corner) {
+    return Vec3((corner.cwiseAbs() + widening) * bvh::kBoxRoundingMargin + widening +
+                Vec3::Constant(std::numeric_limits<double>::denorm_min()));
+  };
+  return Box3(box.min() - room(box.min()), box.max() + room(box.max()));
+}
+
+}  // namespace
+
+void run_face_shape_stage(StepResult& result, const Scene& scene, const StepView& step, const narrowphase::NarrowPhase& narrow,
+                          bool audit) {
+  if (scene.shape_objects().empty()) return;
+  ScopedStageTimer timer(result.stages, "face-shape");
+  struct Local {
+    CollisionSet collisions;
+    std::vector<FaceShapePair> tested;
+    std::size_t boxes = 0, culled = 0, tests = 0;
+  };
+  tbb::enumerable_thread_specific<Local> locals;
+  const double thickness = scene.thickness();
+  for (const ObjectId s : scene.shape_objects()) {
+    const SceneObject& shape_object = scene.object(s);
+    const Shape& shape = *shape_object.shape;
+    const VertexId centre = shape_object.first_vertex;
+    const Box3 shape_box = swept_shape_box(shape, step.x0[centre], step.x1[centre], thickness);
+    for (ObjectId o = 0; o < scene.objects().size(); ++o) {
+      const SceneObject& object = scene.object(o);
+      if (o == s || object.num_faces == 0 || !scene.may_collide(o, s)) continue;
+      tbb::parallel_for(tbb::blocked_range<FaceId>(object.first_face, static_cast<FaceId>(object.first_face + object.num_faces), 256),
+                        [&](const auto& range) {
+        Local& local = locals.local();
+        for (FaceId f = range.begin(); f != range.end(); ++f) {
+          if (!bvh::swept_face_box(scene.topology().face(f), step.x0, step.x1, thickness / 2).intersects(shape_box)) continue;
+          ++local.boxes;
+          const FaceShapePair pair{f, s};
+          const FaceShapeRows rows = face_shape_rows(scene, step.x0, step.x1, pair);
+          if (cull_face_shape(shape, rows, thickness) == FaceShapeCull::certified_apart) {
+            ++local.culled;
+            continue;
+          }
+          ++local.tests;
+          if (audit) local.tested.push_back(pair);
+          const narrowphase::NarrowPhaseResult answer = narrow_phase_face_shape(narrow, shape, rows, thickness);
+          if (answer.collides) local.collisions.add(pair, answer.toi);
+        }
+      });
+    }
+  }
+  std::size_t boxes = 0, culled = 0, tests = 0;
+  std::vector<FaceShapePair> tested;
+  for (Local& local : locals) {
+    result.collisions.append(local.collisions);
+    boxes += local.boxes;
+    culled += local.culled;
+    tests += local.tests;
+    tested.insert(tested.end(), local.tested.begin(), local.tested.end());
+  }
+  result.collisions.normalize();
+  result.counters.extra.emplace_back("face_shape_boxes", static_cast<double>(boxes));
+  result.counters.extra.emplace_back("face_shape_culled", static_cast<double>(culled));
+  result.counters.extra.emplace_back("face_shape_tests", static_cast<double>(tests));
+  if (audit) {
+    std::sort(tested.begin(), tested.end());
+    if (!result.tested) result.tested.emplace();
+    result.tested->face_shape = std::move(tested);
+  }
 }
 
 }  // namespace ccd::strategies

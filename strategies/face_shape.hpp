@@ -18,7 +18,9 @@
 /// by their rounding (kCornerRounding). A conservative narrow phase thus stays conservative.
 
 #include "core/shape.hpp"
+#include "core/step.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
+#include "strategies/strategy.hpp"
 
 namespace ccd::strategies {
 
@@ -41,6 +43,16 @@ FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, dou
 /// may meet the solid box at t = 0).
 narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::NarrowPhase& narrow, const Shape& shape,
                                                        const FaceShapeRows& rows, double thickness);
+
+/// The face-shape stage of a step, shared by `full`, `apccd` and the OpenCL strategies (on the host): for each shape
+/// object and each face of an object that may collide with it, a box test (the face's swept box widened by δ/2
+/// against the centre's swept box widened by the shape's size and δ/2, both with bvh::kBoxRoundingMargin), then
+/// cull_face_shape, then narrow_phase_face_shape on the survivors. Adds the colliding pairs to result.collisions
+/// (normalized again), its time to the stage "face-shape", and the counters face_shape_boxes (pairs past the box
+/// test), face_shape_culled (certified apart) and face_shape_tests (narrow-phase decisions). With `audit`, the
+/// pairs that reached the narrow phase go to result.tested. Does nothing in a scene without shapes.
+void run_face_shape_stage(StepResult& result, const Scene& scene, const StepView& step, const narrowphase::NarrowPhase& narrow,
+                          bool audit);
 
 /// R + δ rounded up: the smallest double >= the exact sum (round-to-nearest sum, then one step up when the sum
 /// rounded down, found exactly by TwoSum).

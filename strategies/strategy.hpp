@@ -30,6 +30,8 @@ struct StepCounters {
 struct TestedPairs {
   std::vector<VertexFacePair> vertex_face;
   std::vector<EdgeEdgePair> edge_edge;
+  /// Face-shape pairs that reached the narrow phase (past the cull).
+  std::vector<FaceShapePair> face_shape = {};
 };
 
 struct StepResult {

@@ -124,6 +124,15 @@ void refuse_thickness(const Scene& scene, const std::string& name) {
     throw std::invalid_argument(name + " works at δ = 0 only: FCL has no thickness and its volumes are not inflated, "
                                 "but this scene's δ is " + std::to_string(scene.thickness()) + " (run with --thickness 0)");
   }
+  // FCL's continuous collision of shapes (fcl::Sphere, fcl::Box) moves whole rigid objects; a deforming cloth
+  // against them would need one rigid model per face and step, which no peer does. These baselines stay with
+  // meshes: generate the scene with obstacles=mesh.
+  for (const SceneObject& object : scene.objects()) {
+    if (object.shape) {
+      throw std::invalid_argument(name + " does not model analytic shapes: object '" + object.name + "' is a " +
+                                  std::string(to_string(object.shape->kind)) + " (generate the scene with obstacles=mesh)");
+    }
+  }
   // FCL's endModel fails on a model without triangles (code -3): say which object instead.
   for (const SceneObject& object : scene.objects()) {
     if (object.num_faces == 0) {

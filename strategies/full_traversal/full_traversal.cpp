@@ -2,6 +2,7 @@
 
 #include "core/assignment.hpp"
 #include "strategies/elementary_tests.hpp"
+#include "strategies/face_shape.hpp"
 #include "strategies/object_hierarchies.hpp"
 
 #include <stdexcept>
@@ -35,6 +36,7 @@ class FullTraversal final : public Strategy {
       candidates = hierarchies_.candidates();
     }
     run_narrow_phase(result, scene_->topology(), masks_, candidates, step, *narrow_phase_, scene_->thickness(), audit, separation_filter_);
+    run_face_shape_stage(result, *scene_, step, *narrow_phase_, audit);
     result.counters.history_bytes = hierarchies_.bytes();
     return result;
   }
@@ -72,6 +74,7 @@ class BruteForce final : public Strategy {
   StepResult step(const StepView& step, bool audit) override {
     StepResult result;
     run_narrow_phase(result, scene_->topology(), masks_, pairs_, step, *narrow_phase_, scene_->thickness(), audit);
+    run_face_shape_stage(result, *scene_, step, *narrow_phase_, audit);
     return result;
   }
 

@@ -1,6 +1,7 @@
 #include "strategies/opencl/full_opencl.hpp"
 
 #include "ccd/config.hpp"
+#include "strategies/face_shape.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 
 #if CCDBENCH_WITH_OPENCL
@@ -91,6 +92,8 @@ class FullOpenCl final : public Strategy {
     if (audit) result.tested = pipeline_.tested_pairs(tested->buffer, tests);
     if (separation_filter_) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(elementary - tests));
     positions_.finish(step);
+    // Face-shape pairs on the host, with the host's narrow phase (face_shape.hpp), as the CPU backend does.
+    run_face_shape_stage(result, pipeline_.scene(), step, *pipeline_.narrow_phase().host, audit);
     result.counters.candidate_triangle_pairs = candidates;
     result.counters.elementary_tests = tests;
     result.counters.history_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() +

@@ -78,5 +78,39 @@ TEST(CollisionSet, DigestSeesEveryPairAndEveryToiBit) {
   EXPECT_NE(answers_digest(vertex_face), answers_digest(edge_edge));
 }
 
+// Face-shape pairs are a third list: normalized, compared and subtracted like the others, and in the digest only
+// when there are any (a set without them keeps the digest it had before shapes existed: pinned here).
+TEST(CollisionSet, FaceShapePairsAreAThirdListAndLeaveOtherDigestsAlone) {
+  CollisionSet truth, reported;
+  truth.add(FaceShapePair{4, 2}, 0.5);
+  truth.add(FaceShapePair{3, 2}, 0.75);
+  truth.add(FaceShapePair{3, 2}, 0.25);
+  truth.add(VertexFacePair{0, 1}, 0.5);
+  truth.normalize();
+  ASSERT_EQ(truth.face_shape().size(), 2u);
+  EXPECT_EQ(truth.face_shape()[0].pair, (FaceShapePair{3, 2}));
+  EXPECT_EQ(truth.face_shape()[0].toi, 0.25);
+  EXPECT_EQ(truth.size(), 3u);
+  EXPECT_TRUE(truth.contains(FaceShapePair{4, 2}));
+  EXPECT_FALSE(truth.contains(FaceShapePair{4, 1}));
+  reported.add(FaceShapePair{3, 2});
+  reported.add(VertexFacePair{0, 1});
+  reported.normalize();
+  const CollisionSet missed = set_difference(truth, reported);
+  ASSERT_EQ(missed.size(), 1u);
+  EXPECT_EQ(missed.face_shape()[0].pair, (FaceShapePair{4, 2}));
+  EXPECT_FALSE(truth.same_pairs(reported));
+
+  CollisionSet vertex_face;
+  vertex_face.add(VertexFacePair{0, 1}, 0.5);
+  vertex_face.normalize();
+  // FNV-1a of the words 1, (0 << 32 | 1), bits(0.5), 0: what the digest gave before face-shape pairs existed.
+  EXPECT_EQ(answers_digest(vertex_face), "c88267a2f0f70fc8");
+  CollisionSet with_shape = vertex_face;
+  with_shape.add(FaceShapePair{1, 0}, 0.5);
+  with_shape.normalize();
+  EXPECT_NE(answers_digest(with_shape), answers_digest(vertex_face));
+}
+
 }  // namespace
 }  // namespace ccd

@@ -107,6 +107,54 @@ TEST(SceneFileBadInput, EachMistakeIsNamed) {
             std::string::npos);
 }
 
+// Shapes: a sphere with a track of centres (one per frame) and a still box (one centre); their centres are the
+// frames' last vertices, and every mistake is named by its key.
+TEST(SceneFile, ShapeObjectsWithTracks) {
+  nlohmann::json scene = nlohmann::json::parse(kScene);
+  scene["objects"][2] = {{"name", "ball"}, {"kind", "shape"}, {"shape", "sphere"}, {"radius", 0.25},
+                         {"track", {{"centres", {{0, 0, 1}, {0, 0, 0.5}, {0, 0, 0.125}}}}}};
+  scene["objects"].push_back({{"name", "block"}, {"kind", "shape"}, {"shape", "box"}, {"half_extents", {1, 2, 0.5}},
+                              {"track", {{"centres", {{3, 3, 3}}}}}});
+  scene["collidable"].push_back({"block", "cloth"});
+  {
+    TempDir dir;
+    write_three_object_scene(dir, scene.dump());
+    const SceneSequence sequence = load_scene_file(dir.path());
+    const Scene& s = sequence.scene();
+    ASSERT_EQ(s.shape_objects(), (std::vector<ObjectId>{2, 3}));
+    EXPECT_EQ(s.object(2).shape->radius, 0.25);
+    EXPECT_EQ(s.object(3).shape->half_extents, Vec3(1, 2, 0.5));
+    EXPECT_FALSE(s.object(2).self_collision);
+    const auto frame = sequence.frame(2);
+    ASSERT_EQ(frame.size(), 9u + 4u + 1u + 1u);
+    EXPECT_EQ(frame[13], Vec3(0, 0, 0.125));
+    EXPECT_EQ(frame[14], Vec3(3, 3, 3)) << "one centre holds the box still";
+  }
+  auto changed = [&](const std::function<void(nlohmann::json&)>& change) {
+    nlohmann::json s = scene;
+    change(s);
+    return scene_error(s.dump(2));
+  };
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["radius"] = -1; }).find("objects[2]: a sphere's radius must be finite and > 0"),
+            std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["shape"] = "cone"; }).find("objects[2].shape: unknown shape 'cone'"),
+            std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][3]["half_extents"] = {1, 2}; }).find("objects[3].half_extents: must be an array of three"),
+            std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][3]["radius"] = 1; }).find("objects[3].radius: a box has half extents"),
+            std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["frames"] = s["objects"][0]["frames"]; }).find("objects[2]: unknown key 'frames'"),
+            std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][2].erase("track"); }).find("objects[2]: missing key 'track'"), std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["track"]["centres"][1] = {0, "x", 0}; })
+                .find("objects[2].track.centres[1]: must be an array of three numbers"),
+            std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["track"]["centres"] = {{0, 0, 1}, {0, 0, 1}}; }).find("has 2 frames"),
+            std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["track"] = {{"cache", "missing.frames"}}; }).find("missing.frames"),
+            std::string::npos);
+}
+
 TEST(SceneFile, GeneratorsAreLookedUpByName) {
   EXPECT_NE(scene_error(R"({"generator": {"name": "no-such-scene"}})").find("unknown scene generator 'no-such-scene'"),
             std::string::npos);

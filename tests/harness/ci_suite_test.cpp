@@ -28,7 +28,7 @@ TEST(CiSuite, EveryCellCollidesWithContactsOfEveryKindAtBothThicknesses) {
   testing::TempDir cache;
   ::setenv("CCDBENCH_CACHE_DIR", cache.path().c_str(), 1);
   for (const bool zero : {false, true}) {
-    std::size_t self = 0, across = 0, inside_sessions = 0;
+    std::size_t self = 0, across = 0, inside_sessions = 0, face_sphere = 0, face_box = 0;
     for (const SceneSource& source : suite_scenes("ci")) {
       datasets::SceneSequence sequence = source.load();
       if (zero) sequence.set_thickness(0.0);
@@ -43,6 +43,7 @@ TEST(CiSuite, EveryCellCollidesWithContactsOfEveryKindAtBothThicknesses) {
         const auto truth = reference::compute_step_truth(scene, x0, x1, {scene.thickness(), false, {}}).collisions;
         for (const auto& c : truth.vertex_face()) (scene.object_of_vertex(c.pair.v) == scene.object_of_face(c.pair.f) ? self : across) += 1;
         for (const auto& c : truth.edge_edge()) (scene.object_of_vertex(c.pair.a.v0) == scene.object_of_vertex(c.pair.b.v0) ? self : across) += 1;
+        for (const auto& c : truth.face_shape()) (scene.object(c.pair.shape).shape->kind == ShapeKind::sphere ? face_sphere : face_box) += 1;
         const strategies::StepResult result = apccd->step({&scene, k, x0, x1}, false);
         if (extra(result, "session_start") == 0.0) inside_sessions += truth.size();
         colliding += truth.size();
@@ -54,6 +55,8 @@ TEST(CiSuite, EveryCellCollidesWithContactsOfEveryKindAtBothThicknesses) {
     EXPECT_GT(self, 0u);
     EXPECT_GT(across, 0u);
     EXPECT_GT(inside_sessions, 0u);
+    EXPECT_GT(face_sphere, 0u) << "the suite must gate face-sphere pairs";
+    EXPECT_GT(face_box, 0u) << "the suite must gate face-box pairs";
   }
   ::unsetenv("CCDBENCH_CACHE_DIR");
 }

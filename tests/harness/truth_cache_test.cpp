@@ -15,6 +15,7 @@
 
 #include <fstream>
 #include <regex>
+#include <set>
 #include <sstream>
 
 namespace ccd::harness {
@@ -36,6 +37,21 @@ CrossingStep crossing_step() {
   }
   Scene scene({{"lower", ObjectKind::deformable, true, 25, faces}, {"upper", ObjectKind::deformable, false, 25, faces}},
               {{0, 1}}, 0.0);
+  return {std::move(scene), std::move(x0), std::move(x1)};
+}
+
+/// A 5x5 sheet with a sphere falling through it and a box rising into it: face-shape contacts beside VF and EE.
+CrossingStep shape_crossing_step() {
+  std::vector<Vec3> x0 = testing::grid_positions(5, 0.0), x1 = x0;
+  for (Vec3& p : x1) p.z() += 0.05 * p.x();
+  x0.push_back(Vec3(1.3, 1.6, 1.0));
+  x1.push_back(Vec3(1.4, 1.5, -1.0));
+  x0.push_back(Vec3(3.1, 2.2, -2.0));
+  x1.push_back(Vec3(3.0, 2.3, 0.2));
+  Scene scene({{"sheet", ObjectKind::deformable, true, 25, testing::grid_faces(5)},
+               {"ball", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::sphere, 0.4, Vec3::Zero()}},
+               {"block", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::box, 0.0, Vec3(0.3, 0.5, 0.25)}}},
+              {{0, 1}, {0, 2}}, 0.0);
   return {std::move(scene), std::move(x0), std::move(x1)};
 }
 
@@ -77,6 +93,56 @@ TEST(TruthCache, EveryFlippedBitIsDetectedAndTheTruthComputedAgain) {
   EXPECT_TRUE(again.same_pairs(truth));
   EXPECT_NE(warnings.str().find(file.filename().string()), std::string::npos) << warnings.str();
   EXPECT_EQ(file_bytes(file), original) << "the recomputed truth replaces the corrupt file";
+}
+
+// Face-shape pairs and their TOIs are kept like the others; every flipped bit is still detected; a face-shape
+// pair the scene cannot have (a mesh object, or a shape it may not collide with) is refused.
+TEST(TruthCache, FaceShapePairsAreCachedAndCheckedToo) {
+  testing::TempDir dir;
+  CrossingStep step = shape_crossing_step();
+  const TruthCache cache(dir / "truth", nullptr);
+  bool computed = false;
+  const CollisionSet truth = cache.truth(step.scene, step.x0, step.x1, computed, true);
+  ASSERT_TRUE(computed);
+  std::set<ObjectId> shapes;
+  for (const auto& c : truth.face_shape()) shapes.insert(c.pair.shape);
+  ASSERT_EQ(shapes, (std::set<ObjectId>{1, 2})) << "both shapes must collide for this test to mean anything";
+  const auto file = cache.file_for(step.scene, step.x0, step.x1);
+  const CachedTruth cached = read_truth_file(file, step.scene);
+  ASSERT_TRUE(cached.collisions.same_pairs(truth));
+  for (std::size_t i = 0; i < truth.face_shape().size(); ++i) EXPECT_EQ(cached.collisions.face_shape()[i].toi, truth.face_shape()[i].toi);
+  const std::vector<char> original = file_bytes(file);
+  for (std::size_t byte = 0; byte < original.size(); ++byte) {
+    std::vector<char> flipped = original;
+    flipped[byte] = static_cast<char>(flipped[byte] ^ 1);
+    write_bytes(file, flipped);
+    EXPECT_THROW(read_truth_file(file, step.scene), InputError) << "byte " << byte;
+  }
+  // Another radius is another scene: its truth has another key.
+  const auto key = truth_key(step.scene, step.x0, step.x1);
+  Scene bigger({{"sheet", ObjectKind::deformable, true, 25, testing::grid_faces(5)},
+                {"ball", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::sphere, 0.5, Vec3::Zero()}},
+                {"block", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::box, 0.0, Vec3(0.3, 0.5, 0.25)}}},
+               {{0, 1}, {0, 2}}, 0.0);
+  EXPECT_NE(truth_key(bigger, step.x0, step.x1), key);
+  auto refused = [&](FaceShapePair pair) {
+    CollisionSet set;
+    set.add(pair);
+    write_truth_file(dir / "x.truth", set);
+    return testing::error_message<InputError>([&] { read_truth_file(dir / "x.truth", step.scene); });
+  };
+  EXPECT_NE(refused({0, 0}).find("x.truth:face-shape pair 0: not a face-shape pair this scene can have"), std::string::npos);
+  EXPECT_NE(refused({99, 1}).find("not a face-shape pair"), std::string::npos);
+  EXPECT_NE(refused({0, 7}).find("not a face-shape pair"), std::string::npos);
+  Scene apart({{"sheet", ObjectKind::deformable, true, 25, testing::grid_faces(5)},
+               {"ball", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::sphere, 0.4, Vec3::Zero()}},
+               {"block", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::box, 0.0, Vec3(0.3, 0.5, 0.25)}}},
+              {{0, 1}}, 0.0);
+  CollisionSet block_pair;
+  block_pair.add(FaceShapePair{0, 2});
+  write_truth_file(dir / "y.truth", block_pair);
+  EXPECT_NE(testing::error_message<InputError>([&] { read_truth_file(dir / "y.truth", apart); }).find("not a face-shape pair"),
+            std::string::npos);
 }
 
 // A file with a valid checksum can still hold pairs of another scene: every pair is checked against this one (an

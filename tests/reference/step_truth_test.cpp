@@ -3,6 +3,7 @@
 #include "core/scene.hpp"
 #include "core/step.hpp"
 #include "reference/elementary_pair.hpp"
+#include "reference/face_shape.hpp"
 #include "reference/step_truth.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -139,6 +140,76 @@ TEST(StepTruth, UnusedVerticesAreNeverPrimitives) {
   ASSERT_TRUE(would_collide) << "as a primitive the unused vertex would collide: else this test proves nothing";
   const StepTruth truth = compute_step_truth(fold.scene, fold.x0, fold.x1, {0.0, false, {}});
   for (const auto& contact : truth.collisions.vertex_face()) EXPECT_NE(contact.pair.v, unused);
+}
+
+/// A 6x6 cloth (jittered, seeded) falling and bending, a sphere and a box moving through it, and a second box
+/// that the scene does not let collide with the cloth.
+struct ShapeScene {
+  Scene scene;
+  std::vector<Vec3> x0, x1;
+};
+
+ShapeScene shape_scene(std::uint64_t seed, double thickness) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> jitter(-0.05, 0.05);
+  std::vector<Vec3> x0 = testing::grid_positions(6, 0.0), x1 = x0;
+  for (std::size_t i = 0; i < x0.size(); ++i) {
+    x0[i] += Vec3(jitter(random), jitter(random), jitter(random));
+    x1[i] = Vec3(x0[i].x(), x0[i].y(), -0.3 + 0.1 * std::sin(x0[i].x()) + jitter(random));
+  }
+  auto centre = [&](double lo, double hi) { return Vec3(std::uniform_real_distribution<double>(lo, hi)(random), 2.5, 0.0); };
+  const Vec3 ball = centre(0.5, 4.5), block = centre(0.5, 4.5);
+  // Ball: down through the cloth; block: up through it from below; the other box: anywhere (never collidable).
+  x0.push_back(ball + Vec3(0, 0, 0.8));
+  x1.push_back(ball + Vec3(0.3, 0, -0.6));
+  x0.push_back(block + Vec3(0, 1, -1.2));
+  x1.push_back(block + Vec3(-0.2, 1, 0.1));
+  x0.push_back(Vec3(2.5, 2.5, 0));
+  x1.push_back(Vec3(2.5, 2.5, 0));
+  Scene scene({{"cloth", ObjectKind::deformable, true, 36, testing::grid_faces(6)},
+               {"ball", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::sphere, 0.7, Vec3::Zero()}},
+               {"block", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::box, 0.0, Vec3(0.6, 0.4, 0.5)}},
+               {"ghost", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::box, 0.0, Vec3(9, 9, 9)}}},
+              {{0, 1}, {0, 2}}, thickness);
+  return {std::move(scene), std::move(x0), std::move(x1)};
+}
+
+// Face-shape pairs: the sweep's certified boxes lose none. Every face against every collidable shape, decided
+// directly, is the check, on seeded scenes, at δ = 0 and δ > 0, and for every number of time slices.
+TEST(StepTruth, FaceShapePairsEqualDecidingEveryFaceAgainstEveryShape) {
+  std::size_t colliding = 0, spheres = 0, boxes = 0;
+  for (std::uint64_t seed : {1, 2, 3}) {
+    for (double delta : {0.0, 0.05}) {
+      const ShapeScene s = shape_scene(seed, delta);
+      CollisionSet expected;
+      for (FaceId f = 0; f < s.scene.topology().num_faces(); ++f) {
+        for (const ObjectId shape : s.scene.shape_objects()) {
+          if (!s.scene.may_collide(0, shape)) continue;
+          const FaceShapePair pair{f, shape};
+          if (decide_face_shape(*s.scene.object(shape).shape, face_shape_rows(s.scene, s.x0, s.x1, pair), delta).collides) {
+            expected.add(pair);
+          }
+        }
+      }
+      expected.normalize();
+      for (std::size_t slices : {1, 2, 8, 0}) {
+        SCOPED_TRACE("seed " + std::to_string(seed) + ", δ " + std::to_string(delta) + ", " + std::to_string(slices) + " slices");
+        TruthRequest request{delta, false, {}};
+        request.time_slices = slices;
+        const StepTruth truth = compute_step_truth(s.scene, s.x0, s.x1, request);
+        CollisionSet shape_pairs;
+        for (const auto& c : truth.collisions.face_shape()) shape_pairs.add(c.pair);
+        shape_pairs.normalize();
+        EXPECT_TRUE(shape_pairs.same_pairs(expected)) << "sweep " << shape_pairs.size() << ", every face " << expected.size();
+        EXPECT_LT(truth.statistics.face_shape_pairs, 2 * s.scene.topology().num_faces()) << "the boxes cull nothing";
+      }
+      colliding += expected.size();
+      for (const auto& c : expected.face_shape()) (c.pair.shape == 1 ? spheres : boxes) += 1;
+    }
+  }
+  EXPECT_GT(spheres, 0u) << "the sphere must meet the cloth for this test to mean anything";
+  EXPECT_GT(boxes, 0u);
+  EXPECT_LT(colliding, 6u * 2 * 2 * 50) << "not every face collides, or the boxes are not tested either";
 }
 
 TEST(StepTruth, SameSetsForOneAndTwoThreadsAndTois) {

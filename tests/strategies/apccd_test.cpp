@@ -94,6 +94,7 @@ TEST_P(ApccdOnScene, MissesNothingUnderEveryKnobAndThreadCount) {
 
 INSTANTIATE_TEST_SUITE_P(BuiltInScenes, ApccdOnScene, ::testing::ValuesIn(testing::procedural_scene_names()),
                          testing::param_name);
+INSTANTIATE_TEST_SUITE_P(ShapeScenes, ApccdOnScene, ::testing::ValuesIn(testing::shape_scene_names()), testing::param_name);
 
 // The pairs a session start finds are not the whole story: on the fold, contacts begin inside sessions, where only
 // the pending list and partial traversals can bring them to the back end.

@@ -34,6 +34,9 @@ inline std::vector<std::vector<Vec3>> all_frames(const datasets::SceneSequence& 
   return frames;
 }
 
+/// The built-in scenes that take obstacles=shape, named "NAME:shapes" for small_scene.
+inline std::vector<std::string> shape_scene_names() { return {"spinning-ball:shapes", "drape:shapes", "pile:shapes", "fold:shapes"}; }
+
 /// The built-in scenes' names, for tests parametrized over them.
 inline std::vector<std::string> procedural_scene_names() {
   std::vector<std::string> names;
@@ -51,8 +54,12 @@ struct LoadedScene {
 /// `ccdbench run --strategy full [--thickness 0]`: spinning-ball 1835 / 231 colliding pairs, drape 496 / 53, flag
 /// 16 / 16, twist 289 / 174, funnel 1078 / 98, pile 1258 / 172, fold 1908 / 357). Heavier contact only costs time:
 /// every strategy test runs under AddressSanitizer in CI too.
-inline LoadedScene small_scene(const std::string& name, const TempDir& dir) {
+/// "NAME:shapes" is the scene with obstacles=shape.
+inline LoadedScene small_scene(const std::string& full_name, const TempDir& dir) {
+  const bool shapes = full_name.ends_with(":shapes");
+  const std::string name = shapes ? full_name.substr(0, full_name.size() - 7) : full_name;
   datasets::SceneParameters parameters{{"resolution", 8}, {"frames", 12}};
+  if (shapes) parameters["obstacles"] = 1;
   if (name == "pile") parameters["count"] = 2;
   if (name == "twist") {
     // The clamps need time, and a finer mat, to wind it into contact with itself.

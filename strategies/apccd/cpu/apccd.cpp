@@ -2,6 +2,7 @@
 
 #include "core/assignment.hpp"
 #include "strategies/elementary_tests.hpp"
+#include "strategies/face_shape.hpp"
 #include "strategies/object_hierarchies.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -156,6 +157,8 @@ class Apccd final : public Strategy {
                              {"pending_bytes", static_cast<double>(pending_bytes)},
                              {"tree_bytes", static_cast<double>(tree_bytes)},
                              {"relative_motion", relative_motion}};
+    // Shapes are beyond the paper: their faces are tested every step, as `full` does (face_shape.hpp).
+    run_face_shape_stage(result, *scene_, step, *narrow_phase_, audit);
     session_.advance(dangling_vertices, admissible.size(), pending_.size());
     return result;
   }

@@ -3,6 +3,7 @@
 #include "ccd/config.hpp"
 
 #if CCDBENCH_WITH_OPENCL
+#include "strategies/face_shape.hpp"
 #include "strategies/opencl/pipeline.hpp"
 #endif
 
@@ -188,6 +189,8 @@ class ApccdOpenCl final : public Strategy {
                                                          {"relative_motion", relative_motion}};
     extra.insert(extra.end(), result.counters.extra.begin(), result.counters.extra.end());
     result.counters.extra = std::move(extra);
+    // Face-shape pairs on the host, with the host's narrow phase (face_shape.hpp), as the CPU backend does.
+    run_face_shape_stage(result, *scene_, step, *pipeline_.narrow_phase().host, audit);
     session_.advance(dangling_vertices, admissible, pending_.count);
     return result;
   }
