@@ -31,6 +31,7 @@
 #include <list>
 #include <map>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <tuple>
 #include <unistd.h>
@@ -264,6 +265,51 @@ json record_misses(const Scene& scene, const std::vector<std::vector<Vec3>>& fra
   return causes;
 }
 
+/// Contact between objects, over every step's truth: per object pair "A/B" (A declared first; "A/A" for self
+/// contact), the colliding pairs, and the faces of A in contact with B (a face is in contact when one of its corners,
+/// edges or itself is in a colliding pair with B: the faces that a face-shape pair would name), summed over steps.
+/// What reports/shapes compares between obstacles=mesh and obstacles=shape.
+json contact_by_objects(const Scene& scene, const std::vector<CollisionSet>& truth, std::size_t steps) {
+  const MeshTopology& topology = scene.topology();
+  std::map<std::pair<ObjectId, ObjectId>, std::size_t> pairs, faces;
+  for (std::size_t k = 0; k < steps; ++k) {
+    std::map<std::pair<ObjectId, ObjectId>, std::set<FaceId>> in_contact;
+    auto note = [&](ObjectId a, ObjectId b) {
+      ++pairs[{std::min(a, b), std::max(a, b)}];
+      return std::pair{std::min(a, b), std::max(a, b)};
+    };
+    auto add_vertex_faces = [&](std::set<FaceId>& set, VertexId v) {
+      for (FaceId f : topology.vertex_faces(v)) set.insert(f);
+    };
+    for (const auto& c : truth[k].vertex_face()) {
+      const ObjectId ov = scene.object_of_vertex(c.pair.v), of = scene.object_of_face(c.pair.f);
+      const auto key = note(ov, of);
+      if (ov == of) continue;
+      if (of == key.first) {
+        in_contact[key].insert(c.pair.f);
+      } else {
+        add_vertex_faces(in_contact[key], c.pair.v);
+      }
+    }
+    for (const auto& c : truth[k].edge_edge()) {
+      const ObjectId oa = scene.object_of_vertex(c.pair.a.v0), ob = scene.object_of_vertex(c.pair.b.v0);
+      const auto key = note(oa, ob);
+      if (oa == ob) continue;
+      const Edge e = oa == key.first ? c.pair.a : c.pair.b;
+      for (FaceId f : topology.edge_faces(*topology.find_edge(e.v0, e.v1))) in_contact[key].insert(f);
+    }
+    for (const auto& c : truth[k].face_shape()) in_contact[note(scene.object_of_face(c.pair.f), c.pair.shape)].insert(c.pair.f);
+    for (const auto& [key, set] : in_contact) faces[key] += set.size();
+  }
+  json colliding = json::object(), contact_faces = json::object();
+  for (const auto& [key, count] : pairs) {
+    const std::string name = scene.object(key.first).name + "/" + scene.object(key.second).name;
+    colliding[name] = count;
+    if (key.first != key.second) contact_faces[name] = faces[key];
+  }
+  return {{"colliding_by_objects", colliding}, {"faces_in_contact_by_objects", contact_faces}};
+}
+
 /// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.
 json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps,
              const std::string& cell_name) {
@@ -403,6 +449,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                   {"scene", data.label},
                   {"strategy", resolved},
                   {"triangles", scene.topology().num_faces()},
+                  {"vertices", scene.topology().num_vertices()},
                   {"steps", steps},
                   {"thickness", scene.thickness()},
                   {"ms_per_step", median(medians)},
@@ -427,6 +474,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                         {"missed_tested", tested},
                         {"false_alarms", false_alarms},
                         {"miss_causes", miss_causes}});
+    summary.update(contact_by_objects(scene, data.truth, steps));
     if (!scene.shape_objects().empty()) {
       summary.update(json{{"colliding_face_shape", colliding_face_shape}, {"missed_face_shape", missed_face_shape}});
     }

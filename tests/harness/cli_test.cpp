@@ -187,9 +187,9 @@ TEST(Cli, RunVerifiesWritesResultsAndResumes) {
   const CommandResult first = run_ccdbench(base);
   ASSERT_EQ(first.exit_code, 0) << first.output;
   const nlohmann::json summary = read_json(dir / "summary.json");
-  ASSERT_EQ(summary.size(), 2u);
+  ASSERT_EQ(summary.size(), 3u);
   for (const auto& s : summary) {
-    for (const char* field : {"scene", "strategy", "steps", "ms_per_step", "colliding", "reported", "missed",
+    for (const char* field : {"scene", "strategy", "steps", "ms_per_step", "colliding", "colliding_by_objects", "reported", "missed",
                               "missed_culled", "missed_tested", "false_alarms", "machine", "build_type", "threads",
                               "git_revision", "executable", "thickness", "thickness_from", "key", "finished_at"}) {
       EXPECT_TRUE(s.contains(field)) << field;
@@ -202,7 +202,14 @@ TEST(Cli, RunVerifiesWritesResultsAndResumes) {
     EXPECT_NO_THROW(nlohmann::json::parse(line));
     ++records;
   }
-  EXPECT_EQ(records, 2 + 4 + 23u);  // a summary per cell, a record per step
+  EXPECT_EQ(records, 3 + 4 + 23 + 23u);  // a summary per cell, a record per step
+  // The shape scene's summary counts its face-shape pairs apart, and its contact with each shape.
+  const nlohmann::json& shapes = summary[2];
+  EXPECT_EQ(shapes["scene"], "fold-r8-f24-shapes");
+  EXPECT_GT(shapes["colliding_face_shape"].get<std::size_t>(), 0u) << shapes.dump();
+  EXPECT_EQ(shapes["missed_face_shape"], 0);
+  EXPECT_GT(shapes["colliding_by_objects"]["sheet/ball"].get<std::size_t>(), 0u) << shapes.dump();
+  EXPECT_GT(shapes["faces_in_contact_by_objects"]["sheet/blade"].get<std::size_t>(), 0u) << shapes.dump();
   const CommandResult again = run_ccdbench(base);
   EXPECT_NE(again.output.find("(resumed)"), std::string::npos) << again.output;
   EXPECT_EQ(run_ccdbench(base + " --fresh").output.find("(resumed)"), std::string::npos);
@@ -219,7 +226,15 @@ TEST(Cli, RunJudgesFclByTrianglePairsAndRefusesItAtPositiveThickness) {
   EXPECT_NE(refused.exit_code, 0);
   EXPECT_NE(refused.output.find("run with --thickness 0"), std::string::npos) << refused.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "results.jsonl"));
-  const CommandResult run = run_ccdbench("run --suite ci --thickness 0 --max-steps 3 --strategy full,fcl:bv=aabb,fcl-bvh" + out +
+  // FCL's baselines model meshes only: the ci suite's shape scene is refused naming the shape.
+  const CommandResult shapes = run_ccdbench("run --suite ci --thickness 0 --strategy fcl" + out);
+  EXPECT_NE(shapes.exit_code, 0);
+  EXPECT_NE(shapes.output.find("fcl does not model analytic shapes: object 'blade' is a box"), std::string::npos) << shapes.output;
+  // The ci suite's mesh scenes, named by generator blocks.
+  testing::write_text(dir / "ball.json", R"({"generator": {"name": "spinning-ball", "resolution": 8, "frames": 5}})");
+  testing::write_text(dir / "fold.json", R"({"generator": {"name": "fold", "resolution": 8, "frames": 24}})");
+  const CommandResult run = run_ccdbench("run --scene '" + (dir / "ball.json").string() + "' '" + (dir / "fold.json").string() +
+                                         "' --thickness 0 --max-steps 3 --strategy full,fcl:bv=aabb,fcl-bvh" + out +
                                          " --json '" + (dir / "s.json").string() + "'");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("fcl:bv=aabb (†)"), std::string::npos) << run.output;

@@ -126,7 +126,7 @@ class OpenClParity : public ::testing::Test {
 
 TEST_F(OpenClParity, TheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
   // Both ci scenes collide at both δ (tests/harness/ci_suite_test.cpp), with either narrow phase.
-  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"})) EXPECT_EQ(scenes, 2u);
+  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"})) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
 }
 
 /// Steps of the longer suite runs under AddressSanitizer, which makes them several times slower on CI's two cores:
@@ -153,7 +153,7 @@ TEST_F(OpenClParity, TheDefaultSuiteGivesTheCpuAnswersAtBothThicknesses) {
 // pairs dropped by the filter.
 TEST_F(OpenClParity, FullWithTheFilterOnGivesTheCpuAnswers) {
   std::map<std::string, double> counters;
-  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, 0, "full", ":filter=on", &counters)) EXPECT_EQ(scenes, 2u);
+  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, 0, "full", ":filter=on", &counters)) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
   EXPECT_GT(counters["distance_filtered"], 0.0);
 }
 
@@ -161,7 +161,7 @@ TEST_F(OpenClParity, FullWithTheFilterOnGivesTheCpuAnswers) {
 // (session starts, nf, pending pairs, dangling vertices and triangles, pairs the distance heuristic drops).
 TEST_F(OpenClParity, ApccdOnTheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
   std::map<std::string, double> counters;
-  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"}, 0, "apccd", "", &counters)) EXPECT_EQ(scenes, 2u);
+  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"}, 0, "apccd", "", &counters)) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
   // Sessions longer than a frame, with dangling triangles (at δ = 0), and the distance heuristic at work.
   EXPECT_GT(counters["dangling_triangles"], 0.0);
   EXPECT_GT(counters["distance_filtered"], 0.0);
@@ -183,7 +183,7 @@ TEST_F(OpenClParity, ApccdKnobsGiveTheCpuAnswers) {
     SCOPED_TRACE(keys);
     std::map<std::string, double> counters;
     for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, kSanitizerKnobSteps, "apccd", keys, &counters)) {
-      EXPECT_EQ(scenes, 2u);
+      EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
     }
     if (std::string(keys) != ":skip=off") {
       EXPECT_GT(counters["dangling_vertices"], 0.0) << "no session outlived its first frame";
@@ -201,7 +201,7 @@ TEST_F(OpenClParity, ApccdOnTheDeviceMissesNothingOnTheCiSuite) {
     options.out = cache_.path() / (zero ? "results-zero" : "results");
     std::ostringstream table;
     const std::vector<nlohmann::json> summaries = harness::run_benchmark(options, table);
-    ASSERT_EQ(summaries.size(), 4u) << table.str();
+    ASSERT_EQ(summaries.size(), 2 * harness::suite_scenes("ci").size()) << table.str();
     for (const nlohmann::json& summary : summaries) {
       SCOPED_TRACE(summary.value("scene", "") + " " + summary.value("strategy", ""));
       EXPECT_TRUE(summary.value("verified", false));
@@ -310,7 +310,7 @@ TEST_F(OpenClParity, ApccdGrowingListsGiveTheSameAnswers) {
   std::map<std::string, double> counters;
   const std::vector<std::size_t> colliding_scenes = suite_at_both_thicknesses("ci", {"conservative"}, 0, "apccd", "", &counters);
   ::unsetenv("CCDBENCH_OPENCL_TEST_TINY");
-  for (const std::size_t scenes : colliding_scenes) EXPECT_EQ(scenes, 2u);
+  for (const std::size_t scenes : colliding_scenes) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
   EXPECT_GT(counters["host_decided_pairs"], 0.0);
   // pending_table_builds is a running total: summed over steps it exceeds the steps only when a session rebuilt it.
   EXPECT_GT(counters["pending_table_builds"], 0.0) << "no partial traversal found a pair: the pending list never grew";
