@@ -4,6 +4,8 @@
 //   cull            libccd's GJK, then a certified axis where GJK says apart (what the strategies run)
 //   certified_only  the certified axes on every pair, without libccd
 //   cull_narrow     the cull, then the conservative narrow phase on the survivors (the strategies' whole decision)
+//   cull_narrow_no_prefilter  the same without the box's per-pair box test (narrow_phase_face_shape's
+//                   box_prefilter), to attribute it
 //   narrow_only     the conservative narrow phase on every pair, without a cull
 //   reference       the exact decision (reference/face_shape.hpp)
 // Counters: culled (fraction of pairs culled), colliding (fraction the narrow phase calls colliding).
@@ -61,7 +63,7 @@ const narrowphase::NarrowPhase& conservative() {
   return *narrow;
 }
 
-enum class Stage { cull, certified_only, cull_narrow, narrow_only, reference };
+enum class Stage { cull, certified_only, cull_narrow, cull_narrow_no_prefilter, narrow_only, reference };
 
 void BM_FaceShape(benchmark::State& state, ShapeKind kind, Stage stage) {
   const Pairs& pairs = pairs_of(kind);
@@ -77,12 +79,14 @@ void BM_FaceShape(benchmark::State& state, ShapeKind kind, Stage stage) {
           culled += apart ? 1 : 0;
           break;
         }
-        case Stage::cull_narrow: {
+        case Stage::cull_narrow:
+        case Stage::cull_narrow_no_prefilter: {
           if (strategies::cull_face_shape(pairs.shape, rows, kThickness) == strategies::FaceShapeCull::certified_apart) {
             ++culled;
             break;
           }
-          colliding += strategies::narrow_phase_face_shape(conservative(), pairs.shape, rows, kThickness).collides ? 1 : 0;
+          const bool prefilter = stage == Stage::cull_narrow;
+          colliding += strategies::narrow_phase_face_shape(conservative(), pairs.shape, rows, kThickness, prefilter).collides ? 1 : 0;
           break;
         }
         case Stage::narrow_only:
@@ -102,7 +106,9 @@ void BM_FaceShape(benchmark::State& state, ShapeKind kind, Stage stage) {
 void register_all() {
   for (const ShapeKind kind : {ShapeKind::sphere, ShapeKind::box}) {
     for (const auto& [stage, name] : {std::pair{Stage::cull, "cull"}, std::pair{Stage::certified_only, "certified_only"},
-                                      std::pair{Stage::cull_narrow, "cull_narrow"}, std::pair{Stage::narrow_only, "narrow_only"},
+                                      std::pair{Stage::cull_narrow, "cull_narrow"},
+                                      std::pair{Stage::cull_narrow_no_prefilter, "cull_narrow_no_prefilter"},
+                                      std::pair{Stage::narrow_only, "narrow_only"},
                                       std::pair{Stage::reference, "reference"}}) {
       benchmark::RegisterBenchmark(("FaceShape/" + std::string(to_string(kind)) + "/" + name).c_str(),
                                    [kind, stage](benchmark::State& state) { BM_FaceShape(state, kind, stage); })

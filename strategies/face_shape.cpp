@@ -1,5 +1,6 @@
 #include "strategies/face_shape.hpp"
 
+#include "strategies/bvh/bvh.hpp"
 #include "strategies/narrowphase/exact_scaling.hpp"
 
 #include <ccd/ccd.h>
@@ -253,7 +254,7 @@ FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, dou
 }
 
 narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::NarrowPhase& narrow, const Shape& shape,
-                                                       const FaceShapeRows& rows, double thickness) {
+                                                       const FaceShapeRows& rows, double thickness, bool box_prefilter) {
   const narrowphase::RoundToNearest nearest;
   const auto& f0 = rows.face_t0;
   const auto& f1 = rows.face_t1;
@@ -273,9 +274,23 @@ narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::Narrow
   for (int j = 0; j < 8; ++j) largest = std::max({largest, c0[j].cwiseAbs().maxCoeff(), c1[j].cwiseAbs().maxCoeff()});
   // The bound has room for its own rounding (√3/2 < 1); nextafter covers the rounding of the sum with δ.
   const double grown = std::nextafter(thickness + (kCornerRounding * largest + kSubnormalRounding), kInfinity);
+  // Each elementary pair's two sides, swept over the step, in boxes widened by grown/2 with bvh::widened's rounding
+  // room: boxes that miss hold primitives that stay farther than `grown` apart, which cannot collide.
+  const double half = grown / 2;
+  auto boxes_meet = [&](bool vertex_face, const narrowphase::PairRows& pair) {
+    Box3 a, b;
+    const int split = vertex_face ? 1 : 2;
+    for (int i = 0; i < 4; ++i) {
+      (i < split ? a : b).extend(pair[i]);
+      (i < split ? a : b).extend(pair[i + 4]);
+    }
+    return bvh::widened(a, half).intersects(bvh::widened(b, half));
+  };
   for_each_box_surface_pair(f0, f1, c0, c1, [&](bool vertex_face, const narrowphase::PairRows& pair) {
+    if (box_prefilter && !boxes_meet(vertex_face, pair)) return false;
     merge(result, vertex_face ? narrow.vertex_face(pair, grown) : narrow.edge_edge(pair, grown));
-    return false;  // the earliest TOI needs every part
+    // The earliest TOI needs every part, unless one already touches at t = 0 (cloth resting on a box does).
+    return result.collides && result.toi == 0.0;
   });
   return result;
 }
@@ -329,7 +344,7 @@ void run_face_shape_stage(StepResult& result, const Scene& scene, const StepView
           ++local.boxes;
           const FaceShapePair pair{f, s};
           const FaceShapeRows rows = face_shape_rows(scene, step.x0, step.x1, pair);
-          if (cull_face_shape(shape, rows, thickness) == FaceShapeCull::certified_apart) {
+          if (cull_face_shape(shape, rows, thickness, shape.kind == ShapeKind::box) == FaceShapeCull::certified_apart) {
             ++local.culled;
             continue;
           }

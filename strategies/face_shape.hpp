@@ -40,9 +40,11 @@ enum class FaceShapeCull {
 FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, double thickness, bool use_gjk = true);
 
 /// Decides the pair with `narrow` (see above). The TOI is the earliest of the elementary tests' (0 for a face that
-/// may meet the solid box at t = 0).
+/// may meet the solid box at t = 0). With `box_prefilter` (the default), a box's 80 elementary pairs are tested
+/// only where their sides' swept boxes, widened by half the grown δ, meet; false skips that, for
+/// benchmarks/face_shape_benchmark.cpp to attribute it.
 narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::NarrowPhase& narrow, const Shape& shape,
-                                                       const FaceShapeRows& rows, double thickness);
+                                                       const FaceShapeRows& rows, double thickness, bool box_prefilter = true);
 
 /// The face-shape stage of a step, shared by `full`, `apccd` and the OpenCL strategies (on the host): for each shape
 /// object and each face of an object that may collide with it, a box test (the face's swept box widened by δ/2
