@@ -1,7 +1,9 @@
 #!/usr/bin/python3
-"""Prints the tables of reports/shapes/README.md from what reports/shapes/run.sh wrote.
+"""Prints the tables of reports/shapes/README.md from what reports/shapes/run.sh wrote (the summary records of each
+scene's results.jsonl, or results.jsonl.gz).
 Usage: /usr/bin/python3 reports/shapes/tables.py [RESULTS]   (default reports/shapes/results)"""
 
+import gzip
 import json
 import pathlib
 import sys
@@ -26,10 +28,14 @@ print("| scene | obstacles | strategy | ms/step | scene MiB/frame | strategy MiB
 print("|---|---|---|---|---|---|---|---|---|---|")
 contact = {}
 for scene in ("spinning-ball", "drape", "pile"):
-    path = results / scene / "summary.json"
+    path = results / scene / "results.jsonl"
+    if not path.exists():
+        path = results / scene / "results.jsonl.gz"
     if not path.exists():
         continue
-    for s in json.loads(path.read_text()):
+    text = gzip.decompress(path.read_bytes()).decode() if path.suffix == ".gz" else path.read_text()
+    records = [json.loads(line) for line in text.splitlines()]
+    for s in [r for r in records if r.get("record") == "summary"]:
         obstacles = "shape" if s["scene"].endswith("-shape") else "mesh"
         strategy = s["strategy"].split("+")[0]
         # One frame's positions and the faces (24 bytes a vertex, 12 a face): what the scene holds per frame.
