@@ -55,8 +55,19 @@ json describe_sequence(const fs::path& path, const std::string& type, const data
                        {"faces", object.num_faces},
                        {"frames", sequence.source(id).num_frames()},
                        {"source", sequence.source(id).describe()}});
+    if (object.shape) {
+      objects.back()["shape"] = to_string(object.shape->kind);
+      if (object.shape->kind == ShapeKind::sphere) {
+        objects.back()["radius"] = object.shape->radius;
+      } else {
+        const Vec3& h = object.shape->half_extents;
+        objects.back()["half_extents"] = {h.x(), h.y(), h.z()};
+      }
+    }
   }
   description["objects"] = objects;
+  // A shape's centre is a vertex no face uses: not a stray vertex of a mesh.
+  description["shape_centres"] = scene.shape_objects().size();
   json collidable = json::array();
   for (const auto& [a, b] : scene.collidable_pairs()) collidable.push_back({scene.object(a).name, scene.object(b).name});
   description["collidable"] = collidable;
@@ -186,8 +197,10 @@ json inspect_path(const fs::path& path) {
 namespace {
 
 void print_topology(const json& d, std::ostream& out, const std::string& indent) {
-  out << indent << "vertices " << d["vertices"] << " (unused " << d["unused_vertices"] << "), faces " << d["faces"]
-      << ", edges " << d["edges"] << " (boundary " << d["boundary_edges"] << ")\n";
+  const std::size_t centres = d.value("shape_centres", std::size_t{0});
+  out << indent << "vertices " << d["vertices"] << " (unused " << d["unused_vertices"].get<std::size_t>() - centres;
+  if (centres > 0) out << ", and " << centres << " shape centre" << (centres == 1 ? "" : "s");
+  out << "), faces " << d["faces"] << ", edges " << d["edges"] << " (boundary " << d["boundary_edges"] << ")\n";
 }
 
 void print_queries(const json& d, std::ostream& out, const std::string& indent) {
@@ -223,10 +236,17 @@ void print_inspection(const json& d, std::ostream& out) {
     print_topology(d, out, "  ");
     out << "  frames " << d["frames"] << ", steps " << d["steps"] << ", thickness " << d["thickness"] << "\n";
     for (const json& object : d["objects"]) {
-      out << "  object " << object["name"].get<std::string>() << ": " << object["kind"].get<std::string>()
-          << ", self-collision " << (object["self_collision"].get<bool>() ? "on" : "off") << ", vertices "
-          << object["vertices"] << ", faces " << object["faces"] << ", frames " << object["frames"] << " ("
-          << object["source"].get<std::string>() << ")\n";
+      out << "  object " << object["name"].get<std::string>() << ": " << object["kind"].get<std::string>();
+      if (object.contains("shape")) {
+        out << " (" << object["shape"].get<std::string>();
+        if (object.contains("radius")) out << ", radius " << object["radius"];
+        if (object.contains("half_extents")) out << ", half extents " << object["half_extents"].dump();
+        out << "), centre per frame";
+      } else {
+        out << ", self-collision " << (object["self_collision"].get<bool>() ? "on" : "off") << ", vertices "
+            << object["vertices"] << ", faces " << object["faces"];
+      }
+      out << ", frames " << object["frames"] << " (" << object["source"].get<std::string>() << ")\n";
     }
     for (const json& pair : d["collidable"]) {
       out << "  collidable " << pair[0].get<std::string>() << " <-> " << pair[1].get<std::string>() << "\n";

@@ -34,6 +34,24 @@ TEST(Cli, HelpExplainsTheCommands) {
   EXPECT_EQ(run_ccdbench("--version").exit_code, 0);
 }
 
+// A shape object is shown by its shape and size; its centre is not counted as a stray unused vertex.
+TEST(Cli, InspectShowsShapesAndTheirSize) {
+  testing::TempDir dir;
+  ::setenv("CCDBENCH_CACHE_DIR", (dir / "cache").c_str(), 1);
+  const CommandResult generated = run_ccdbench("generate fold --resolution 4 --frames 3 --set obstacles=shape --out '" +
+                                               (dir / "fold").string() + "'");
+  ASSERT_EQ(generated.exit_code, 0) << generated.output;
+  const CommandResult inspected = run_ccdbench("inspect '" + (dir / "fold").string() + "'");
+  ASSERT_EQ(inspected.exit_code, 0) << inspected.output;
+  EXPECT_NE(inspected.output.find("(unused 0, and 2 shape centres)"), std::string::npos) << inspected.output;
+  EXPECT_NE(inspected.output.find("object ball: shape (sphere, radius "), std::string::npos) << inspected.output;
+  EXPECT_NE(inspected.output.find("object blade: shape (box, half extents ["), std::string::npos) << inspected.output;
+  const nlohmann::json json = inspect_json(dir / "fold");
+  EXPECT_EQ(json["objects"][2]["shape"], "sphere");
+  EXPECT_EQ(run_ccdbench("generate fold --frames 3 --set obstacles=cone --out '" + (dir / "x").string() + "'").exit_code, 2);
+  ::unsetenv("CCDBENCH_CACHE_DIR");
+}
+
 TEST(Cli, InspectPrintsTheDataReadmeCountsForEveryFileOfTheSharedData) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   const auto queries = inspect_json(data / "sample-queries");
