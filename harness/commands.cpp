@@ -404,8 +404,20 @@ int run_generate(const GenerateOptions& options, std::ostream& out) {
       used = 0;
     }
     if (used == 0 || used != value.size()) {
-      const auto choice = datasets::scene_parameter_choice(options.name, setting.substr(0, equals), value);
-      if (!choice) throw std::invalid_argument("--set " + setting + ": the value must be a number or one of the parameter's choices");
+      const std::string name = setting.substr(0, equals);
+      const auto choice = datasets::scene_parameter_choice(options.name, name, value);
+      if (!choice) {
+        // An unknown scene or parameter: resolve_scene_parameters says so and names the scene's parameters.
+        datasets::resolve_scene_parameters(options.name, {{name, 0.0}});
+        std::string choices;
+        for (const datasets::ProceduralSceneInfo& info : datasets::procedural_scenes()) {
+          for (const datasets::SceneParameter& parameter : info.parameters) {
+            if (info.name != options.name || parameter.name != name) continue;
+            for (const std::string& c : parameter.choices) choices += (choices.empty() ? "" : ", ") + c;
+          }
+        }
+        throw std::invalid_argument("--set " + setting + ": the value must be a number" + (choices.empty() ? "" : " or one of: " + choices));
+      }
       number = *choice;
     }
     parameters[setting.substr(0, equals)] = number;

@@ -48,7 +48,11 @@ TEST(Cli, InspectShowsShapesAndTheirSize) {
   EXPECT_NE(inspected.output.find("object blade: shape (box, half extents ["), std::string::npos) << inspected.output;
   const nlohmann::json json = inspect_json(dir / "fold");
   EXPECT_EQ(json["objects"][2]["shape"], "sphere");
-  EXPECT_EQ(run_ccdbench("generate fold --frames 3 --set obstacles=cone --out '" + (dir / "x").string() + "'").exit_code, 2);
+  const CommandResult cone = run_ccdbench("generate fold --frames 3 --set obstacles=cone --out '" + (dir / "x").string() + "'");
+  EXPECT_EQ(cone.exit_code, 2);
+  EXPECT_NE(cone.output.find("--set obstacles=cone: the value must be a number or one of: mesh, shape"), std::string::npos) << cone.output;
+  const CommandResult flag = run_ccdbench("generate flag --frames 3 --set obstacles=shape --out '" + (dir / "x").string() + "'");
+  EXPECT_NE(flag.output.find("scene 'flag' has no parameter 'obstacles'"), std::string::npos) << flag.output;
   ::unsetenv("CCDBENCH_CACHE_DIR");
 }
 
