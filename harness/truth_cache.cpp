@@ -213,30 +213,24 @@ CachedTruth read_truth_file(const std::filesystem::path& path, const Scene& scen
   };
   CachedTruth cached;
   cached.with_toi = with_toi;
-  VertexFacePair previous_vf{};
-  for (std::uint64_t i = 0; i < vf; ++i, p += kVertexFaceBytes) {
-    const VertexFacePair pair{get_u32(p), get_u32(p + 4)};
-    check_vertex_face(path, scene, i, pair);
-    if (i > 0 && !(previous_vf < pair)) throw InputError(path, pair_where("vertex-face", i), "pairs out of order or repeated");
-    cached.collisions.add(pair, next_time("vertex-face", i));
-    previous_vf = pair;
-  }
-  EdgeEdgePair previous_ee{};
-  for (std::uint64_t i = 0; i < ee; ++i, p += kEdgeEdgeBytes) {
-    const EdgeEdgePair pair{{get_u32(p), get_u32(p + 4)}, {get_u32(p + 8), get_u32(p + 12)}};
-    check_edge_edge(path, scene, i, pair);
-    if (i > 0 && !(previous_ee < pair)) throw InputError(path, pair_where("edge-edge", i), "pairs out of order or repeated");
-    cached.collisions.add(pair, next_time("edge-edge", i));
-    previous_ee = pair;
-  }
-  FaceShapePair previous_fs{};
-  for (std::uint64_t i = 0; i < fs; ++i, p += kFaceShapeBytes) {
-    const FaceShapePair pair{get_u32(p), get_u32(p + 4)};
-    check_face_shape(path, scene, i, pair);
-    if (i > 0 && !(previous_fs < pair)) throw InputError(path, pair_where("face-shape", i), "pairs out of order or repeated");
-    cached.collisions.add(pair, next_time("face-shape", i));
-    previous_fs = pair;
-  }
+  // Each list in turn: decoded, checked against the scene, sorted without repeats.
+  auto read_pairs = [&](std::uint64_t count, std::size_t pair_bytes, const char* kind, auto decode, auto check) {
+    decltype(decode(p)) previous{};
+    for (std::uint64_t i = 0; i < count; ++i, p += pair_bytes) {
+      const auto pair = decode(p);
+      check(path, scene, i, pair);
+      if (i > 0 && !(previous < pair)) throw InputError(path, pair_where(kind, i), "pairs out of order or repeated");
+      cached.collisions.add(pair, next_time(kind, i));
+      previous = pair;
+    }
+  };
+  read_pairs(vf, kVertexFaceBytes, "vertex-face", [](const unsigned char* q) { return VertexFacePair{get_u32(q), get_u32(q + 4)}; },
+             check_vertex_face);
+  read_pairs(ee, kEdgeEdgeBytes, "edge-edge", [](const unsigned char* q) {
+    return EdgeEdgePair{{get_u32(q), get_u32(q + 4)}, {get_u32(q + 8), get_u32(q + 12)}};
+  }, check_edge_edge);
+  read_pairs(fs, kFaceShapeBytes, "face-shape", [](const unsigned char* q) { return FaceShapePair{get_u32(q), get_u32(q + 4)}; },
+             check_face_shape);
   cached.collisions.normalize();
   return cached;
 }
