@@ -232,6 +232,17 @@ bool may_meet_box_at_start(const Shape& shape, const FaceShapeRows& rows) {
   return !certified_apart(std::span<const Vec3>(scaled->relative.data(), 3), scaled->shape, 0.0);
 }
 
+/// The centre's swept box widened by the shape's size (R, or h per axis) plus δ/2, with bvh::widened's rounding
+/// room: a face whose δ/2-widened box misses it is farther than δ from the shape all step.
+Box3 swept_shape_box(const Shape& shape, const Vec3& c0, const Vec3& c1, double thickness) {
+  Box3 box;
+  box.extend(c0);
+  box.extend(c1);
+  Vec3 widening;
+  for (int k = 0; k < 3; ++k) widening[k] = (shape.kind == ShapeKind::sphere ? shape.radius : shape.half_extents[k]) + thickness / 2;
+  return bvh::widened(box, widening);
+}
+
 }  // namespace
 
 double radius_plus_thickness(double radius, double thickness) {
@@ -294,28 +305,6 @@ narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::Narrow
   });
   return result;
 }
-
-}  // namespace ccd::strategies
-
-namespace ccd::strategies {
-namespace {
-
-/// The centre's swept box widened by the shape's size (R, or h per axis) plus δ/2, with the rounding room of
-/// bvh::widened per axis: a face whose δ/2-widened box misses it is farther than δ from the shape all step.
-Box3 swept_shape_box(const Shape& shape, const Vec3& c0, const Vec3& c1, double thickness) {
-  Box3 box;
-  box.extend(c0);
-  box.extend(c1);
-  Vec3 widening;
-  for (int k = 0; k < 3; ++k) widening[k] = (shape.kind == ShapeKind::sphere ? shape.radius : shape.half_extents[k]) + thickness / 2;
-  const auto room = [&](const Vec3& corner) {
-    return Vec3((corner.cwiseAbs() + widening) * bvh::kBoxRoundingMargin + widening +
-                Vec3::Constant(std::numeric_limits<double>::denorm_min()));
-  };
-  return Box3(box.min() - room(box.min()), box.max() + room(box.max()));
-}
-
-}  // namespace
 
 void run_face_shape_stage(StepResult& result, const Scene& scene, const StepView& step, const narrowphase::NarrowPhase& narrow,
                           bool audit) {

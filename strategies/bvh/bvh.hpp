@@ -24,13 +24,17 @@ Box3 swept_face_box(const Face& face, std::span<const Vec3> x0, std::span<const 
 /// the smallest subnormal covers corners that underflow. So two primitives within 2w always get overlapping boxes.
 inline constexpr double kBoxRoundingMargin = 0x1p-50;
 
-/// Widens `box` by `widening` on every side, with the rounding room above.
-inline Box3 widened(const Box3& box, double widening) {
+/// Widens `box` by widening[k] on both sides along axis k, with the rounding room above.
+inline Box3 widened(const Box3& box, const Vec3& widening) {
   const auto room = [&](const Vec3& corner) {
-    return Vec3((corner.cwiseAbs().array() + widening) * kBoxRoundingMargin + widening + std::numeric_limits<double>::denorm_min());
+    return Vec3((corner.cwiseAbs().array() + widening.array()) * kBoxRoundingMargin + widening.array() +
+                std::numeric_limits<double>::denorm_min());
   };
   return Box3(box.min() - room(box.min()), box.max() + room(box.max()));
 }
+
+/// Widens `box` by `widening` on every side, with the rounding room above.
+inline Box3 widened(const Box3& box, double widening) { return widened(box, Vec3::Constant(widening)); }
 
 class TriangleBvh {
  public:
