@@ -688,14 +688,8 @@ void write_scene_json(const std::filesystem::path& out, const std::string& name,
   nlohmann::json objects = nlohmann::json::array();
   for (const OutputObject& object : setup.objects) {
     if (object.shape) {
-      nlohmann::json entry = {{"name", object.name}, {"kind", "shape"}, {"shape", std::string(to_string(object.shape->kind))},
-                              {"track", {{"cache", "cache/" + object.name + ".frames"}}}};
-      if (object.shape->kind == ShapeKind::sphere) {
-        entry["radius"] = object.shape->radius;
-      } else {
-        const Vec3& h = object.shape->half_extents;
-        entry["half_extents"] = {h.x(), h.y(), h.z()};
-      }
+      nlohmann::json entry = {{"name", object.name}, {"kind", "shape"}, {"track", {{"cache", "cache/" + object.name + ".frames"}}}};
+      put_shape_keys(entry, *object.shape);
       objects.push_back(entry);
       continue;
     }

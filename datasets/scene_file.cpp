@@ -159,6 +159,15 @@ SceneSequence scene_from_generator(const json& block, const std::filesystem::pat
 
 }  // namespace
 
+void put_shape_keys(json& object, const Shape& shape) {
+  object["shape"] = std::string(to_string(shape.kind));
+  if (shape.kind == ShapeKind::sphere) {
+    object["radius"] = shape.radius;
+  } else {
+    object["half_extents"] = {shape.half_extents.x(), shape.half_extents.y(), shape.half_extents.z()};
+  }
+}
+
 void register_scene_generator(const std::string& name, SceneGeneratorFunction generator) {
   std::lock_guard lock(generator_registry_mutex());
   generator_registry()[name] = std::move(generator);

@@ -55,15 +55,7 @@ json describe_sequence(const fs::path& path, const std::string& type, const data
                        {"faces", object.num_faces},
                        {"frames", sequence.source(id).num_frames()},
                        {"source", sequence.source(id).describe()}});
-    if (object.shape) {
-      objects.back()["shape"] = to_string(object.shape->kind);
-      if (object.shape->kind == ShapeKind::sphere) {
-        objects.back()["radius"] = object.shape->radius;
-      } else {
-        const Vec3& h = object.shape->half_extents;
-        objects.back()["half_extents"] = {h.x(), h.y(), h.z()};
-      }
-    }
+    if (object.shape) datasets::put_shape_keys(objects.back(), *object.shape);
   }
   description["objects"] = objects;
   // A shape's centre is a vertex no face uses: not a stray vertex of a mesh.
