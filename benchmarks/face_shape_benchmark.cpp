@@ -12,7 +12,7 @@
 
 #include "reference/face_shape.hpp"
 #include "strategies/face_shape.hpp"
-#include "strategies/narrowphase/narrow_phase.hpp"
+#include "strategies/narrowphase/registry.hpp"
 
 #include <benchmark/benchmark.h>
 

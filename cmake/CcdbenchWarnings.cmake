@@ -13,3 +13,20 @@ function(ccd_add_library name)
   target_include_directories(ccd_${name} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(ccd_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ccd::warnings ${ARG_PRIVATE_DEPS})
 endfunction()
+
+# Helper: a registry whose list is the build's (strategies/narrowphase/registry.hpp, strategies/registry.hpp).
+# Compiles FILE.cpp for each FILE into `target` and writes generated/ccd/<list_name>.inc, one line
+# `CCD_<LIST_NAME in capitals, without its final S>(BASENAME)` per file, which the registry includes to call each
+# file's entries function; so adding an entry is one new file and one line in its folder's CMakeLists.txt.
+function(ccd_add_registry target list_name)
+  string(TOUPPER "${list_name}" macro)
+  string(REGEX REPLACE "S$" "" macro "${macro}")
+  set(lines "// Generated from ${CMAKE_CURRENT_LIST_FILE}: do not edit.\n")
+  foreach(file IN LISTS ARGN)
+    target_sources(${target} PRIVATE ${file}.cpp)
+    get_filename_component(base ${file} NAME)
+    string(APPEND lines "CCD_${macro}(${base})\n")
+  endforeach()
+  file(CONFIGURE OUTPUT ${PROJECT_BINARY_DIR}/generated/ccd/${list_name}.inc CONTENT "${lines}")
+  target_link_libraries(${target} PRIVATE ccd::config)
+endfunction()

@@ -9,7 +9,7 @@
 #include "harness/query_scoring.hpp"
 #include "harness/run.hpp"
 #include "harness/work_queue.hpp"
-#include "strategies/strategy.hpp"
+#include "strategies/registry.hpp"
 
 
 #include <CLI/CLI.hpp>

@@ -5,12 +5,8 @@
 #include "harness/json_output.hpp"
 #include "harness/statistics.hpp"
 #include "reference/elementary_pair.hpp"
-#include "strategies/narrowphase/narrow_phase.hpp"
-
-#include "ccd/config.hpp"
-#if CCDBENCH_WITH_FCL
-#include "strategies/fcl/fcl_elementary.hpp"
-#endif
+#include "strategies/narrowphase/registry.hpp"
+#include "strategies/registry.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -35,7 +31,7 @@ reference::Decision decide_exactly(const datasets::Query& query, datasets::Query
 /// The reference on the query's exact rationals: the harness calling the oracle, not a strategy's narrow phase.
 class ExactQueryMethod final : public QueryMethod {
  public:
-  std::string name() const override { return "exact"; }
+  std::string name() const override { return kExactMethod; }
   QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
     return {decide_exactly(query, kind, thickness, false).collides, std::numeric_limits<double>::quiet_NaN()};
   }
@@ -58,19 +54,20 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
   std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
 };
 
-#if CCDBENCH_WITH_FCL
-/// FCL's own continuous tests (what the `fcl` strategy runs), δ = 0 only.
-class FclQueryMethod final : public QueryMethod {
+/// A strategy's elementary tests of its own (fcl's, StrategyEntry::elementary_test), at δ = 0 only.
+class OwnTestsQueryMethod final : public QueryMethod {
  public:
-  std::string name() const override { return "fcl"; }
+  explicit OwnTestsQueryMethod(const strategies::StrategyEntry& strategy) : strategy_(strategy) {}
+  std::string name() const override { return strategy_.name; }
   QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
-    if (thickness > 0) throw std::invalid_argument("method fcl has no thickness: run it with --thickness 0");
-    return {kind == datasets::QueryKind::vertex_face ? strategies::fcl_vertex_face(query.rounded)
-                                                     : strategies::fcl_edge_edge(query.rounded),
-            std::numeric_limits<double>::quiet_NaN()};  // FCL's time is not reported through its bool tests
+    if (thickness > 0) throw std::invalid_argument("method " + strategy_.name + " has no thickness: run it with --thickness 0");
+    // No time: such tests answer yes or no.
+    return {strategy_.elementary_test(query.rounded, kind == datasets::QueryKind::vertex_face), std::numeric_limits<double>::quiet_NaN()};
   }
+
+ private:
+  const strategies::StrategyEntry& strategy_;
 };
-#endif
 
 }  // namespace
 
@@ -79,24 +76,24 @@ reference::PairKind reference_kind(datasets::QueryKind kind) {
 }
 
 std::unique_ptr<QueryMethod> make_query_method(const std::string& spec) {
-  if (spec == "exact") return std::make_unique<ExactQueryMethod>();
-#if CCDBENCH_WITH_FCL
-  if (spec == "fcl") return std::make_unique<FclQueryMethod>();
-#endif
+  if (spec == kExactMethod) return std::make_unique<ExactQueryMethod>();
   const std::string name = spec.substr(0, spec.find(':'));
-  const auto names = narrowphase::narrow_phase_names();
-  if (std::find(names.begin(), names.end(), name) == names.end()) {
-    std::string known;
-    for (const std::string& n : query_method_names()) known += (known.empty() ? "" : ", ") + n;
-    throw std::invalid_argument("unknown method '" + spec + "' (known: " + known + ")");
+  if (narrowphase::is_narrow_phase(name)) return std::make_unique<NarrowPhaseQueryMethod>(narrowphase::make_narrow_phase_from_spec(spec));
+  for (const strategies::StrategyEntry& strategy : strategies::strategy_entries()) {
+    if (strategy.name == spec && strategy.elementary_test) return std::make_unique<OwnTestsQueryMethod>(strategy);
   }
-  return std::make_unique<NarrowPhaseQueryMethod>(narrowphase::make_narrow_phase_from_spec(spec));
+  std::string known;
+  for (const std::string& n : query_method_names()) known += (known.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("unknown method '" + spec + "' (known: " + known + ")");
 }
 
 std::vector<std::string> query_method_names() {
-  std::vector<std::string> names = narrowphase::narrow_phase_names();
-  names.push_back("exact");
-  if (CCDBENCH_WITH_FCL) names.push_back("fcl");
+  std::vector<std::string> names;
+  for (const narrowphase::NarrowPhaseEntry& entry : narrowphase::narrow_phases()) names.push_back(entry.name);
+  names.push_back(kExactMethod);
+  for (const strategies::StrategyEntry& strategy : strategies::strategy_entries()) {
+    if (strategy.elementary_test) names.push_back(strategy.name);
+  }
   return names;
 }
 
@@ -342,13 +339,12 @@ std::vector<std::string> sweep_methods(const std::vector<std::string>& methods) 
   std::vector<std::string> swept;
   for (const std::string& method : methods) {
     const std::string name = method.substr(0, method.find(':'));
-    if (name == "conservative") {
-      for (const char* tolerance : {"1e-2", "1e-3", "1e-4", "1e-5", "1e-6", "1e-7"}) swept.push_back("conservative:tolerance=" + std::string(tolerance));
-    } else if (name == "cubic32" || name == "cubic64" || name == "advancement") {
-      for (const char* eta : {"0", "1e-8", "1e-6", "1e-4", "1e-2"}) swept.push_back(name + ":eta=" + eta);
-    } else {
+    if (!narrowphase::is_narrow_phase(name) || narrowphase::find_narrow_phase(name).sweep_key.empty()) {
       swept.push_back(method);
+      continue;
     }
+    const narrowphase::NarrowPhaseEntry& entry = narrowphase::find_narrow_phase(name);
+    for (const std::string& value : entry.sweep_values) swept.push_back(name + ":" + entry.sweep_key + "=" + value);
   }
   return swept;
 }

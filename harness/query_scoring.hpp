@@ -36,8 +36,11 @@ class QueryMethod {
   virtual QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const = 0;
 };
 
-/// Methods by spec: `exact` (the reference: certified filter, then exact root isolation, on the rationals) or a
-/// narrow phase `NAME[:key=value...]` (cubic32, cubic64, conservative, advancement) on the rounded doubles.
+/// The method that is the reference itself (certified filter, then exact root isolation, on the rationals).
+inline constexpr const char* kExactMethod = "exact";
+
+/// Methods by spec: `exact`, a narrow phase of the registry `NAME[:key=value...]` on the rounded doubles, or a
+/// strategy with elementary tests of its own (fcl), by its name.
 /// @throws std::invalid_argument naming the known methods for an unknown name or parameter.
 std::unique_ptr<QueryMethod> make_query_method(const std::string& spec);
 std::vector<std::string> query_method_names();

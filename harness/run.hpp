@@ -26,7 +26,6 @@ struct SceneSource {
 /// 2 cores, truth included), `paper` (tens of thousands of triangles, a hundred frames).
 /// @throws std::invalid_argument for an unknown suite.
 std::vector<SceneSource> suite_scenes(const std::string& suite);
-std::vector<std::string> suite_names();
 
 /// The label of a scene given as a file: the folder's name for FOLDER or FOLDER/scene.json, else the file's name.
 std::string scene_file_label(const std::filesystem::path& path);

@@ -2,7 +2,7 @@
 
 #include "harness/query_scoring.hpp"
 #include "reference/elementary_pair.hpp"
-#include "strategies/narrowphase/narrow_phase.hpp"
+#include "strategies/narrowphase/registry.hpp"
 
 #include <nlohmann/json.hpp>
 

@@ -7,8 +7,6 @@
 #include "core/step.hpp"
 #include "strategies/bvh/bvh.hpp"
 
-#include <map>
-#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -46,7 +44,7 @@ struct StepResult {
   std::vector<bvh::TrianglePair> triangle_pairs;
 };
 
-/// How answers are judged (DESIGN.md §3). By triangle pairs: a truth pair counts as found when a reported triangle
+/// How answers are judged (DESIGN.md §3; each registry entry says which, registry.hpp). By triangle pairs: a truth pair counts as found when a reported triangle
 /// pair contains both its primitives, and a false alarm is a reported triangle pair containing no truth pair.
 enum class Judging { elementary_pairs, triangle_pairs };
 
@@ -62,20 +60,6 @@ class Strategy {
   virtual void init(const Scene& scene, std::span<const Vec3> first_frame) = 0;
   /// One step, in order. With `audit`, also returns the elementary pairs tested (outside the timed stages).
   virtual StepResult step(const StepView& step, bool audit) = 0;
-  virtual Judging judging() const { return Judging::elementary_pairs; }
 };
-
-/// A spec `NAME[+NARROW][:key=value...]`, split. Keys the strategy does not know go to the narrow phase.
-struct StrategySpec {
-  std::string name;
-  std::string narrow_phase = "conservative";
-  std::map<std::string, std::string> parameters;
-};
-StrategySpec parse_strategy_spec(const std::string& spec);
-
-/// Makes a strategy from its spec (`full`, `full+cubic64`, `brute`, ...).
-/// @throws std::invalid_argument naming the known strategies, or the unknown parameter, or an unavailable backend.
-std::unique_ptr<Strategy> make_strategy(const std::string& spec);
-std::vector<std::string> strategy_names();
 
 }  // namespace ccd::strategies

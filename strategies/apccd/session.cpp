@@ -12,13 +12,6 @@
 namespace ccd::strategies {
 namespace {
 
-bool parse_switch_or(const std::string& key, const std::string& value, const std::string& allowed) {
-  if (value == "on" || value == "true" || value == "1") return true;
-  if (value == "off" || value == "false" || value == "0") return false;
-  throw std::invalid_argument("apccd: " + key + "=" + value + " must be " + allowed);
-}
-bool parse_switch(const std::string& key, const std::string& value) { return parse_switch_or(key, value, "on or off"); }
-
 const char* history_name(HistoryMode mode) {
   switch (mode) {
     case HistoryMode::off: return "off";
@@ -28,14 +21,10 @@ const char* history_name(HistoryMode mode) {
   return "off";
 }
 
-double parse_number(const std::string& key, const std::string& value, narrowphase::SpecRange range) {
-  return narrowphase::parse_spec_number("apccd", key, value, range);
-}
-
 // Ranges of apccd's keys. A session longer than 1000 frames is far past any scene's coherence (and nf stays an
 // exact int); budgets are multiples of motion, 1e6 of them already cover any scene; dangling_max is a fraction of
 // the vertices; pending_max a ratio of pair counts; inflation_max a multiple of the mean edge length (1e9: no cap).
-constexpr narrowphase::SpecRange kSessionFrames{1, 1000, true};
+constexpr narrowphase::SpecRange kSessionFrames{1, 1000};
 constexpr narrowphase::SpecRange kMotionFactor{0, 1e6};
 constexpr narrowphase::SpecRange kFraction{0, 1};
 constexpr narrowphase::SpecRange kPendingRatio{1, 1e9};
@@ -81,37 +70,40 @@ int orientation(const MeshTopology&, std::span<const Vec3> x, const EdgeEdgePair
 
 }  // namespace
 
-std::vector<std::string> apccd_parameter_names() {
-  return {"skip", "nf_min", "nf_max", "local", "global", "dangling_max", "pending_max", "inflation_max", "heuristic",
-          "history", "object_pairs"};
+std::vector<narrowphase::KeySpec> apccd_keys() {
+  using narrowphase::KeySpec;
+  const ApccdSettings defaults;
+  return {KeySpec::on_off("skip", defaults.skip, "skipping-frame sessions (off: every step is a session start)"),
+          KeySpec::integer("nf_min", defaults.nf_min, kSessionFrames, "shortest session, in frames"),
+          KeySpec::integer("nf_max", defaults.nf_max, kSessionFrames, "longest session, in frames"),
+          KeySpec::number("local", defaults.local, kMotionFactor, "inflation by a vertex's own speed, per frame left in the session"),
+          KeySpec::number("global", defaults.global, kMotionFactor, "inflation by its object's mean speed, per frame left in the session"),
+          KeySpec::number("dangling_max", defaults.dangling_max, kFraction, "fraction of dangling vertices that ends a session"),
+          KeySpec::number("pending_max", defaults.pending_max, kPendingRatio, "pending pairs per admissible pair that ends a session"),
+          KeySpec::number("inflation_max", defaults.inflation_max, kInflationCap,
+                          "a session is shortened so the mean budget stays within this fraction of the mean edge length"),
+          KeySpec::on_off("heuristic", defaults.heuristic, "the front end's distance heuristic"),
+          KeySpec::choice("history", {"off", "on", "persistent"}, history_name(defaults.history),
+                          "orientation history: off, on (pairs tested last step), persistent (the paper's: every pair tested since the start)",
+                          {{"step", "on"}, {"true", "on"}, {"1", "on"}, {"false", "off"}, {"0", "off"}}),
+          KeySpec::choice("object_pairs", {"fresh", "session"}, defaults.fresh_object_pairs ? "fresh" : "session",
+                          "pairs across objects from tight trees refitted every step (fresh) or from the session's inflated trees")};
 }
 
-ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters) {
+ApccdSettings read_apccd_settings(const narrowphase::SpecReader& keys) {
   ApccdSettings settings;
-  auto take = [&](const char* key, auto apply) {
-    const auto it = parameters.find(key);
-    if (it == parameters.end()) return;
-    apply(it->second);
-    parameters.erase(it);
-  };
-  take("skip", [&](const std::string& v) { settings.skip = parse_switch("skip", v); });
-  take("heuristic", [&](const std::string& v) { settings.heuristic = parse_switch("heuristic", v); });
-  take("history", [&](const std::string& v) {
-    settings.history = v == "persistent" ? HistoryMode::persistent
-                       : v == "step"     ? HistoryMode::step
-                                         : (parse_switch_or("history", v, "on, off, step or persistent") ? HistoryMode::step : HistoryMode::off);
-  });
-  take("object_pairs", [&](const std::string& v) {
-    if (v != "fresh" && v != "session") throw std::invalid_argument("apccd: object_pairs=" + v + " must be fresh or session");
-    settings.fresh_object_pairs = v == "fresh";
-  });
-  take("nf_min", [&](const std::string& v) { settings.nf_min = static_cast<int>(parse_number("nf_min", v, kSessionFrames)); });
-  take("nf_max", [&](const std::string& v) { settings.nf_max = static_cast<int>(parse_number("nf_max", v, kSessionFrames)); });
-  take("local", [&](const std::string& v) { settings.local = parse_number("local", v, kMotionFactor); });
-  take("global", [&](const std::string& v) { settings.global = parse_number("global", v, kMotionFactor); });
-  take("dangling_max", [&](const std::string& v) { settings.dangling_max = parse_number("dangling_max", v, kFraction); });
-  take("pending_max", [&](const std::string& v) { settings.pending_max = parse_number("pending_max", v, kPendingRatio); });
-  take("inflation_max", [&](const std::string& v) { settings.inflation_max = parse_number("inflation_max", v, kInflationCap); });
+  settings.skip = keys.choice("skip") == "on";
+  settings.heuristic = keys.choice("heuristic") == "on";
+  const std::string history = keys.choice("history");
+  settings.history = history == "persistent" ? HistoryMode::persistent : history == "on" ? HistoryMode::step : HistoryMode::off;
+  settings.fresh_object_pairs = keys.choice("object_pairs") == "fresh";
+  settings.nf_min = static_cast<int>(keys.integer("nf_min"));
+  settings.nf_max = static_cast<int>(keys.integer("nf_max"));
+  settings.local = keys.number("local");
+  settings.global = keys.number("global");
+  settings.dangling_max = keys.number("dangling_max");
+  settings.pending_max = keys.number("pending_max");
+  settings.inflation_max = keys.number("inflation_max");
   if (settings.nf_min > settings.nf_max) throw std::invalid_argument("apccd: nf_min must not exceed nf_max");
   return settings;
 }

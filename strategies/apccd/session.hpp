@@ -7,6 +7,7 @@
 
 #include "core/scene.hpp"
 #include "core/step.hpp"
+#include "strategies/narrowphase/spec.hpp"
 #include "strategies/strategy.hpp"
 
 #include <cstdint>
@@ -53,12 +54,11 @@ struct ApccdSettings {
   bool fresh_object_pairs = true;
 };
 
-/// The keys apccd itself accepts (the rest of a spec's keys are its narrow phase's and its backend's).
-std::vector<std::string> apccd_parameter_names();
+/// The keys apccd itself declares (its backend's and its narrow phase's are declared by them).
+std::vector<narrowphase::KeySpec> apccd_keys();
 
-/// Reads the apccd keys from `parameters`, removing them (what remains is the narrow phase's).
-/// @throws std::invalid_argument for a malformed or out-of-range value.
-ApccdSettings take_apccd_settings(std::map<std::string, std::string>& parameters);
+/// The settings from apccd's keys. @throws std::invalid_argument for nf_min > nf_max.
+ApccdSettings read_apccd_settings(const narrowphase::SpecReader& keys);
 
 /// The resolved name: "apccd+NARROW:skip=on:..." with every key, numbers as format_spec_number prints them.
 std::string apccd_name(const ApccdSettings& settings, const std::string& narrow_phase_name);

@@ -1,7 +1,39 @@
-#include "strategies/fcl/fcl_strategies.hpp"
+/// @file
+/// FCL (the Flexible Collision Library) as a peer would use it for deforming meshes (DESIGN.md §3).
+///
+/// Both strategies keep one `fcl::BVHModel` per scene object, built once from frame 0. Each step updates a model
+/// with `beginUpdateModel` / `updateSubModel` / `endUpdateModel(refit, bottom-up)`, after which its leaves bound a
+/// triangle's old and new corners. Static objects are updated once at init and never again. Traversal is FCL's own:
+/// `fcl::detail::selfCollide` for an object with self-collision (a model against itself, each pair of distinct
+/// leaves once; identical triangles are never paired) and `fcl::detail::collide` for a collidable pair of objects.
+/// FCL's traversal is sequential, so these strategies use one thread whatever `--threads` says, except for the
+/// project's own narrow phase in `fcl-bvh`.
+///
+/// - `fcl`: FCL's `MeshContinuousCollisionTraversalNode` and its 6 VF + 9 EE cubic tests per triangle pair, with the
+///   contact limit raised so that every colliding triangle pair is reported. FCL answers with triangle pairs, so the
+///   strategy is judged at the triangle-pair level (Strategy::judging). Pairs of triangles that share a vertex are
+///   tested like any other: FCL's own tests reject the elementary pairs that share a vertex (their four points are
+///   coplanar at every t, so every coefficient of the cubic is exactly zero), and the pairs that share none are what
+///   a fold contact needs.
+/// - `fcl-bvh`: FCL's hierarchy and traversal as the broad phase only; its candidate triangle pairs go through the
+///   project's expansion and narrow phases, so culling and elementary tests are judged apart.
+///
+/// FCL has no thickness and its volumes are not inflated: both refuse δ > 0 (init throws).
+/// Key: `bv` = aabb | obbrss | kdop24. The default is aabb, what a peer picks for a mesh refitted every step: its
+/// refit is one min/max pass (OBBRSS fits oriented boxes again: 6.2 ms against 0.23 ms per step on the default
+/// suite's spinning-ball), and its boxes hold touching contacts exactly. OBBRSS is not conservative at δ = 0: on the default
+/// suite's pile, fcl-bvh:bv=obbrss culled one touching edge pair of two cloths lying flat (the fitted boxes are
+/// flat too, and rounding separates them).
 
+#include "ccd/config.hpp"
+#include "strategies/registry.hpp"
+
+#include <stdexcept>
+
+#if CCDBENCH_WITH_FCL
 #include "core/assignment.hpp"
 #include "strategies/elementary_tests.hpp"
+#include "strategies/fcl/fcl_elementary.hpp"
 
 // utility.h declares fcl::fit, which BVH_model-inl.h uses without including it.
 #include <fcl/math/bv/utility.h>
@@ -16,9 +48,10 @@
 
 #include <algorithm>
 #include <limits>
-#include <stdexcept>
+#endif
 
 namespace ccd::strategies {
+#if CCDBENCH_WITH_FCL
 namespace {
 
 using FclVector = fcl::Vector3<double>;
@@ -167,7 +200,6 @@ class FclContinuous final : public Strategy {
   explicit FclContinuous(std::string bv_name) : bv_name_(std::move(bv_name)) {}
 
   std::string name() const override { return "fcl:bv=" + bv_name_; }
-  Judging judging() const override { return Judging::triangle_pairs; }
 
   void check_scene(const Scene& scene) const override { refuse_thickness(scene, "fcl"); }
 
@@ -307,28 +339,35 @@ std::unique_ptr<Strategy> with_bounding_volume(const std::string& bv, Args&&... 
   throw std::invalid_argument("unknown FCL bounding volume '" + bv + "' (known: aabb, obbrss, kdop24)");
 }
 
-std::string take_bounding_volume(std::map<std::string, std::string>& parameters) {
-  const auto it = parameters.find("bv");
-  if (it == parameters.end()) return "aabb";
-  std::string bv = it->second;
-  parameters.erase(it);
-  return bv;
-}
-
 }  // namespace
+#endif
 
-std::unique_ptr<Strategy> make_fcl(std::map<std::string, std::string> parameters) {
-  const std::string bv = take_bounding_volume(parameters);
-  if (!parameters.empty()) {
-    throw std::invalid_argument("fcl has no parameter '" + parameters.begin()->first +
-                                "' (its only key is bv; it uses FCL's own elementary tests, so it takes no narrow phase)");
+std::vector<StrategyEntry> fcl_strategies_entries() {
+  const narrowphase::KeySpec bv = narrowphase::KeySpec::choice(
+      "bv", {"aabb", "obbrss", "kdop24"}, "aabb", "FCL's bounding volume (aabb: what a peer refits every step; obbrss is not conservative at δ = 0)");
+  StrategyEntry fcl;
+  fcl.name = "fcl";
+  fcl.help = "FCL as a peer uses it: its BVH refitted every step and its own continuous VF/EE tests (δ = 0; fcl-bvh+NARROW: ours)";
+  fcl.keys = {bv};
+  fcl.takes_narrow_phase = false;
+  fcl.judging = Judging::triangle_pairs;
+  StrategyEntry fcl_bvh;
+  fcl_bvh.name = "fcl-bvh";
+  fcl_bvh.help = "FCL's BVH as the broad phase, then this project's expansion and narrow phase (δ = 0)";
+  fcl_bvh.keys = {bv};
+#if CCDBENCH_WITH_FCL
+  fcl.explain_miss = [](const narrowphase::PairRows& rows, bool vertex_face) { return std::string(to_string(explain_fcl_answer(rows, vertex_face))); };
+  fcl.elementary_test = [](const narrowphase::PairRows& rows, bool vertex_face) { return vertex_face ? fcl_vertex_face(rows) : fcl_edge_edge(rows); };
+  fcl.make = [](StrategyRequest request) { return with_bounding_volume<FclContinuous>(request.keys.choice("bv")); };
+  fcl_bvh.make = [](StrategyRequest request) {
+    return with_bounding_volume<FclBroadPhase>(request.keys.choice("bv"), std::move(request.narrow_phase));
+  };
+#else
+  for (StrategyEntry* entry : {&fcl, &fcl_bvh}) {
+    entry->unavailable = "this build has CCDBENCH_WITH_FCL=OFF (install libfcl-dev libccd-dev, which scripts/setup.sh does, and reconfigure)";
   }
-  return with_bounding_volume<FclContinuous>(bv);
-}
-
-std::unique_ptr<Strategy> make_fcl_bvh(std::map<std::string, std::string> parameters, const std::string& narrow_phase) {
-  const std::string bv = take_bounding_volume(parameters);
-  return with_bounding_volume<FclBroadPhase>(bv, narrowphase::make_narrow_phase(narrow_phase, parameters));
+#endif
+  return {std::move(fcl), std::move(fcl_bvh)};
 }
 
 }  // namespace ccd::strategies

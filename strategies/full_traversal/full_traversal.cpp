@@ -1,9 +1,21 @@
-#include "strategies/full_traversal/full_traversal.hpp"
+/// @file
+/// `full`: the baseline APCCD is measured against. Every step: refit every deformable object's BVH over the
+/// swept, δ-inflated triangle boxes, traverse fully (self and object pairs as the scene declares), expand the
+/// candidates by the assignment masks and run the narrow phase on every elementary pair.
+/// With filter=on (`separation_filter`), the separation filter apccd's front end uses (separation_filter.hpp) drops
+/// the elementary pairs it proves apart before the narrow phase: the baseline that splits apccd's gain into what
+/// the filter gives and what its sessions give. Its name then ends in ":filter=on" (off, the default, is not
+/// printed, so that the names of existing results stay).
+/// `brute`: every triangle pair the scene lets collide, no culling at all (small scenes): the independent check
+/// of culling.
 
 #include "core/assignment.hpp"
+#include "strategies/backend.hpp"
 #include "strategies/elementary_tests.hpp"
 #include "strategies/face_shape.hpp"
 #include "strategies/object_hierarchies.hpp"
+#include "strategies/opencl/full_opencl.hpp"
+#include "strategies/registry.hpp"
 
 #include <stdexcept>
 
@@ -88,22 +100,24 @@ class BruteForce final : public Strategy {
 
 }  // namespace
 
-bool take_full_filter(std::map<std::string, std::string>& parameters) {
-  const auto it = parameters.find("filter");
-  if (it == parameters.end()) return false;
-  const std::string value = it->second;
-  parameters.erase(it);
-  if (value == "on" || value == "true" || value == "1") return true;
-  if (value == "off" || value == "false" || value == "0") return false;
-  throw std::invalid_argument("full: filter=" + value + " must be on or off");
-}
-
-std::unique_ptr<Strategy> make_full_traversal(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, bool separation_filter) {
-  return std::make_unique<FullTraversal>(std::move(narrow_phase), separation_filter);
-}
-
-std::unique_ptr<Strategy> make_brute_force(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase) {
-  return std::make_unique<BruteForce>(std::move(narrow_phase));
+std::vector<StrategyEntry> full_traversal_entries() {
+  StrategyEntry full;
+  full.name = "full";
+  full.help = "BVH refit over swept, δ-inflated triangle boxes and a full traversal every step: the baseline";
+  full.keys = backend_keys();
+  full.keys.push_back(narrowphase::KeySpec::on_off("filter", false, "apccd's separation filter before the narrow phase (splits apccd's gain)"));
+  full.backends = {"cpu", "opencl"};
+  full.make = [](StrategyRequest request) -> std::unique_ptr<Strategy> {
+    const bool filter = request.keys.choice("filter") == "on";
+    const BackendChoice backend = read_backend(request.keys);
+    if (backend.opencl()) return make_full_opencl(std::move(request.narrow_phase), backend, filter);
+    return std::make_unique<FullTraversal>(std::move(request.narrow_phase), filter);
+  };
+  StrategyEntry brute;
+  brute.name = "brute";
+  brute.help = "every triangle pair the scene lets collide, no culling (small scenes): the independent check of culling";
+  brute.make = [](StrategyRequest request) -> std::unique_ptr<Strategy> { return std::make_unique<BruteForce>(std::move(request.narrow_phase)); };
+  return {std::move(full), std::move(brute)};
 }
 
 }  // namespace ccd::strategies

@@ -1,22 +1,31 @@
-#include "strategies/narrowphase/advancement.hpp"
+/// @file
+/// `advancement`: conservative advancement by minimum separation (the distance-based test a user with a
+/// thickness reaches for). From t = 0 it repeatedly measures the distance d between the primitives and advances
+/// by (d - δ)/L, where L bounds how fast that distance can shrink; it reports a contact once d <= δ + η. Over each
+/// advance the distance stays above δ, so it cannot step over a contact: it misses only by the rounding of the
+/// distance computation. Grazing passes take many steps; the cap then answers "collides".
 
 #include "strategies/narrowphase/primitive_distance.hpp"
+#include "strategies/narrowphase/registry.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 namespace ccd::narrowphase {
 namespace {
+
+struct AdvancementSettings {
+  /// η as a fraction of the pair's bounding-box diagonal: the distance at which it stops and reports a contact.
+  double eta = 1e-6;
+  long max_iterations = 1000;
+};
 
 class Advancement final : public NarrowPhase {
  public:
   explicit Advancement(const AdvancementSettings& settings) : settings_(settings) {}
 
   std::string name() const override {
-    std::ostringstream out;
-    out << "advancement:eta=" << settings_.eta << ":max_iterations=" << settings_.max_iterations;
-    return out.str();
+    return "advancement:eta=" + format_spec_number(settings_.eta) + ":max_iterations=" + std::to_string(settings_.max_iterations);
   }
   bool conservative() const override { return false; }  // up to the rounding of distances
   NarrowPhaseResult vertex_face(const PairRows& rows, double thickness) const override { return test(rows, thickness, true); }
@@ -69,8 +78,19 @@ class Advancement final : public NarrowPhase {
 
 }  // namespace
 
-std::unique_ptr<NarrowPhase> make_advancement(const AdvancementSettings& settings) {
-  return std::make_unique<Advancement>(settings);
+std::vector<NarrowPhaseEntry> advancement_entries() {
+  const AdvancementSettings defaults;
+  return {{"advancement",
+           "conservative advancement by minimum separation: misses only by the rounding of its distances",
+           {KeySpec::number("eta", defaults.eta, kFractionOfPairRange, "distance at which it stops and reports a contact, a fraction of the pair's box diagonal"),
+            KeySpec::integer("max_iterations", defaults.max_iterations, kIterationRange,
+                             "advancement steps before giving up (and answering \"collides\")")},
+           false,
+           "eta",
+           {"0", "1e-8", "1e-6", "1e-4", "1e-2"},
+           [](const SpecReader& keys) -> std::unique_ptr<NarrowPhase> {
+             return std::make_unique<Advancement>(AdvancementSettings{keys.number("eta"), keys.integer("max_iterations")});
+           }}};
 }
 
 }  // namespace ccd::narrowphase

@@ -1,13 +1,24 @@
-#include "strategies/narrowphase/inclusion.hpp"
+/// @file
+/// `conservative`: an inclusion-based bisection over (t, u, v) with a forward error bound, in the spirit of
+/// Tight-Inclusion (Wang et al. 2021). It never misses: every answer "no" is proven; "yes" may be a false alarm
+/// within the tolerance, or because the iteration cap was hit (reported).
 
 #include "strategies/narrowphase/exact_scaling.hpp"
+#include "strategies/narrowphase/registry.hpp"
 #include "strategies/narrowphase/shared.hpp"
 
-#include <sstream>
 #include <vector>
 
 namespace ccd::narrowphase {
 namespace {
+
+struct InclusionSettings {
+  /// Distance tolerance as a fraction of the pair's bounding-box diagonal: a sub-box whose every point lies
+  /// within δ + tolerance is reported as a contact.
+  double tolerance = 1e-6;
+  /// Sub-boxes examined before giving up (and answering "collides").
+  long max_iterations = 20000;
+};
 
 /// The search, compiled twice: for the x86-64 baseline and for x86-64-v3 (AVX2), chosen when the program loads
 /// (GCC function multiversioning), so one binary runs on any x86-64 and uses wide vectors where they exist. The
@@ -30,11 +41,12 @@ class InclusionTest final : public NarrowPhase {
   explicit InclusionTest(const InclusionSettings& settings) : settings_(settings) {}
 
   std::string name() const override {
-    std::ostringstream out;
-    out << "conservative:tolerance=" << settings_.tolerance << ":max_iterations=" << settings_.max_iterations;
-    return out.str();
+    return "conservative:tolerance=" + format_spec_number(settings_.tolerance) + ":max_iterations=" + std::to_string(settings_.max_iterations);
   }
   bool conservative() const override { return true; }
+  std::optional<DeviceForm> device_form() const override {
+    return DeviceForm{DeviceForm::Kernel::conservative, settings_.tolerance, settings_.max_iterations};
+  }
   NarrowPhaseResult vertex_face(const PairRows& rows, double thickness) const override { return test(rows, thickness, true); }
   NarrowPhaseResult edge_edge(const PairRows& rows, double thickness) const override { return test(rows, thickness, false); }
 
@@ -64,8 +76,20 @@ class InclusionTest final : public NarrowPhase {
 
 }  // namespace
 
-std::unique_ptr<NarrowPhase> make_inclusion(const InclusionSettings& settings) {
-  return std::make_unique<InclusionTest>(settings);
+std::vector<NarrowPhaseEntry> inclusion_entries() {
+  const InclusionSettings defaults;
+  return {{"conservative",
+           "inclusion search over (t, u, v) with a forward error bound: never misses, at any scale",
+           {KeySpec::number("tolerance", defaults.tolerance, kFractionOfPairRange,
+                            "distance tolerance of an accepted sub-box, a fraction of the pair's box diagonal"),
+            KeySpec::integer("max_iterations", defaults.max_iterations, kIterationRange,
+                             "sub-boxes examined before giving up (and answering \"collides\")")},
+           true,
+           "tolerance",
+           {"1e-2", "1e-3", "1e-4", "1e-5", "1e-6", "1e-7"},
+           [](const SpecReader& keys) -> std::unique_ptr<NarrowPhase> {
+             return std::make_unique<InclusionTest>(InclusionSettings{keys.number("tolerance"), keys.integer("max_iterations")});
+           }}};
 }
 
 }  // namespace ccd::narrowphase

@@ -7,11 +7,8 @@
 
 #include <array>
 #include <limits>
-#include <map>
-#include <memory>
+#include <optional>
 #include <string>
-#include <utility>
-#include <vector>
 
 namespace ccd::narrowphase {
 
@@ -31,6 +28,17 @@ struct NarrowPhaseResult {
   double achieved_tolerance = 0.0;
 };
 
+/// How the OpenCL kernels run a narrow phase: the same shared text (shared/*.h) compiled for the device, with the
+/// settings the host's instance has, so that both give the same answers bit for bit.
+struct DeviceForm {
+  enum class Kernel { cubic64, conservative };
+  Kernel kernel = Kernel::cubic64;
+  /// cubic64: eta; conservative: tolerance (fractions of the pair's bounding-box diagonal).
+  double accuracy = 0;
+  /// conservative: sub-boxes examined before giving up.
+  long max_iterations = 0;
+};
+
 class NarrowPhase {
  public:
   virtual ~NarrowPhase() = default;
@@ -40,42 +48,8 @@ class NarrowPhase {
   virtual bool conservative() const = 0;
   virtual NarrowPhaseResult vertex_face(const PairRows& rows, double thickness) const = 0;
   virtual NarrowPhaseResult edge_edge(const PairRows& rows, double thickness) const = 0;
+  /// The form the OpenCL backend runs, or nullopt when it has no kernel for this narrow phase.
+  virtual std::optional<DeviceForm> device_form() const { return std::nullopt; }
 };
-
-/// Parameters as given in a spec (`key=value`), before the variant checks them.
-using NarrowPhaseParameters = std::map<std::string, std::string>;
-
-/// `cubic32`, `cubic64`, `conservative`, `advancement`, with optional parameters.
-/// @throws std::invalid_argument naming the variants (or the variant's parameters) for an unknown name or key,
-///         and for a value out of range.
-std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const NarrowPhaseParameters& parameters = {});
-
-/// The values a numeric spec key accepts: [minimum, maximum], whole numbers only when `integer`. Every key has
-/// one, so that no value converts into something else (1e300 iterations into a negative count).
-struct SpecRange {
-  double minimum;
-  double maximum;
-  bool integer = false;
-};
-
-/// The value of spec key `key` of `owner` (the whole text must be a number within `range`).
-/// @throws std::invalid_argument "OWNER: KEY=VALUE must be a number in [MIN, MAX]" (or "an integer") otherwise.
-double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, SpecRange range);
-
-/// `value` as a spec prints it: as an ostream does (6 significant digits: 0.25, 1e-06, 100000) when that reads back
-/// as the same double, else the shortest text that does (1.0000000001), so specs that differ in any digit get
-/// different names.
-std::string format_spec_number(double value);
-
-/// The keys a narrow phase accepts (empty for an unknown name).
-std::vector<std::string> narrow_phase_parameter_names(const std::string& name);
-
-/// Splits `HEAD[:key=value...]` into HEAD and its parameters. @throws std::invalid_argument for a malformed key.
-std::pair<std::string, NarrowPhaseParameters> split_spec(const std::string& spec);
-
-/// Parses `NAME[:key=value...]` and makes the variant.
-std::unique_ptr<NarrowPhase> make_narrow_phase_from_spec(const std::string& spec);
-
-std::vector<std::string> narrow_phase_names();
 
 }  // namespace ccd::narrowphase

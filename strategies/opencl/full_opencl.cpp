@@ -14,34 +14,6 @@
 
 namespace ccd::strategies {
 
-std::vector<std::string> backend_parameter_names() { return {"backend", "device", "device_iterations"}; }
-
-// device_iterations: 0 (never give up) or up to the largest iteration cap a narrow phase takes (1e9).
-constexpr narrowphase::SpecRange kDeviceIterationRange{0.0, 1e9, true};
-
-BackendChoice take_backend(std::map<std::string, std::string>& parameters) {
-  BackendChoice choice;
-  if (const auto it = parameters.find("backend"); it != parameters.end()) {
-    choice.backend = it->second;
-    parameters.erase(it);
-  }
-  if (choice.backend != "cpu" && choice.backend != "opencl") {
-    throw std::invalid_argument("backend=" + choice.backend + " is not a backend (cpu, opencl)");
-  }
-  for (const char* key : {"device", "device_iterations"}) {
-    const auto it = parameters.find(key);
-    if (it == parameters.end()) continue;
-    if (choice.backend != "opencl") throw std::invalid_argument(std::string(key) + "=" + it->second + " is a key of the OpenCL backend: it needs backend=opencl");
-    if (std::string(key) == "device") {
-      choice.device = it->second;
-    } else {
-      choice.device_iterations = static_cast<long>(narrowphase::parse_spec_number("full", key, it->second, kDeviceIterationRange));
-    }
-    parameters.erase(it);
-  }
-  return choice;
-}
-
 #if CCDBENCH_WITH_OPENCL
 namespace {
 
@@ -50,13 +22,13 @@ using opencl::upload;
 
 class FullOpenCl final : public Strategy {
  public:
-  FullOpenCl(opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device, bool separation_filter)
-      : pipeline_(std::move(narrow_phase), std::move(device), "full:backend=opencl"), separation_filter_(separation_filter) {}
+  FullOpenCl(opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device, const BackendChoice& backend, bool separation_filter)
+      : pipeline_(std::move(narrow_phase), std::move(device), backend, "full:backend=opencl"), separation_filter_(separation_filter) {}
 
   std::string name() const override {
     const opencl::NarrowPhaseChoice& narrow = pipeline_.narrow_phase();
-    return "full+" + narrow.host->name() + (separation_filter_ ? ":filter=on" : "") + ":backend=opencl:device=" + pipeline_.device().name +
-           (narrow.name == "conservative" ? ":device_iterations=" + std::to_string(narrow.device_iterations) : "");
+    return "full+" + narrow.host->name() + (separation_filter_ ? ":filter=on" : "") +
+           pipeline_.backend().resolved(pipeline_.device().name, narrow.conservative());
   }
 
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
@@ -127,13 +99,12 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
   return summaries;
 }
 
-std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, const std::string& narrow_phase_name,
-                                           const narrowphase::NarrowPhaseParameters& parameters, const BackendChoice& backend,
+std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, const BackendChoice& backend,
                                            bool separation_filter) {
-  opencl::NarrowPhaseChoice narrow = opencl::choose_narrow_phase("full", std::move(narrow_phase), narrow_phase_name, parameters, backend.device_iterations);
+  opencl::NarrowPhaseChoice narrow = opencl::choose_narrow_phase("full", std::move(narrow_phase));
   opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), backend.device);
   opencl::require_double_precision(device);
-  return std::make_unique<FullOpenCl>(std::move(narrow), std::move(device), separation_filter);
+  return std::make_unique<FullOpenCl>(std::move(narrow), std::move(device), backend, separation_filter);
 }
 
 #else
@@ -143,8 +114,7 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
                               "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }
 
-std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const std::string&,
-                                           const narrowphase::NarrowPhaseParameters&, const BackendChoice&, bool) {
+std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const BackendChoice&, bool) {
   throw std::invalid_argument("backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
                               "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }

@@ -10,6 +10,7 @@
 /// device each step for no change in the answer; a refit is a few level launches. Traversal is one work item per
 /// face against a whole tree, which needs no synchronisation and fills the GPU at cloth sizes.
 
+#include "strategies/backend.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 #include "strategies/strategy.hpp"
 
@@ -38,30 +39,12 @@ struct OpenClDeviceSummary {
 /// Every OpenCL device, in device=INDEX order. @throws std::invalid_argument when this build has no OpenCL.
 std::vector<OpenClDeviceSummary> opencl_devices();
 
-/// The keys every OpenCL-capable strategy takes: backend=cpu|opencl, device=INDEX|NAME-SUBSTRING and
-/// device_iterations=N (iterations a work item spends on one conservative query before giving it up to a second
-/// pass, on the device or the host, that decides it from the start with the same code: the answers do not depend
-/// on it, only the time; 0: never give up).
-std::vector<std::string> backend_parameter_names();
-
-struct BackendChoice {
-  std::string backend = "cpu";
-  std::string device;
-  long device_iterations = 200;
-};
-
-/// Removes the backend keys from `parameters` and returns them.
-/// @throws std::invalid_argument for another backend, an out-of-range count, or a device key without backend=opencl.
-BackendChoice take_backend(std::map<std::string, std::string>& parameters);
-
 /// Chooses the device (listing them) and checks it has what the kernels need, so a bad device is refused when the
 /// run is planned. The context, the program and the device's arithmetic self-test come at init().
-/// @throws std::invalid_argument for a narrow phase other than conservative and cubic64, a missing device, or a
-///         device without (denormal-keeping) fp64; OpenClError when this build has no OpenCL.
-/// `parameters`: the narrow phase's own spec keys, which the kernels read as the CPU narrow phase does.
+/// @throws std::invalid_argument for a narrow phase without a device form, a missing device, or a device without
+///         (denormal-keeping) fp64, or when this build has no OpenCL.
 /// `separation_filter`: full's filter=on (full_traversal.hpp), the same filter on the device.
-std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase,
-                                           const std::string& narrow_phase_name, const narrowphase::NarrowPhaseParameters& parameters,
-                                           const BackendChoice& backend, bool separation_filter = false);
+std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, const BackendChoice& backend,
+                                           bool separation_filter = false);
 
 }  // namespace ccd::strategies

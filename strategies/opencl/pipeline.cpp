@@ -2,6 +2,7 @@
 
 #include "core/assignment.hpp"
 #include "strategies/bvh/bvh.hpp"
+#include "strategies/narrowphase/registry.hpp"
 #include "strategies/opencl/self_test.hpp"
 
 #include <tbb/parallel_for.h>
@@ -9,7 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <cstdlib>
+#include <cstdio>
 
 namespace ccd::opencl {
 namespace {
@@ -30,28 +31,38 @@ constexpr std::size_t kHostQueriesPerThread = 2;
 /// The second device pass gives up after this many iterations: the queries that cloth-funnel hands back finish
 /// within it, side by side; what is left runs to the cap.
 constexpr long kSecondPassIterations = 4000;
-/// Depth the traversal kernel's stack holds (CCD_TRAVERSAL_STACK in kernels/full.cl).
+/// Depth the traversal kernel's stack holds (CCD_TRAVERSAL_STACK): the hierarchies split at the median, so a tree
+/// of n faces is ceil(log2 n) + 1 deep; init refuses a deeper tree before any launch.
 constexpr std::size_t kTraversalStack = 64;
+
+/// "0x1p-50": a double as a C hexadecimal literal, exact.
+std::string hexadecimal(double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%a", value);
+  return text;
+}
 
 EdgeEdgePair edge_pair(const cl_uint4& p) { return {Edge{p.s[0], p.s[1]}, Edge{p.s[2], p.s[3]}}; }
 
 }  // namespace
 
-NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_ptr<narrowphase::NarrowPhase> host, const std::string& name,
-                                      const narrowphase::NarrowPhaseParameters& parameters, long device_iterations) {
-  if (name != "conservative" && name != "cubic64") {
-    throw std::invalid_argument(strategy + ":backend=opencl runs the narrow phases conservative and cubic64, not " + name);
+NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_ptr<narrowphase::NarrowPhase> host) {
+  const std::optional<narrowphase::DeviceForm> form = host->device_form();
+  if (!form) {
+    std::string runs;
+    for (const narrowphase::NarrowPhaseEntry& entry : narrowphase::narrow_phases()) {
+      const auto backends = narrowphase::narrow_phase_backends(entry);
+      if (std::find(backends.begin(), backends.end(), "opencl") != backends.end()) runs += (runs.empty() ? "" : ", ") + entry.name;
+    }
+    throw std::invalid_argument(strategy + ":backend=opencl runs the narrow phases " + runs + ", not " + host->name());
   }
-  NarrowPhaseChoice choice;
-  choice.host = std::move(host);
-  choice.name = name;
-  choice.device_iterations = device_iterations;
-  if (name == "conservative") {
-    choice.inclusion = narrowphase::read_inclusion_settings(parameters);
-  } else {
-    choice.cubic = narrowphase::read_cubic_settings(name, parameters);
-  }
-  return choice;
+  return {std::move(host), *form};
+}
+
+std::string kernel_defines(std::size_t group_size, long sub_boxes) {
+  return "-DCCD_GROUP_SIZE=" + std::to_string(group_size) + " -DCCD_DEVICE_SUB_BOXES=" + std::to_string(sub_boxes) +
+         " -DCCD_BOX_ROUNDING_MARGIN=" + hexadecimal(bvh::kBoxRoundingMargin) + " -DCCD_TRAVERSAL_STACK=" + std::to_string(kTraversalStack) +
+         " -DCCD_VERTEX_FACE=" + std::to_string(DevicePipeline::kVertexFace) + "u -DCCD_EMPTY_KEY=" + std::to_string(kEmptyPendingKey) + "UL";
 }
 
 void DevicePositions::reset(Context& context, std::span<const Vec3> frame) {
@@ -71,17 +82,13 @@ void DevicePositions::finish(const StepView& step) {
   last_step_ = step.index;
 }
 
-DevicePipeline::DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, std::string label)
-    : narrow_phase_(std::move(narrow_phase)), device_(std::move(device)), label_(std::move(label)) {}
+DevicePipeline::DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, strategies::BackendChoice backend, std::string label)
+    : narrow_phase_(std::move(narrow_phase)), device_(std::move(device)), backend_(std::move(backend)), label_(std::move(label)) {}
 
 void DevicePipeline::init(const Scene& scene, std::span<const Vec3> first_frame) {
   scene_ = &scene;
   group_ = group_size_for(device_);
-  // Test hook (tests/opencl): lists start with room for one entry and a work item holds 4 sub-boxes, so that the
-  // growing of lists and the host's share of the conservative queries run on small scenes too.
-  const char* tiny_hook = std::getenv("CCDBENCH_OPENCL_TEST_TINY");
-  tiny_ = tiny_hook != nullptr && std::string(tiny_hook) == "1";
-  context_ = std::make_unique<Context>(device_, "-DCCD_GROUP_SIZE=" + std::to_string(group_) + (tiny_ ? " -DCCD_DEVICE_SUB_BOXES=4" : ""));
+  context_ = std::make_unique<Context>(device_, kernel_defines(group_, backend_.sub_boxes));
   check_device_arithmetic(*context_);
   const MeshTopology& topology = scene.topology();
   const std::size_t faces = topology.num_faces();
@@ -101,8 +108,8 @@ void DevicePipeline::init(const Scene& scene, std::span<const Vec3> first_frame)
   upload(*context_, edges_, edges.data(), edges.size());
   upload(*context_, masks_, masks.data(), masks.size());
   counter_.reserve(*context_, 2 * sizeof(cl_uint));
-  initial_elementary_capacity_ = tiny_ ? 1 : 16 * std::max<std::size_t>(faces, 256);
-  out_.capacity = tiny_ ? 1 : 1024;
+  initial_elementary_capacity_ = list_start(16 * std::max<std::size_t>(faces, 256));
+  out_.capacity = list_start(1024);
   context_->finish();
 }
 
@@ -246,7 +253,7 @@ void DevicePipeline::refit_levels(const RefitPlan& plan, const Buffer& node_boxe
 
 std::size_t DevicePipeline::traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out,
                                      StageEvents& events, const char* stage) {
-  if (out.capacity == 0) out.capacity = tiny_ ? 1 : std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024);
+  if (out.capacity == 0) out.capacity = list_start(std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024));
   const cl_mem offset_memory = offsets != nullptr ? offsets->get() : nullptr;
   const std::size_t candidates = fill_list("traverse", queries.count, out, sizeof(cl_uint2), events, stage, [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
     set_arguments(kernel, static_cast<cl_uint>(queries.count), queries.leaf.get(), queries.face.get(), queries.root.get(), queries.mode.get(),
@@ -302,8 +309,8 @@ std::size_t DevicePipeline::narrow_group(cl_kernel kernel) const {
 void DevicePipeline::launch_conservative(const Buffer& pairs, std::size_t count, long limit, const Buffer& status, const Buffer& toi,
                                          const Buffer& x0, const Buffer& x1, StageEvents& events) {
   cl_kernel kernel = context_->kernel("narrow_conservative");
-  const cl_double tolerance = narrow_phase_.inclusion.tolerance;
-  const cl_long max_iterations = narrow_phase_.inclusion.max_iterations, give_up_after = limit;
+  const cl_double tolerance = narrow_phase_.form.accuracy;
+  const cl_long max_iterations = narrow_phase_.form.max_iterations, give_up_after = limit;
   set_arguments(kernel, static_cast<cl_uint>(count), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), tolerance, max_iterations,
                 give_up_after, status.get(), toi.get());
   launch(*context_, kernel, count, narrow_group(kernel), events.add("narrow phase"));
@@ -333,12 +340,12 @@ void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const
   Context& context = *context_;
   status_.reserve(context, std::max<std::size_t>(count, 1));
   toi_.reserve(context, std::max<std::size_t>(count, 1) * sizeof(double));
-  const bool conservative = narrow_phase_.name == "conservative";
+  const bool conservative = narrow_phase_.conservative();
   if (conservative) {
-    launch_conservative(elementary, count, narrow_phase_.device_iterations, status_, toi_, x0, x1, events);
+    launch_conservative(elementary, count, backend_.device_iterations, status_, toi_, x0, x1, events);
   } else {
     cl_kernel kernel = context.kernel("narrow_cubic");
-    const cl_double eta = narrow_phase_.cubic.eta;
+    const cl_double eta = narrow_phase_.form.accuracy;
     set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), eta,
                   status_.get(), toi_.get());
     launch(context, kernel, count, narrow_group(kernel), events.add("narrow phase"));

@@ -11,8 +11,7 @@
 
 #include "core/scene.hpp"
 #include "core/step.hpp"
-#include "strategies/narrowphase/cubic.hpp"
-#include "strategies/narrowphase/inclusion.hpp"
+#include "strategies/backend.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 #include "strategies/opencl/runtime.hpp"
 #include "strategies/strategy.hpp"
@@ -23,20 +22,24 @@
 
 namespace ccd::opencl {
 
-/// The narrow phase a pipeline runs: conservative or cubic64, with its keys read as the CPU's factory reads them.
+/// The narrow phase a pipeline runs: the host's instance (for the queries the device hands on, and the face-shape
+/// stage) and the form its kernel takes, with the host's settings.
 struct NarrowPhaseChoice {
   std::unique_ptr<narrowphase::NarrowPhase> host;
-  std::string name;
-  narrowphase::InclusionSettings inclusion;
-  narrowphase::CubicSettings cubic;
-  /// Iterations a work item spends on one conservative query before giving it up (0: never).
-  long device_iterations = 200;
+  narrowphase::DeviceForm form;
+  bool conservative() const { return form.kernel == narrowphase::DeviceForm::Kernel::conservative; }
 };
 
-/// The narrow phase of `strategy`:backend=opencl, its keys (`parameters`) read as the CPU's factory reads them.
-/// @throws std::invalid_argument for a narrow phase other than conservative and cubic64.
-NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_ptr<narrowphase::NarrowPhase> host, const std::string& name,
-                                      const narrowphase::NarrowPhaseParameters& parameters, long device_iterations);
+/// The narrow phase of `strategy`:backend=opencl.
+/// @throws std::invalid_argument for a narrow phase without a device form, naming those that have one.
+NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_ptr<narrowphase::NarrowPhase> host);
+
+/// An empty slot of apccd's pending table (CCD_EMPTY_KEY in its kernels): no pair key (a, b), a < b, is all ones.
+inline constexpr cl_ulong kEmptyPendingKey = ~cl_ulong{0};
+
+/// The kernels' build options: every constant the host and the kernels must agree on, from its one definition on
+/// the host (the kernel files refuse to build without them), and the sizes chosen for this device and run.
+std::string kernel_defines(std::size_t group_size, long sub_boxes);
 
 /// A list the device fills: its buffer, its room (entries) and, after a fill, its length.
 struct DeviceList {
@@ -85,8 +88,8 @@ struct RefitPlan {
 
 class DevicePipeline {
  public:
-  /// `label` names the strategy in errors ("full:backend=opencl").
-  DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, std::string label);
+  /// `label` names the strategy in errors ("full:backend=opencl"); `backend` its backend keys.
+  DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, strategies::BackendChoice backend, std::string label);
 
   /// Context, self-test, topology, masks and the flattened hierarchies (shape only; boxes come from refits).
   void init(const Scene& scene, std::span<const Vec3> first_frame);
@@ -94,7 +97,9 @@ class DevicePipeline {
   Context& context() { return *context_; }
   const Scene& scene() const { return *scene_; }
   std::size_t group() const { return group_; }
-  bool tiny() const { return tiny_; }
+  const strategies::BackendChoice& backend() const { return backend_; }
+  /// The room a list starts with: `sized` (from the scene), unless list_start says otherwise.
+  std::size_t list_start(std::size_t sized) const { return backend_.list_start != 0 ? backend_.list_start : sized; }
   const std::string& label() const { return label_; }
   const NarrowPhaseChoice& narrow_phase() const { return narrow_phase_; }
   const DeviceInfo& device() const { return device_; }
@@ -168,11 +173,11 @@ class DevicePipeline {
 
   NarrowPhaseChoice narrow_phase_;
   DeviceInfo device_;
+  strategies::BackendChoice backend_;
   std::string label_;
   const Scene* scene_ = nullptr;
   std::unique_ptr<Context> context_;
   std::size_t group_ = 256;
-  bool tiny_ = false;
   std::size_t node_count_ = 0;
   std::vector<cl_uint> leaf_node_;
   std::vector<cl_int> roots_;

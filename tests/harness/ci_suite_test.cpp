@@ -2,7 +2,7 @@
 
 #include "harness/run.hpp"
 #include "reference/step_truth.hpp"
-#include "strategies/strategy.hpp"
+#include "strategies/registry.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>

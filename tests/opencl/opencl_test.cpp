@@ -7,7 +7,7 @@
 #include "harness/run.hpp"
 #include "strategies/opencl/full_opencl.hpp"
 #include "strategies/opencl/runtime.hpp"
-#include "strategies/strategy.hpp"
+#include "strategies/registry.hpp"
 #include "tests/support/cli.hpp"
 #include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"
@@ -94,12 +94,13 @@ class OpenClParity : public ::testing::Test {
   void SetUp() override { ::setenv("CCDBENCH_CACHE_DIR", cache_.path().c_str(), 1); }
   void TearDown() override { ::unsetenv("CCDBENCH_CACHE_DIR"); }
 
-  /// Every scene of `suite` at its δ and at δ = 0, with `strategy`+narrow`keys` on both backends. Returns, per δ
-  /// (scene's, 0) and narrow phase, how many scenes collided: a comparison of empty sets proves nothing. Adds the
-  /// device's counters to `counters`.
+  /// Every scene of `suite` at its δ and at δ = 0, with `strategy`+narrow`keys` on both backends (`device_keys` on the
+  /// device's only). Returns, per δ (scene's, 0) and narrow phase, how many scenes collided: a comparison of empty
+  /// sets proves nothing. Adds the device's counters to `counters`.
   std::vector<std::size_t> suite_at_both_thicknesses(const std::string& suite, const std::vector<std::string>& narrow_phases,
                                                      std::size_t max_steps = 0, const std::string& strategy = "full",
-                                                     const std::string& keys = "", std::map<std::string, double>* counters = nullptr) {
+                                                     const std::string& keys = "", std::map<std::string, double>* counters = nullptr,
+                                                     const std::string& device_keys = "") {
     std::vector<std::size_t> colliding_scenes(2 * narrow_phases.size(), 0);
     for (const harness::SceneSource& source : harness::suite_scenes(suite)) {
       const datasets::SceneSequence loaded = source.load();
@@ -112,7 +113,7 @@ class OpenClParity : public ::testing::Test {
           const std::string& narrow = narrow_phases[n];
           SCOPED_TRACE(source.label + ", δ = " + std::to_string(thickness) + ", " + narrow);
           const std::string cpu = strategy + "+" + narrow + keys;
-          if (expect_same_answers(cpu, cpu + ":backend=opencl", scene, frames, counters) > 0) {
+          if (expect_same_answers(cpu, cpu + ":backend=opencl" + device_keys, scene, frames, counters) > 0) {
             ++colliding_scenes[2 * n + z];
           }
         }
@@ -290,15 +291,17 @@ TEST_F(OpenClParity, ThePublicStepsGiveTheCpuAnswersAtBothThicknesses) {
   }
 }
 
-// The paths a small step never takes: every list starts with room for one entry (so traversal, expansion and
-// compaction all grow and run again), and a work item holds 4 sub-boxes (so conservative queries overflow and the
-// host decides them with the same code).
+/// The backend's memory keys at their smallest: every list starts with room for one entry (so every list-filling
+/// stage grows and runs again) and a work item holds 4 sub-boxes (so conservative queries overflow and are decided
+/// again with the same code, down to the host).
+constexpr const char* kSmallestDeviceMemory = ":list_start=1:sub_boxes=4";
+
+// The paths a small step never takes with the default sizes: lists that grow, and queries decided on the host.
 TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
-  ::setenv("CCDBENCH_OPENCL_TEST_TINY", "1", 1);
   const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
   std::map<std::string, double> counters;
-  const std::size_t colliding = expect_same_answers("full", "full:backend=opencl", loaded.scene(), testing::all_frames(loaded), &counters);
-  ::unsetenv("CCDBENCH_OPENCL_TEST_TINY");
+  const std::size_t colliding =
+      expect_same_answers("full", std::string("full:backend=opencl") + kSmallestDeviceMemory, loaded.scene(), testing::all_frames(loaded), &counters);
   EXPECT_GT(colliding, 0u);
   EXPECT_GT(counters["host_decided_pairs"], 0.0) << "no query overflowed its sub-boxes: the host's part was not exercised";
 }
@@ -306,10 +309,9 @@ TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
 // The same for apccd: its own lists (dangling triangles, partial traversal, admissible, tested) grow and run
 // again, and the pending list's hash table is rebuilt at every growth within a session.
 TEST_F(OpenClParity, ApccdGrowingListsGiveTheSameAnswers) {
-  ::setenv("CCDBENCH_OPENCL_TEST_TINY", "1", 1);
   std::map<std::string, double> counters;
-  const std::vector<std::size_t> colliding_scenes = suite_at_both_thicknesses("ci", {"conservative"}, 0, "apccd", "", &counters);
-  ::unsetenv("CCDBENCH_OPENCL_TEST_TINY");
+  const std::vector<std::size_t> colliding_scenes =
+      suite_at_both_thicknesses("ci", {"conservative"}, 0, "apccd", "", &counters, kSmallestDeviceMemory);
   for (const std::size_t scenes : colliding_scenes) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
   EXPECT_GT(counters["host_decided_pairs"], 0.0);
   // pending_table_builds is a running total: summed over steps it exceeds the steps only when a session rebuilt it.

@@ -4,7 +4,7 @@
 #include "datasets/scene_file.hpp"
 #include "reference/step_truth.hpp"
 #include "strategies/apccd/session.hpp"
-#include "strategies/strategy.hpp"
+#include "strategies/registry.hpp"
 #include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"
 

@@ -13,7 +13,7 @@
 #include "datasets/data_dir.hpp"
 #include "datasets/scene_sequence.hpp"
 #include "harness/run.hpp"
-#include "strategies/strategy.hpp"
+#include "strategies/registry.hpp"
 #include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"
 

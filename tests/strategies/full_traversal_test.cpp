@@ -2,7 +2,7 @@
 
 #include "datasets/procedural_scenes.hpp"
 #include "reference/step_truth.hpp"
-#include "strategies/strategy.hpp"
+#include "strategies/registry.hpp"
 #include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -85,7 +85,7 @@ TEST(StrategyFactory, SpecsResolveAndErrorsAreClear) {
   EXPECT_THROW(make_strategy("full:nf_max=3"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full:oops"), std::invalid_argument);
   const std::string unknown = testing::error_message<std::invalid_argument>([] { make_strategy("full:nf_max=3"); });
-  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, filter; narrow phase conservative's: "
+  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, filter; narrow phase conservative's: "
                          "tolerance, max_iterations)"), std::string::npos) << unknown;
 }
 

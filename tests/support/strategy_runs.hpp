@@ -4,7 +4,7 @@
 
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/scene_file.hpp"
-#include "strategies/strategy.hpp"
+#include "strategies/registry.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <tbb/global_control.h>

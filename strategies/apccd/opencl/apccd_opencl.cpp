@@ -30,13 +30,12 @@ constexpr std::size_t kMaxListEntries = 0xFFFFFFFFull;
 
 class ApccdOpenCl final : public Strategy {
  public:
-  ApccdOpenCl(const ApccdSettings& settings, opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device)
-      : settings_(settings), pipeline_(std::move(narrow_phase), std::move(device), "apccd:backend=opencl") {}
+  ApccdOpenCl(const ApccdSettings& settings, opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device, const BackendChoice& backend)
+      : settings_(settings), pipeline_(std::move(narrow_phase), std::move(device), backend, "apccd:backend=opencl") {}
 
   std::string name() const override {
     const opencl::NarrowPhaseChoice& narrow = pipeline_.narrow_phase();
-    return apccd_name(settings_, narrow.host->name()) + ":backend=opencl:device=" + pipeline_.device().name +
-           (narrow.name == "conservative" ? ":device_iterations=" + std::to_string(narrow.device_iterations) : "");
+    return apccd_name(settings_, narrow.host->name()) + pipeline_.backend().resolved(pipeline_.device().name, narrow.conservative());
   }
 
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
@@ -141,7 +140,7 @@ class ApccdOpenCl final : public Strategy {
                                " pending and object pairs in one step; the kernels index at most 2^32 - 1");
     }
     const cl_mem across_memory = across != nullptr ? across->buffer.get() : nullptr;
-    if (admissible_.capacity == 0) admissible_.capacity = pipeline_.tiny() ? 1 : std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024);
+    if (admissible_.capacity == 0) admissible_.capacity = pipeline_.list_start(std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024));
     const std::size_t admissible = pipeline_.fill_list(
         "admit", pending_.count + across_count, admissible_, sizeof(cl_uint2), events, "front end", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
           const cl_uchar check_boxes = settings_.heuristic ? 1 : 0;
@@ -240,7 +239,7 @@ class ApccdOpenCl final : public Strategy {
     cl_uint count[2] = {0, 0};
     download(context, counter_, count, 2);
     const std::size_t faces = scene_->topology().num_faces();
-    if (dangling_faces_.capacity == 0) dangling_faces_.capacity = pipeline_.tiny() ? 1 : faces;
+    if (dangling_faces_.capacity == 0) dangling_faces_.capacity = pipeline_.list_start(faces);
     if (count[0] == 0) {
       dangling_faces_.count = 0;
       return 0;
@@ -265,7 +264,7 @@ class ApccdOpenCl final : public Strategy {
                   relative_[0].get(), relative_[1].get(), scene_->thickness() / 2, session_boxes_.get(), fresh_boxes_.get());
     launch(context, enlarge, count, pipeline_.group(), events.add("partial traversal"));
     pipeline_.refit_levels(pipeline_.moving_nodes(), session_boxes_, &events);
-    if (found_.capacity == 0) found_.capacity = pipeline_.tiny() ? 1 : std::max<std::size_t>(4 * count, 1024);
+    if (found_.capacity == 0) found_.capacity = pipeline_.list_start(std::max<std::size_t>(4 * count, 1024));
     const std::size_t found = pipeline_.fill_list("partial_traverse", count, found_, sizeof(cl_uint2), events, "partial traversal",
                                                   [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
                                                     set_arguments(kernel, static_cast<cl_uint>(count), dangling_faces_.buffer.get(),
@@ -281,13 +280,14 @@ class ApccdOpenCl final : public Strategy {
     }
     if (!table_valid_ || kTableLoadInverse * most > (std::size_t{1} << table_bits_)) {
       table_bits_ = 4;
-      // Room for the list to double before the next rebuild (the test hook's tiny lists rebuild at every growth).
-      const std::size_t headroom = pipeline_.tiny() ? 1 : 2;
+      // Room for the list to double before the next rebuild; with list_start, lists grow from small and the table
+      // is rebuilt at every growth too.
+      const std::size_t headroom = pipeline_.backend().list_start != 0 ? 1 : 2;
       while ((std::size_t{1} << table_bits_) < kTableLoadInverse * most * headroom) ++table_bits_;
       const std::size_t slots = std::size_t{1} << table_bits_;
       table_.reserve(context, slots * sizeof(cl_ulong));
       ++table_builds_;
-      const cl_ulong empty = ~cl_ulong{0};
+      const cl_ulong empty = opencl::kEmptyPendingKey;
       check(clEnqueueFillBuffer(context.queue(), table_.get(), &empty, sizeof(empty), 0, slots * sizeof(cl_ulong), 0, nullptr,
                                 events.add("partial traversal")),
             "clEnqueueFillBuffer");
@@ -352,9 +352,8 @@ class ApccdOpenCl final : public Strategy {
 }  // namespace
 
 std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings& settings, std::unique_ptr<narrowphase::NarrowPhase> narrow_phase,
-                                            const std::string& narrow_phase_name, const narrowphase::NarrowPhaseParameters& parameters,
                                             const BackendChoice& backend) {
-  opencl::NarrowPhaseChoice narrow = opencl::choose_narrow_phase("apccd", std::move(narrow_phase), narrow_phase_name, parameters, backend.device_iterations);
+  opencl::NarrowPhaseChoice narrow = opencl::choose_narrow_phase("apccd", std::move(narrow_phase));
   opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), backend.device);
   opencl::require_double_precision(device);
   if (!device.int64_atomics) {
@@ -362,13 +361,12 @@ std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings& settings, std::
                                 ") has no 64-bit atomics (cl_khr_int64_base_atomics), which apccd's pending list needs; "
                                 "full:backend=opencl runs there");
   }
-  return std::make_unique<ApccdOpenCl>(settings, std::move(narrow), std::move(device));
+  return std::make_unique<ApccdOpenCl>(settings, std::move(narrow), std::move(device), backend);
 }
 
 #else
 
-std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings&, std::unique_ptr<narrowphase::NarrowPhase>, const std::string&,
-                                            const narrowphase::NarrowPhaseParameters&, const BackendChoice&) {
+std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings&, std::unique_ptr<narrowphase::NarrowPhase>, const BackendChoice&) {
   throw std::invalid_argument("backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
                               "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }

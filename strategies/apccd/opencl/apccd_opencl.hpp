@@ -21,8 +21,8 @@
 /// Devices need cl_khr_int64_base_atomics (PoCL and NVIDIA have it).
 
 #include "strategies/apccd/session.hpp"
+#include "strategies/backend.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
-#include "strategies/opencl/full_opencl.hpp"
 #include "strategies/strategy.hpp"
 
 #include <memory>
@@ -31,10 +31,9 @@ namespace ccd::strategies {
 
 /// Chooses the device and checks it (fp64 with subnormals, 64-bit atomics); the context, the program and the
 /// self-test come at init().
-/// @throws std::invalid_argument for a narrow phase other than conservative and cubic64, or a device that lacks
-///         what the kernels need; OpenClError when this build has no OpenCL.
+/// @throws std::invalid_argument for a narrow phase without a device form, or a device that lacks what the kernels
+///         need, or when this build has no OpenCL.
 std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings& settings, std::unique_ptr<narrowphase::NarrowPhase> narrow_phase,
-                                            const std::string& narrow_phase_name, const narrowphase::NarrowPhaseParameters& parameters,
                                             const BackendChoice& backend);
 
 }  // namespace ccd::strategies

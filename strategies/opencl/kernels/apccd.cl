@@ -3,8 +3,11 @@
  * rounding happens (a relative position is one subtraction per coordinate, a widened box as bvh.cpp's), so that
  * both backends test the same pairs. */
 
-/* An empty slot of the pending list's hash table: no pair key is all ones (a pair is (a, b) with a < b). */
-#define CCD_EMPTY_KEY 0xFFFFFFFFFFFFFFFFUL
+/* CCD_EMPTY_KEY, an empty slot of the pending list's hash table (no pair key is all ones: a pair is (a, b) with
+ * a < b), comes from the host, which fills the table with it (opencl::kernel_defines). */
+#ifndef CCD_EMPTY_KEY
+#error "CCD_EMPTY_KEY must be defined by the host (kernel_defines)"
+#endif
 
 /* Positions in each object's frame: x - centroid[object of the vertex] (static objects: centroid 0). */
 kernel void object_frame(uint count, global const double* x, global const uint* vertex_object, global const double* centroids,

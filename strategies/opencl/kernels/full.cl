@@ -9,15 +9,14 @@
  * exceeds the capacity grows the buffer and runs the stage again. Positions are 3 doubles per vertex; boxes are 6
  * doubles (min xyz, max xyz). */
 
-/* bvh.hpp's kBoxRoundingMargin: relative room for the rounding of widened boxes (2^-50 of |corner| + w covers the
- * one or two roundings of c ± w, at most 2^-52 of it; the smallest subnormal covers corners that underflow). */
-#define CCD_BOX_ROUNDING_MARGIN 0x1p-50
-/* Depth of the traversal stack: the hierarchies split at the median, so a tree of n faces is ceil(log2 n) + 1
- * deep; the host refuses a deeper tree before any launch. */
-#define CCD_TRAVERSAL_STACK 64
-/* An elementary pair's kind in the third component of its uint4: vertex-face pairs are (v, f, CCD_VERTEX_FACE, 0);
- * edge-edge pairs are (a.v0, a.v1, b.v0, b.v1), vertex ids that are never CCD_VERTEX_FACE. */
-#define CCD_VERTEX_FACE 0xFFFFFFFFu
+/* Constants the host defines from their one definition there (opencl::kernel_defines, pipeline.cpp):
+ * CCD_BOX_ROUNDING_MARGIN, bvh.hpp's relative room for the rounding of widened boxes; CCD_TRAVERSAL_STACK, the depth
+ * of the traversal stack (the host refuses a deeper tree before any launch); CCD_VERTEX_FACE, an elementary pair's
+ * kind in the third component of its uint4: vertex-face pairs are (v, f, CCD_VERTEX_FACE, 0), edge-edge pairs
+ * (a.v0, a.v1, b.v0, b.v1), vertex ids that are never CCD_VERTEX_FACE. */
+#if !defined(CCD_BOX_ROUNDING_MARGIN) || !defined(CCD_TRAVERSAL_STACK) || !defined(CCD_VERTEX_FACE)
+#error "CCD_BOX_ROUNDING_MARGIN, CCD_TRAVERSAL_STACK and CCD_VERTEX_FACE must be defined by the host (kernel_defines)"
+#endif
 
 typedef struct {
   double lo[3], hi[3];

@@ -13,8 +13,8 @@ typedef ulong ccd_ulong;
 #error "CCD_GROUP_SIZE (the work-group size of the counting kernels) must be defined by the host"
 #endif
 
-/* Sub-boxes a conservative query may hold on the device (private memory, 56 bytes each). A query that needs more
- * reports an overflow and the host decides it with the same code and more room (shared/inclusion.h). */
+/* Sub-boxes a conservative query may hold on the device (private memory, 56 bytes each; the backend's sub_boxes
+ * key). A query that needs more reports an overflow and is decided again with more room (shared/inclusion.h). */
 #ifndef CCD_DEVICE_SUB_BOXES
-#define CCD_DEVICE_SUB_BOXES 48
+#error "CCD_DEVICE_SUB_BOXES must be defined by the host (kernel_defines)"
 #endif

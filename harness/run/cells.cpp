@@ -1,0 +1,196 @@
+#include "harness/run/cells.hpp"
+
+#include "harness/cell_store.hpp"
+#include "harness/run/provenance.hpp"
+#include "harness/run/verdict.hpp"
+#include "harness/statistics.hpp"
+#include "strategies/registry.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <iostream>
+#include <map>
+
+namespace ccd::harness {
+
+using nlohmann::json;
+
+json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps,
+             const std::string& cell_name) {
+  const Scene& scene = data.sequence.scene();
+  std::vector<std::vector<double>> step_ms(steps);
+  std::map<std::string, std::vector<double>> stage_ms;
+  std::vector<strategies::StepResult> first_pass;
+  std::string resolved;
+  const strategies::StrategyEntry& strategy_entry = strategies::strategy_entry_of(spec);
+  const strategies::Judging judging = strategy_entry.judging;
+  for (int repeat = 0; repeat < std::max(1, options.repeats); ++repeat) {
+    auto strategy = strategies::make_strategy(spec);
+    resolved = strategy->name();
+    strategy->init(scene, data.frames[0]);
+    for (std::size_t k = 0; k < steps; ++k) {
+      const StepView view{&scene, k, data.frames[k], data.frames[k + 1]};
+      const auto start = std::chrono::steady_clock::now();
+      strategies::StepResult result = strategy->step(view, false);
+      step_ms[k].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      for (const auto& [stage, ms] : result.stages.entries()) stage_ms[stage].push_back(ms);
+      if (repeat == 0) first_pass.push_back(std::move(result));
+    }
+    std::cerr << "run: " << data.label << " / " << resolved << ": pass " << repeat + 1 << " of " << options.repeats << " done\n";
+  }
+  std::vector<Verdict> verdicts(steps);
+  std::vector<strategies::TestedPairs> audited;
+  json miss_causes = json::object();
+  if (options.verify) {
+    bool any_missed = false;
+    for (std::size_t k = 0; k < steps; ++k) {
+      verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, nullptr, options.toi);
+      any_missed = any_missed || verdicts[k].missed > 0;
+    }
+    if (any_missed) {
+      // Audit pass, outside every timed region: which misses were never tested (culled) and which tested wrong.
+      auto strategy = strategies::make_strategy(spec);
+      strategy->init(scene, data.frames[0]);
+      for (std::size_t k = 0; k < steps; ++k) {
+        const strategies::StepResult audit = strategy->step({&scene, k, data.frames[k], data.frames[k + 1]}, true);
+        if (!audit.collisions.same_pairs(first_pass[k].collisions)) {
+          throw std::runtime_error(resolved + " gave different answers on two runs of step " + std::to_string(k) +
+                                   " of " + data.label + ": the strategy is not deterministic");
+        }
+        verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, &*audit.tested, options.toi);
+        audited.push_back(std::move(*audit.tested));
+      }
+      std::optional<std::filesystem::path> directory;
+      if (options.misses) directory = *options.misses / safe_path_component(data.label) / std::filesystem::path(cell_name).stem();
+      miss_causes = record_misses(scene, data.frames, data.truth, first_pass, audited, strategy_entry, directory);
+    }
+  }
+  json step_records = json::array();
+  std::vector<double> medians;
+  std::size_t colliding = 0, reported = 0, missed = 0, culled = 0, tested = 0, false_alarms = 0;
+  std::size_t colliding_face_shape = 0, missed_face_shape = 0;
+  ToiVerdict toi_total;
+  double candidates = 0, tests = 0, history = 0;
+  // Each strategy counter (apccd's session_start, nf, pending_pairs, ...) over the steps: mean and max, since the
+  // paper reports averages and peaks, in the order the strategy reports them.
+  std::vector<std::pair<std::string, std::pair<double, double>>> counter_totals;
+  for (std::size_t k = 0; k < steps; ++k) {
+    const strategies::StepResult& r = first_pass[k];
+    const double ms = median(step_ms[k]);
+    medians.push_back(ms);
+    json stages = json::object();
+    for (const auto& [stage, value] : r.stages.entries()) stages[stage] = value;
+    json record = {{"record", "step"},
+                   {"scene", data.label},
+                   {"strategy", resolved},
+                   {"step", k},
+                   {"ms", ms},
+                   {"stages", stages},
+                   {"candidate_pairs", r.counters.candidate_triangle_pairs},
+                   {"elementary_tests", r.counters.elementary_tests},
+                   {"history_bytes", r.counters.history_bytes},
+                   {"reported", reported_count(r, judging)}};
+    // The digest of the answers (pairs and TOI bits), to compare two runs step by step; fcl's cells are judged by
+    // triangle pairs and carry none.
+    if (judging == strategies::Judging::elementary_pairs) record["answers"] = answers_digest(r.collisions);
+    for (const auto& [name, value] : r.counters.extra) {
+      record[name] = value;
+      auto it = std::find_if(counter_totals.begin(), counter_totals.end(), [&](const auto& total) { return total.first == name; });
+      if (it == counter_totals.end()) it = counter_totals.insert(counter_totals.end(), {name, {0.0, value}});
+      it->second.first += value;
+      it->second.second = std::max(it->second.second, value);
+    }
+    if (options.verify) {
+      record["colliding"] = data.truth[k].size();
+      if (!scene.shape_objects().empty()) {
+        record["colliding_face_shape"] = data.truth[k].face_shape().size();
+        record["missed_face_shape"] = verdicts[k].missed_face_shape;
+      }
+      record["missed"] = verdicts[k].missed;
+      record["missed_culled"] = verdicts[k].culled;
+      record["missed_tested"] = verdicts[k].tested;
+      record["false_alarms"] = verdicts[k].false_alarms;
+      if (options.toi) {
+        record["toi_checked"] = verdicts[k].toi.checked;
+        record["toi_late"] = verdicts[k].toi.late;
+        record["toi_error_max"] = verdicts[k].toi.error_max;
+      }
+      colliding += data.truth[k].size();
+      colliding_face_shape += data.truth[k].face_shape().size();
+      missed_face_shape += verdicts[k].missed_face_shape;
+      toi_total.add(verdicts[k].toi);
+    }
+    reported += reported_count(r, judging);
+    missed += verdicts[k].missed;
+    culled += verdicts[k].culled;
+    tested += verdicts[k].tested;
+    false_alarms += verdicts[k].false_alarms;
+    candidates += static_cast<double>(r.counters.candidate_triangle_pairs);
+    tests += static_cast<double>(r.counters.elementary_tests);
+    history = std::max(history, static_cast<double>(r.counters.history_bytes));
+    record.update(environment());
+    step_records.push_back(record);
+  }
+  json stage_summary = json::object();
+  // Mean per step too (a step without the stage adds 0): they add up to ms_per_step_mean, so a session's cheap
+  // frames and its expensive start are both in them (apccd's medians show one or the other).
+  json stage_mean = json::object();
+  const double timed_steps = static_cast<double>(std::max<std::size_t>(steps, 1) * static_cast<std::size_t>(std::max(1, options.repeats)));
+  for (const auto& [stage, values] : stage_ms) {
+    stage_summary[stage] = median(values);
+    double sum = 0;
+    for (const double ms : values) sum += ms;
+    stage_mean[stage] = sum / timed_steps;
+  }
+  json counter_summary = json::object();
+  for (const auto& [name, total] : counter_totals) {
+    counter_summary[name] = {{"mean", total.first / static_cast<double>(std::max<std::size_t>(steps, 1))}, {"max", total.second}};
+  }
+  double ms_sum = 0;
+  for (const double ms : medians) ms_sum += ms;
+  json summary = {{"record", "summary"},
+                  {"scene", data.label},
+                  {"strategy", resolved},
+                  {"triangles", scene.topology().num_faces()},
+                  {"vertices", scene.topology().num_vertices()},
+                  {"steps", steps},
+                  {"thickness", scene.thickness()},
+                  {"ms_per_step", median(medians)},
+                  {"ms_per_step_mean", ms_sum / static_cast<double>(std::max<std::size_t>(steps, 1))},
+                  {"stage_ms", stage_summary},
+                  {"stage_ms_mean", stage_mean},
+                  {"counters", counter_summary},
+                  {"candidate_pairs", candidates / static_cast<double>(std::max<std::size_t>(steps, 1))},
+                  {"elementary_tests", tests / static_cast<double>(std::max<std::size_t>(steps, 1))},
+                  {"history_bytes", history},
+                  {"reported", reported},
+                  {"judged_by", judging == strategies::Judging::triangle_pairs ? "triangle pairs" : "elementary pairs"},
+                  {"thickness_from", options.thickness ? "command line" : "scene"},
+                  {"verified", options.verify},
+                  {"repeats", options.repeats},
+                  {"cell", std::filesystem::path(cell_name).stem().string()},
+                  {"finished_at", utc_now()}};
+  if (options.verify) {
+    summary.update(json{{"colliding", colliding},
+                        {"missed", missed},
+                        {"missed_culled", culled},
+                        {"missed_tested", tested},
+                        {"false_alarms", false_alarms},
+                        {"miss_causes", miss_causes}});
+    summary.update(contact_by_objects(scene, data.truth, steps));
+    if (!scene.shape_objects().empty()) {
+      summary.update(json{{"colliding_face_shape", colliding_face_shape}, {"missed_face_shape", missed_face_shape}});
+    }
+    if (options.toi) {
+      summary.update(json{{"toi_checked", toi_total.checked},
+                          {"toi_late", toi_total.late},
+                          {"toi_missing", toi_total.missing},
+                          {"toi_error_max", toi_total.error_max},
+                          {"toi_error_mean", toi_total.checked ? toi_total.error_sum / static_cast<double>(toi_total.checked) : 0.0}});
+    }
+  }
+  summary.update(environment());
+  return {{"summary", summary}, {"steps", step_records}};
+}
+
+}  // namespace ccd::harness

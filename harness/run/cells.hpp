@@ -1,0 +1,30 @@
+#pragma once
+/// @file
+/// One cell of `ccdbench run`: a strategy over every step of a scene, timed, judged against the truth, recorded.
+
+#include "core/collision_set.hpp"
+#include "harness/run.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace ccd::harness {
+
+/// A scene as a rank holds it: its frames and, when verifying, the truth of each step it has loaded.
+struct SceneData {
+  std::string label;
+  datasets::SceneSequence sequence;
+  std::vector<std::vector<Vec3>> frames;
+  std::vector<CollisionSet> truth;  // per step, when verifying
+  std::vector<bool> has_truth;      // which steps' truth this rank holds
+  std::size_t steps = 0;            // the steps run (--max-steps may cut the scene's)
+};
+
+/// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.
+/// Returns {"summary": ..., "steps": [...]} (DESIGN.md §5 fields).
+nlohmann::json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps,
+                        const std::string& cell_name);
+
+}  // namespace ccd::harness

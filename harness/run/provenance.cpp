@@ -1,0 +1,60 @@
+#include "harness/run/provenance.hpp"
+
+#include "ccd/config.hpp"
+#include "ccd/git_revision.hpp"
+#include "harness/cell_store.hpp"
+#include "harness/work_queue.hpp"
+
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <fstream>
+#include <unistd.h>
+
+namespace ccd::harness {
+
+std::size_t worker_threads() {
+  return std::min<std::size_t>(static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()),
+                               tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+}
+
+nlohmann::json environment() {
+  static const nlohmann::json cached = [] {
+    char host[256] = {};
+    ::gethostname(host, sizeof host - 1);
+    std::string cpu = "unknown";
+    std::ifstream cpuinfo("/proc/cpuinfo");
+    for (std::string line; std::getline(cpuinfo, line);) {
+      if (line.rfind("model name", 0) == 0) {
+        cpu = line.substr(line.find(':') + 2);
+        break;
+      }
+    }
+    const std::string revision = CCDBENCH_GIT_REVISION;  // of the build, not of the source folder at run time
+    return nlohmann::json{{"machine", std::string(host) + " (" + cpu + ", " + std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) + " cores)"},
+                {"build_type", CCDBENCH_BUILD_TYPE},
+                {"git_revision", revision},
+                {"executable", executable_digest()}};
+  }();
+  nlohmann::json env = cached;
+  env["threads"] = worker_threads();
+  env["rank"] = rank_info().rank;
+  return env;
+}
+
+std::string utc_now() {
+  const auto now = std::chrono::system_clock::now();
+  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
+  const auto micros = std::chrono::duration_cast<std::chrono::microseconds>(now.time_since_epoch()).count() % 1000000;
+  std::tm utc{};
+  ::gmtime_r(&seconds, &utc);
+  char text[64];
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%06lldZ", utc.tm_year + 1900, utc.tm_mon + 1,
+                utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, static_cast<long long>(micros));
+  return text;
+}
+
+}  // namespace ccd::harness

@@ -1,0 +1,22 @@
+#pragma once
+/// @file
+/// What every run record carries about where and how it was made (DESIGN.md §5): the machine, the build, the thread
+/// count, the git revision and the executable's digest; and the clock that orders finished cells.
+
+#include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <string>
+
+namespace ccd::harness {
+
+/// The worker threads this process may use (--threads, or every core).
+std::size_t worker_threads();
+
+/// machine, build_type, git_revision, executable, threads, rank.
+nlohmann::json environment();
+
+/// "2026-11-22T21:30:00.123456Z": orders the cells of results.jsonl by when they finished.
+std::string utc_now();
+
+}  // namespace ccd::harness

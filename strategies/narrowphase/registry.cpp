@@ -1,0 +1,60 @@
+#include "strategies/narrowphase/registry.hpp"
+
+#include <stdexcept>
+
+namespace ccd::narrowphase {
+
+// One declaration per file of the build's list (narrow_phase_files.inc, generated from CMakeLists.txt).
+#define CCD_NARROW_PHASE_FILE(file) std::vector<NarrowPhaseEntry> file##_entries();
+#include "ccd/narrow_phase_files.inc"
+#undef CCD_NARROW_PHASE_FILE
+
+const std::vector<NarrowPhaseEntry>& narrow_phases() {
+  static const std::vector<NarrowPhaseEntry> entries = [] {
+    std::vector<NarrowPhaseEntry> all;
+#define CCD_NARROW_PHASE_FILE(file) \
+  for (NarrowPhaseEntry& entry : file##_entries()) all.push_back(std::move(entry));
+#include "ccd/narrow_phase_files.inc"
+#undef CCD_NARROW_PHASE_FILE
+    return all;
+  }();
+  return entries;
+}
+
+std::string narrow_phase_list() {
+  std::string names;
+  for (const NarrowPhaseEntry& entry : narrow_phases()) names += (names.empty() ? "" : ", ") + entry.name;
+  return names;
+}
+
+bool is_narrow_phase(const std::string& name) {
+  for (const NarrowPhaseEntry& entry : narrow_phases()) {
+    if (entry.name == name) return true;
+  }
+  return false;
+}
+
+const NarrowPhaseEntry& find_narrow_phase(const std::string& name) {
+  for (const NarrowPhaseEntry& entry : narrow_phases()) {
+    if (entry.name == name) return entry;
+  }
+  throw std::invalid_argument("unknown narrow phase '" + name + "' (known: " + narrow_phase_list() + ")");
+}
+
+std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const SpecParameters& parameters) {
+  const NarrowPhaseEntry& entry = find_narrow_phase(name);
+  return entry.make(SpecReader(entry.name, entry.keys, parameters));
+}
+
+std::unique_ptr<NarrowPhase> make_narrow_phase_from_spec(const std::string& spec) {
+  const auto [name, parameters] = split_spec(spec);
+  return make_narrow_phase(name, parameters);
+}
+
+std::vector<std::string> narrow_phase_backends(const NarrowPhaseEntry& entry) {
+  std::vector<std::string> backends{"cpu"};
+  if (entry.make(SpecReader(entry.name, entry.keys, {}))->device_form()) backends.push_back("opencl");
+  return backends;
+}
+
+}  // namespace ccd::narrowphase

@@ -1,0 +1,56 @@
+#pragma once
+/// @file
+/// The narrow-phase registry: the one door through which a narrow phase enters (DESIGN.md §3). Each entry owns its
+/// name, its keys (values, defaults, help), a one-line description, what it promises, the accuracy a `--sweep`
+/// varies and its factory; strategies, `queries`, `stress`, the OpenCL backend and `ccdbench strategies` read it.
+///
+/// The list is the build's: strategies/narrowphase/CMakeLists.txt names one source file per line, and each file
+/// FILE.cpp defines `std::vector<NarrowPhaseEntry> FILE_entries()`. A new narrow phase is its file and its line.
+
+#include "strategies/narrowphase/narrow_phase.hpp"
+#include "strategies/narrowphase/spec.hpp"
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ccd::narrowphase {
+
+struct NarrowPhaseEntry {
+  std::string name;
+  /// One line: what it computes and what it guarantees.
+  std::string help;
+  std::vector<KeySpec> keys;
+  /// Promises no false negatives on any input: judged as conservative (0 misses and no late TOI are gated).
+  bool conservative = false;
+  /// The key `queries --sweep` varies (its accuracy), and the values it takes.
+  std::string sweep_key;
+  std::vector<std::string> sweep_values;
+  /// Makes an instance from its keys (`keys` says which the reader holds, already checked).
+  std::function<std::unique_ptr<NarrowPhase>(const SpecReader&)> make;
+};
+
+/// Every narrow phase, in the order every listing shows them.
+const std::vector<NarrowPhaseEntry>& narrow_phases();
+
+/// The entry named `name`. @throws std::invalid_argument naming the known narrow phases.
+const NarrowPhaseEntry& find_narrow_phase(const std::string& name);
+
+/// Whether `name` names a narrow phase.
+bool is_narrow_phase(const std::string& name);
+
+/// Makes narrow phase `name` from its keys.
+/// @throws std::invalid_argument for an unknown name or key, or a value it does not accept.
+std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const SpecParameters& parameters = {});
+
+/// Parses `NAME[:key=value...]` and makes the variant.
+std::unique_ptr<NarrowPhase> make_narrow_phase_from_spec(const std::string& spec);
+
+/// The backends an entry runs on: "cpu", and "opencl" where its default instance has a device form.
+std::vector<std::string> narrow_phase_backends(const NarrowPhaseEntry& entry);
+
+/// The names of every narrow phase, comma-separated, for messages.
+std::string narrow_phase_list();
+
+}  // namespace ccd::narrowphase
