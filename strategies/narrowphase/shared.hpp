@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The host's view of the narrow phases' shared arithmetic (shared/geometry.h, shared/inclusion.h): the same text
+/// The host's view of the narrow phases' shared arithmetic (shared/*.h; each includes what it uses): the same text
 /// the OpenCL kernels compile, here in C++. `f64` holds every function in double, `f32` the real-generic ones in
 /// float (cubic32). The files are C on purpose (OpenCL C 1.2 has no templates or namespaces), so C-style casts
 /// are silenced for them alone. This project compiles with -ffp-contract=off, which the bit-for-bit parity with
@@ -29,10 +29,11 @@ using std::isfinite;
 using std::ldexp;
 using std::nextafter;
 using std::sqrt;
-#include "strategies/narrowphase/shared/geometry.h"
 #include "strategies/narrowphase/shared/inclusion.h"
 #include "strategies/narrowphase/shared/separation.h"
 }  // namespace f64
+// geometry.h again, for float: its include guard is reset so that it is read a second time, into namespace f32.
+#undef CCD_SHARED_GEOMETRY_H
 namespace f32 {
 using ccd_real = float;
 inline constexpr float ccd_real_epsilon = std::numeric_limits<float>::epsilon();

@@ -1,9 +1,9 @@
 #pragma once
 /// @file
 /// The OpenCL C source of every kernel, embedded at build time (cmake/embed_kernels.cmake) so that a carried
-/// binary needs no file beside it: kernels/prelude.cl, the narrow phases' shared files
-/// (strategies/narrowphase/shared/geometry.h, inclusion.h), then kernels/self_test.cl and kernels/full.cl, each
-/// preceded by a #line directive so that build logs name the file.
+/// binary needs no file beside it: kernels/prelude.cl, self_test.cl, full.cl and apccd.cl, each with the narrow
+/// phases' shared files it includes (strategies/narrowphase/shared/) expanded in place, the first time only; every
+/// file's text is preceded by a #line directive so that build logs name the file.
 
 namespace ccd::opencl {
 

@@ -16,6 +16,9 @@
  *    on signed zeros);
  *  - no built-in dot, cross, length or normalize (OpenCL may compute them in any order or precision). */
 
+#ifndef CCD_SHARED_GEOMETRY_H
+#define CCD_SHARED_GEOMETRY_H
+
 typedef struct {
   ccd_real c[3];
 } ccd_v3;
@@ -284,3 +287,5 @@ static inline ccd_cubic_outcome ccd_cubic_test(const ccd_v3 rows[8], ccd_real th
   }
   return outcome;
 }
+
+#endif

@@ -1,6 +1,6 @@
 /* `conservative`, the inclusion-based narrow phase, written once for the host and the OpenCL backend (geometry.h
- * says how the two stay bit-identical). Double only; needs geometry.h with ccd_real = double, a 64-bit unsigned
- * `ccd_ulong`, and the functions sqrt, fabs, frexp, ldexp, nextafter and isfinite.
+ * says how the two stay bit-identical). Double only: ccd_real = double, with a 64-bit unsigned `ccd_ulong` and the
+ * functions sqrt, fabs, frexp, ldexp, nextafter and isfinite from its environment.
  *
  * The pair as one function of three parameters, F(t, u, v) = S(t) + u·X(t) + v·Y(t), zero when the primitives
  * touch:
@@ -21,9 +21,13 @@
  * underflows unless the pair itself spans more than 2^500. The bound assumes round-to-nearest, IEEE double
  * arithmetic with subnormals and no contraction: the OpenCL backend checks its device for exactly that before
  * use (strategies/opencl/kernels/self_test.cl). */
+#ifndef CCD_SHARED_INCLUSION_H
+#define CCD_SHARED_INCLUSION_H
 
-#define CCD_UNIT_ROUNDOFF 0x1p-53
-#define CCD_DENORM_MIN 4.9406564584124654e-324
+#include "strategies/narrowphase/shared/geometry.h"
+#include "strategies/narrowphase/shared/scaling.h"
+#include "strategies/narrowphase/shared/sub_boxes.h"
+
 /* of u·M, covering the 51 derived above */
 #define CCD_CORNER_ERROR_UNITS 64.0
 /* smallest subnormals, for products that underflow */
@@ -39,127 +43,12 @@
  * the closest-point distance is computed in a few dozen roundings (<< 1e-10); a mistake here would only be a false
  * alarm with TOI 0, never a miss. */
 #define CCD_START_DISTANCE_MARGIN 1e-10
-/* After rescaling, every |coordinate| is below 2^CCD_LARGEST_SCALED_EXPONENT even when the pair's own range forces
- * a smaller shift: cubes of differences (the coplanarity terms, up to 6 of them summed) then stay far from
- * overflow. */
-#define CCD_LARGEST_SCALED_EXPONENT 300
 /* Boxes spent bounding the TOI below once a contact is proven. */
 #define CCD_TOI_BUDGET 48
 /* Half-width of the box around a Newton point in which Miranda's theorem proves a zero: about 1e-7 per parameter. */
 #define CCD_MIRANDA_HALF_WIDTH 0x1p-24
 
-/* ---- Exact rescaling (exact_scaling.hpp). ---- */
-
-/* The pair rescaled exactly by 2^-exponent: with the largest |coordinate| in [1/2, 1), or by the largest power of
- * two that keeps the smallest nonzero |coordinate| a normal double. δ is rounded up when its scaled value is not
- * exact. Returns 0 (rows untouched) when no exact rescaling brings every coordinate below
- * 2^CCD_LARGEST_SCALED_EXPONENT, or a coordinate or δ is not finite: conservative callers then answer "collides". */
-static inline int ccd_scale_to_unit(ccd_v3 rows[8], double* thickness, int* exponent) {
-  *exponent = 0;
-  if (!isfinite(*thickness) || *thickness < 0) return 0;
-  double largest = 0, smallest = INFINITY;
-  for (int i = 0; i < 8; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const double magnitude = fabs(rows[i].c[k]);
-      if (!isfinite(magnitude)) return 0;
-      largest = ccd_max(largest, magnitude);
-      if (magnitude > 0) smallest = ccd_min(smallest, magnitude);
-    }
-  }
-  if (largest == 0) return 1; /* every point at the origin: nothing to rescale */
-  int largest_exponent = 0, smallest_exponent = 0;
-  frexp(largest, &largest_exponent);   /* largest in [2^(e-1), 2^e) */
-  frexp(smallest, &smallest_exponent); /* smallest in [2^(e-1), 2^e), also for subnormals */
-  int shift = largest_exponent;
-  /* Scaling down keeps every bit only while the smallest coordinate stays normal: smallest·2^-shift >= 2^-1022. */
-  const int keeps_bits = smallest_exponent - 1 + 1022;
-  if (shift > keeps_bits) shift = keeps_bits;
-  if (largest_exponent - shift > CCD_LARGEST_SCALED_EXPONENT) return 0;
-  const double given = *thickness;
-  double scaled = 0;
-  if (shift >= -1022 && shift <= 1022) {
-    /* Both 2^-shift and 2^shift are normal doubles, so a product with either is the correctly rounded value of
-     * the exact one, as ldexp's is: the same bits from one ldexp instead of 26 (the coordinates' products are
-     * exact, their results normal and far from overflow by the choice of shift). shift lies in [-1073, 1024]:
-     * only pairs whose largest |coordinate| is 2^1022 or more, or below 2^-1023, take the other branch. */
-    const double down = ldexp(1.0, -shift), up = ldexp(1.0, shift);
-    scaled = given * down;
-    for (int i = 0; i < 8; ++i) {
-      for (int k = 0; k < 3; ++k) rows[i].c[k] *= down;
-    }
-    /* δ is not a coordinate: it may lose bits (or overflow). Rounded up, a larger δ only adds false alarms. */
-    if (scaled * up < given) scaled = nextafter(scaled, (double)INFINITY);
-  } else {
-    scaled = ldexp(given, -shift);
-    for (int i = 0; i < 8; ++i) {
-      for (int k = 0; k < 3; ++k) rows[i].c[k] = ldexp(rows[i].c[k], -shift);
-    }
-    if (ldexp(scaled, shift) < given) scaled = nextafter(scaled, (double)INFINITY);
-  }
-  *thickness = scaled;
-  *exponent = shift;
-  return 1;
-}
-
 /* ---- The inclusion search. ---- */
-
-typedef struct {
-  double t0, t1, u0, u1, v0, v1;
-  ccd_ulong order; /* ties broken by creation order, so the search is deterministic */
-} ccd_sub_box;
-
-static inline ccd_sub_box ccd_sub_box_make(double t0, double t1, double u0, double u1, double v0, double v1, ccd_ulong order) {
-  ccd_sub_box box;
-  box.t0 = t0;
-  box.t1 = t1;
-  box.u0 = u0;
-  box.u1 = u1;
-  box.v0 = v0;
-  box.v1 = v1;
-  box.order = order;
-  return box;
-}
-
-/* Earliest first: the order of the search's priority queues (a strict total order, so every heap pops alike). */
-static inline int ccd_earlier(const ccd_sub_box* a, const ccd_sub_box* b) {
-  return a->t0 != b->t0 ? a->t0 < b->t0 : a->order < b->order;
-}
-
-/* A binary min-heap of sub-boxes, earliest on top, over caller-owned storage. */
-static inline void ccd_heap_sift_down(ccd_sub_box* heap, int size, int i) {
-  for (;;) {
-    const int left = 2 * i + 1, right = left + 1;
-    int least = i;
-    if (left < size && ccd_earlier(&heap[left], &heap[least])) least = left;
-    if (right < size && ccd_earlier(&heap[right], &heap[least])) least = right;
-    if (least == i) return;
-    const ccd_sub_box swap = heap[i];
-    heap[i] = heap[least];
-    heap[least] = swap;
-    i = least;
-  }
-}
-static inline void ccd_heap_push(ccd_sub_box* heap, int* size, ccd_sub_box box) {
-  int i = (*size)++;
-  heap[i] = box;
-  while (i > 0) {
-    const int parent = (i - 1) / 2;
-    if (!ccd_earlier(&heap[i], &heap[parent])) return;
-    const ccd_sub_box swap = heap[i];
-    heap[i] = heap[parent];
-    heap[parent] = swap;
-    i = parent;
-  }
-}
-static inline ccd_sub_box ccd_heap_pop(ccd_sub_box* heap, int* size) {
-  const ccd_sub_box top = heap[0];
-  heap[0] = heap[--*size];
-  ccd_heap_sift_down(heap, *size, 0);
-  return top;
-}
-static inline void ccd_heapify(ccd_sub_box* heap, int size) {
-  for (int i = size / 2 - 1; i >= 0; --i) ccd_heap_sift_down(heap, size, i);
-}
 
 typedef struct {
   ccd_v3 x0[4], dx[4];
@@ -644,3 +533,5 @@ static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 origin
   if (!result.overflow) result.achieved_tolerance = ldexp(result.achieved_tolerance, exponent); /* the pair's units */
   return result;
 }
+
+#endif

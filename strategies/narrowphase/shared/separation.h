@@ -1,16 +1,22 @@
 /* The separation filter (strategies/separation_filter.hpp): a cheap, certified "these two primitives stay farther
  * apart than δ during the step", written once for the host and the OpenCL kernels so that `apccd` decides which
- * elementary pairs reach the narrow phase identically on both backends. Needs geometry.h and inclusion.h (exact
- * rescaling) before it, double only; every operation is the one the former Eigen code performed, in its order.
+ * elementary pairs reach the narrow phase identically on both backends. Double only; every operation is the one the
+ * former Eigen code performed, in its order.
  *
  * Error budget. Every decision below compares a computed quantity with a bound that covers its rounding, derived
  * for round-to-nearest (the host sets it on entry; OpenCL devices round to nearest) with unit roundoff u = 2^-53
  * and γ(k) = k·u / (1 - k·u) (Higham, "Accuracy and Stability of Numerical Algorithms", 3.1): a dot product of n
  * terms errs by at most γ(n)·Σ|x_i·y_i| when nothing underflows, and each rounding to a subnormal result adds at
- * most half the smallest subnormal. Pairs arrive rescaled so that every |coordinate| is below 1 (inclusion.h's
+ * most half the smallest subnormal. Pairs arrive rescaled so that every |coordinate| is below 1 (scaling.h's
  * ccd_scale_to_unit), which keeps products far from overflow; subnormal results are covered by the absolute terms.
  * Only a pair spanning more than about 2^1021 keeps larger coordinates (the smallest must stay a normal double);
  * the plane test then declines (see there). */
+
+#ifndef CCD_SHARED_SEPARATION_H
+#define CCD_SHARED_SEPARATION_H
+
+#include "strategies/narrowphase/shared/geometry.h"
+#include "strategies/narrowphase/shared/scaling.h"
 
 static inline double ccd_gamma(int k) { return k * CCD_UNIT_ROUNDOFF / (1 - k * CCD_UNIT_ROUNDOFF); }
 /* A direction whose squared length is below this is useless (its own rounding would dominate): not proven. */
@@ -201,3 +207,5 @@ static inline int ccd_provably_apart(ccd_v3 r[8], int vertex_face, double thickn
   }
   return ccd_apart_from_plane(r, vertex_face, thickness, largest) || ccd_apart_by_motion_bound(r, vertex_face, thickness, largest);
 }
+
+#endif

@@ -3,6 +3,9 @@
  * rounding happens (a relative position is one subtraction per coordinate, a widened box as bvh.cpp's), so that
  * both backends test the same pairs. */
 
+#include "strategies/narrowphase/shared/geometry.h"
+#include "strategies/narrowphase/shared/separation.h"
+
 /* CCD_EMPTY_KEY, an empty slot of the pending list's hash table (no pair key is all ones: a pair is (a, b) with
  * a < b), comes from the host, which fills the table with it (opencl::kernel_defines). */
 #ifndef CCD_EMPTY_KEY

@@ -9,6 +9,9 @@
  * exceeds the capacity grows the buffer and runs the stage again. Positions are 3 doubles per vertex; boxes are 6
  * doubles (min xyz, max xyz). */
 
+#include "strategies/narrowphase/shared/geometry.h"
+#include "strategies/narrowphase/shared/inclusion.h"
+
 /* Constants the host defines from their one definition there (opencl::kernel_defines, pipeline.cpp):
  * CCD_BOX_ROUNDING_MARGIN, bvh.hpp's relative room for the rounding of widened boxes; CCD_TRAVERSAL_STACK, the depth
  * of the traversal stack (the host refuses a deeper tree before any launch); CCD_VERTEX_FACE, an elementary pair's

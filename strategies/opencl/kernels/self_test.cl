@@ -1,6 +1,9 @@
 /* The start-up check of a device's arithmetic (strategies/opencl/self_test.cpp): the host gives the inputs and
  * compares every output bit with its own. */
 
+#include "strategies/narrowphase/shared/geometry.h"
+#include "strategies/narrowphase/shared/inclusion.h"
+
 /* in: a, b, c, tiny, smallest, two, three. out: a·b + c (0 unless contracted into an FMA), tiny / 2 (a subnormal,
  * 0 if flushed), 3·smallest - smallest (subnormal arithmetic), sqrt(2) and 1/3 (correctly rounded). */
 kernel void self_test_arithmetic(global const double* in, global double* out) {
