@@ -3,7 +3,6 @@
 #include "ccd/config.hpp"
 
 #include <cstdlib>
-#include <string_view>
 
 namespace ccd::datasets {
 
@@ -16,11 +15,6 @@ std::optional<std::filesystem::path> external_data_dir() {
     if (std::filesystem::is_directory(candidate)) return candidate;
   }
   return std::nullopt;
-}
-
-bool external_data_required() {
-  const char* value = std::getenv("CCDBENCH_REQUIRE_DATA");
-  return value != nullptr && std::string_view(value) == "1";
 }
 
 }  // namespace ccd::datasets

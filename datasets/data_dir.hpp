@@ -11,7 +11,4 @@ namespace ccd::datasets {
 /// of the checkout (where scripts/fetch-data.sh puts it) when it exists; else nullopt.
 std::optional<std::filesystem::path> external_data_dir();
 
-/// Whether CCDBENCH_REQUIRE_DATA=1: a test that would skip for lack of data fails instead (CI sets it).
-bool external_data_required();
-
 }  // namespace ccd::datasets

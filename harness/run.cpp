@@ -84,7 +84,6 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   }
   const TruthCache truth_cache(datasets::procedural_cache_root() / "truth");
   SceneStore store(options);
-  std::size_t cells_finished_here = 0;
 
   // Work items (harness/work_queue.hpp): {"truth", scene, step} computes or reads one step's truth into the cache
   // (and this rank's memory); {"cell", scene, spec, file} runs a cell. Steps of a cell are never split: strategies
@@ -111,7 +110,6 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
       const bool computed = load_truth(k);
       return json{{"computed", computed}}.dump();
     }
-    if (rank_info().rank != 0) test_hook_rank_exit(cells_finished_here);
     if (options.verify) {
       // Truth steps computed on other ranks are in the cache by now (they finished before this cell was handed out).
       for (std::size_t k = 0; k < data.steps; ++k) {
@@ -119,7 +117,6 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
       }
     }
     json result = run_cell(data, task.at("spec"), options, data.steps, task.at("file"));
-    ++cells_finished_here;
     return result.dump();
   };
   if (!planner) {
@@ -201,7 +198,6 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     write_cell(item.file, result);
     rebuild_results_log(options.out, std::cerr);
     ++cells_done;
-    test_hook_rank_exit(cells_done);
     if (rank_info().size > 1) {
       std::cerr << "run: " << item.label << " / " << item.key.strategy << ": cell " << cells_done << " of " << cell_count
                 << " done" << on_rank(rank) << "\n";

@@ -7,7 +7,6 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <deque>
@@ -372,22 +371,6 @@ void distribute(const std::vector<WorkItem>& items, const WorkFunction& work, co
   }
 #endif
   run_in_plan_order(items, work, done);
-}
-
-void test_hook_rank_exit(std::size_t finished_here) {
-  const char* value = std::getenv("CCDBENCH_TEST_RANK_EXIT");
-  if (!value || !*value) return;
-  int rank = -1;
-  unsigned long long after = 0;
-  char end = 0;
-  if (std::sscanf(value, "%d:%llu%c", &rank, &after, &end) != 2 || rank < 0) {
-    throw std::invalid_argument(std::string("CCDBENCH_TEST_RANK_EXIT='") + value + "': expected RANK:N");
-  }
-  if (rank != g_ranks.rank || finished_here < after) return;
-  std::cerr << "ccdbench: rank " << rank << ": exiting after " << finished_here
-            << " finished units, as CCDBENCH_TEST_RANK_EXIT asks (a test of a rank that dies)\n";
-  std::cerr.flush();
-  std::_Exit(86);
 }
 
 }  // namespace ccd::harness

@@ -65,11 +65,4 @@ using DoneFunction = std::function<void(std::size_t item, const std::string& res
 /// an error and ends the run (end_all_ranks with 2 for bad input, else 1).
 void distribute(const std::vector<WorkItem>& items, const WorkFunction& work, const DoneFunction& done);
 
-/// Test hook (never set by a user): CCDBENCH_TEST_RANK_EXIT="RANK:N" names a rank and a count. A command asks it
-/// with the units that rank has seen finish (`run`: on rank 0, the cells recorded from every rank, counted after each
-/// is written; on another rank, the cells it finished, asked before it starts the next). At N on rank RANK the process
-/// exits abruptly (status 86, no MPI_Finalize, as if killed). Used by the tests that a rerun completes what a dead
-/// rank left. A malformed value is an error (std::invalid_argument), never ignored.
-void test_hook_rank_exit(std::size_t finished_here);
-
 }  // namespace ccd::harness

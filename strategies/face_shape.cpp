@@ -1,7 +1,7 @@
 #include "strategies/face_shape.hpp"
 
 #include "strategies/bvh/bvh.hpp"
-#include "strategies/narrowphase/exact_scaling.hpp"
+#include "strategies/narrowphase/round_to_nearest.hpp"
 
 #include <ccd/ccd.h>
 #include <tbb/blocked_range.h>

@@ -1,6 +1,6 @@
 #include "strategies/separation_filter.hpp"
 
-#include "strategies/narrowphase/exact_scaling.hpp"
+#include "strategies/narrowphase/round_to_nearest.hpp"
 #include "strategies/narrowphase/shared.hpp"
 
 namespace ccd::strategies {

@@ -16,7 +16,7 @@
 /// move in between.
 ///
 /// Certified: every comparison carries a bound of its own rounding, derived for round-to-nearest (which it sets on
-/// entry), on the pair rescaled exactly by a power of two to unit size (narrowphase/exact_scaling.hpp), so its
+/// entry), on the pair rescaled exactly by a power of two to unit size (narrowphase/shared/scaling.h), so its
 /// answers are the same at every scale from 2^-1000 to 2^1000, tiny coordinates do not underflow and a motion far
 /// larger than the features does not enter the rounding (no x1 - x0 is formed where features are compared).
 /// It decides "apart" only; "maybe" goes to the narrow phase.

@@ -58,7 +58,7 @@ FclMissCause explain_fcl_answer(const narrowphase::PairRows& rows, bool vertex_f
     x0[i] = rows[i];
     dx[i] = rows[i + 4] - rows[i];
   }
-  const std::array<double, 4> c = narrowphase::coplanarity_cubic<double>(x0, dx, vertex_face);
+  const std::array<double, 4> c = narrowphase::coplanarity_cubic(x0, dx, vertex_face);
   double largest = 0, span = 0;
   for (double coefficient : c) largest = std::max(largest, std::abs(coefficient));
   for (const Vec3& row : rows) span = std::max(span, (row - rows[0]).cwiseAbs().maxCoeff());

@@ -3,7 +3,7 @@
 /// Tight-Inclusion (Wang et al. 2021). It never misses: every answer "no" is proven; "yes" may be a false alarm
 /// within the tolerance, or because the iteration cap was hit (reported).
 
-#include "strategies/narrowphase/exact_scaling.hpp"
+#include "strategies/narrowphase/round_to_nearest.hpp"
 #include "strategies/narrowphase/registry.hpp"
 #include "strategies/narrowphase/shared.hpp"
 

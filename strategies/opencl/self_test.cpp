@@ -1,6 +1,6 @@
 #include "strategies/opencl/self_test.hpp"
 
-#include "strategies/narrowphase/exact_scaling.hpp"
+#include "strategies/narrowphase/round_to_nearest.hpp"
 #include "strategies/narrowphase/shared.hpp"
 
 #include <cmath>

@@ -19,18 +19,23 @@ using testing::quoted;
 using testing::read_json;
 using testing::run_command;
 
-/// `mpirun -n RANKS ccdbench --threads 1 ARGUMENTS`, more ranks than cores allowed; `environment` goes before it.
+/// `mpirun -n RANKS ccdbench --threads 1 ARGUMENTS`, more ranks than cores allowed.
+/// With `fault` ("RANK:EVENT:N", tests/support/fault_injection.cpp) the injector is preloaded into the ranks alone
+/// (ASan's check that its runtime comes first among the libraries is off for them: the injector comes first).
 /// LeakSanitizer is told to ignore what OpenMPI's own libraries keep at exit (tests/lsan_openmpi.supp; only ASan
 /// builds read it). For it to see those libraries in a leak's stack, OpenMPI and PMIx keep their plugins loaded
 /// (a plugin closed before exit is an "<unknown module>" no suppression can name) and LeakSanitizer unwinds
 /// without frame pointers, which OpenMPI's libraries are built without.
-testing::CommandResult mpirun(int ranks, const std::string& arguments, const std::string& environment = {}) {
+testing::CommandResult mpirun(int ranks, const std::string& arguments, const std::string& fault = {}) {
+  const std::string injector = fault.empty() ? std::string()
+                                             : " -x LD_PRELOAD=" + quoted(CCDBENCH_FAULT_INJECTION) + " -x CCDBENCH_FAULT=" + fault +
+                                                   " -x ASAN_OPTIONS=verify_asan_link_order=0";
   const std::string command = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
                               "OMPI_MCA_mca_base_component_disable_dlclose=1 PMIX_MCA_mca_base_component_disable_dlclose=1 "
                               "LSAN_OPTIONS=fast_unwind_on_malloc=0:suppressions=" +
                               quoted(std::filesystem::path(CCDBENCH_SOURCE_DIR) / "tests" / "lsan_openmpi.supp") + " " +
-                              environment + " " CCDBENCH_MPIEXEC " -n " + std::to_string(ranks) +
-                              " --oversubscribe --bind-to none " CCDBENCH_EXECUTABLE " --threads 1 " + arguments;
+                              CCDBENCH_MPIEXEC " -n " + std::to_string(ranks) +
+                              " --oversubscribe --bind-to none" + injector + " " CCDBENCH_EXECUTABLE " --threads 1 " + arguments;
   return run_command(command);
 }
 
@@ -52,20 +57,18 @@ nlohmann::json verdict(const nlohmann::json& summary) {
 class Mpi : public ::testing::Test {
  protected:
 
-  /// The ci suite's summaries from `ranks` ranks into OUT (0: a plain process, without mpirun); `environment` may
-  /// set the test hook. Each test starts with a plain run: it fills the truth cache, so that the runs under mpirun,
+  /// The ci suite's summaries from `ranks` ranks into OUT (0: a plain process, without mpirun). Each test starts with a plain run: it fills the truth cache, so that the runs under mpirun,
   /// whose LeakSanitizer unwinds slowly in the ASan build, read their truth instead of computing it.
-  testing::CommandResult run_suite(int ranks, const std::string& out, const std::string& extra = {},
-                                   const std::string& environment = {}) {
+  testing::CommandResult run_suite(int ranks, const std::string& out, const std::string& extra = {}) {
     const std::string arguments = "run --suite ci --toi --strategy full,apccd,full+cubic64 " + extra + " --out " +
                                   quoted(dir_ / out) + " --json " + quoted(dir_ / (out + ".json"));
     if (ranks == 0) return run_command(std::string(CCDBENCH_EXECUTABLE) + " --threads 1 " + arguments);
-    return mpirun(ranks, arguments, environment);
+    return mpirun(ranks, arguments);
   }
 
   /// The same three strategies on a small kinematic fold (6 × 6, 8 frames: it collides at its δ), for the tests
-  /// of dying ranks, which run several times.
-  testing::CommandResult run_fold(int ranks, const std::string& out, const std::string& environment = {}) {
+  /// of dying ranks, which run several times; `fault` as mpirun's.
+  testing::CommandResult run_fold(int ranks, const std::string& out, const std::string& fault = {}) {
     if (!std::filesystem::exists(dir_ / "fold")) {
       const auto generated = run_command(std::string(CCDBENCH_EXECUTABLE) + " generate fold --resolution 6 --frames 8 --out " + quoted(dir_ / "fold"));
       EXPECT_EQ(generated.exit_code, 0) << generated.output;
@@ -73,7 +76,7 @@ class Mpi : public ::testing::Test {
     const std::string arguments = "run --scene " + quoted(dir_ / "fold") + " --toi --strategy full,apccd,full+cubic64 --out " +
                                   quoted(dir_ / out) + " --json " + quoted(dir_ / (out + ".json"));
     if (ranks == 0) return run_command(std::string(CCDBENCH_EXECUTABLE) + " --threads 1 " + arguments);
-    return mpirun(ranks, arguments, environment);
+    return mpirun(ranks, arguments, fault);
   }
 
   nlohmann::json summaries(const std::string& out) { return read_json(dir_ / (out + ".json")); }
@@ -155,15 +158,15 @@ TEST_F(Mpi, TruthAndQueriesOverRanksAreThoseOfOneProcess) {
   EXPECT_GT(colliding, 0u);
 }
 
-// A worker rank dies (the hook exits it, as a kill would) when it is handed its first cell: the run fails, mpirun
-// names the rank, rank 0 says where the finished cells are, and a rerun on two ranks completes with the results of
-// an undisturbed run.
+// A worker rank dies (the injector ends it, as a kill would) when it receives its first work item: the run fails,
+// mpirun names the rank, rank 0 says where the finished cells are, and a rerun on two ranks completes with the
+// results of an undisturbed run.
 TEST_F(Mpi, ARerunCompletesWhatADeadWorkerRankLeft) {
   const auto reference = run_fold(0, "reference");
   ASSERT_EQ(reference.exit_code, 0) << reference.output;
-  const auto failed = run_fold(2, "out", "CCDBENCH_TEST_RANK_EXIT=1:0");
+  const auto failed = run_fold(2, "out", "1:message:1");
   EXPECT_NE(failed.exit_code, 0) << failed.output;
-  EXPECT_NE(failed.output.find("rank 1: exiting after 0 finished units"), std::string::npos) << failed.output;
+  EXPECT_NE(failed.output.find("fault injection: rank 1 ends"), std::string::npos) << failed.output;
   EXPECT_NE(failed.output.find("finished cells are kept in"), std::string::npos) << failed.output;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "out.json")) << "a failed run must not write its summary";
   const std::size_t kept = cell_files("out");
@@ -179,13 +182,14 @@ TEST_F(Mpi, ARerunCompletesWhatADeadWorkerRankLeft) {
   EXPECT_GT(expect_same_verdicts(a, b), 0u);
 }
 
-// Rank 0 dies after recording two cells (deterministic: it counts every rank's cells): exactly those two are kept,
-// and a rerun on one process reuses them and runs the third.
+// Rank 0 dies right after writing its second cell (deterministic: it writes every rank's cells): exactly those two
+// are kept, and a rerun on one process reuses them and runs the third.
 TEST_F(Mpi, ARerunOnOneProcessCompletesWhatADeadRankZeroLeft) {
   const auto reference = run_fold(0, "reference");
   ASSERT_EQ(reference.exit_code, 0) << reference.output;
-  const auto failed = run_fold(2, "out", "CCDBENCH_TEST_RANK_EXIT=0:2");
+  const auto failed = run_fold(2, "out", "0:cell:2");
   EXPECT_NE(failed.exit_code, 0) << failed.output;
+  EXPECT_NE(failed.output.find("fault injection: rank 0 ends at its cell number 2"), std::string::npos) << failed.output;
   EXPECT_EQ(cell_files("out"), 2u) << failed.output;
   const auto rerun = run_fold(1, "out");
   ASSERT_EQ(rerun.exit_code, 0) << rerun.output;

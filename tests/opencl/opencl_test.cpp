@@ -89,6 +89,15 @@ std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& 
 }
 
 
+/// The steps a parity run compares: `count` steps from step `first` (0: to the last), both strategies starting fresh
+/// at frame `first` (a scene that ends before is left out). Suite runs too long for the sanitizer run come in two tests, the first steps and the rest
+/// (`_from_step_K`, which the ASan test preset leaves out by name, CMakePresets.json): each checks the same thing in
+/// every build type.
+struct Steps {
+  std::size_t first = 0;
+  std::size_t count = 0;
+};
+
 class OpenClParity : public ::testing::Test {
  protected:
   void SetUp() override { ::setenv("CCDBENCH_CACHE_DIR", cache_.path().c_str(), 1); }
@@ -98,14 +107,16 @@ class OpenClParity : public ::testing::Test {
   /// device's only). Returns, per δ (scene's, 0) and narrow phase, how many scenes collided: a comparison of empty
   /// sets proves nothing. Adds the device's counters to `counters`.
   std::vector<std::size_t> suite_at_both_thicknesses(const std::string& suite, const std::vector<std::string>& narrow_phases,
-                                                     std::size_t max_steps = 0, const std::string& strategy = "full",
+                                                     Steps steps = {}, const std::string& strategy = "full",
                                                      const std::string& keys = "", std::map<std::string, double>* counters = nullptr,
                                                      const std::string& device_keys = "") {
     std::vector<std::size_t> colliding_scenes(2 * narrow_phases.size(), 0);
     for (const harness::SceneSource& source : harness::suite_scenes(suite)) {
       const datasets::SceneSequence loaded = source.load();
       auto frames = testing::all_frames(loaded);
-      if (max_steps > 0 && frames.size() > max_steps + 1) frames.resize(max_steps + 1);
+      if (frames.size() <= steps.first + 1) continue;  // a scene that ends before `first` is not compared
+      frames.erase(frames.begin(), frames.begin() + static_cast<std::ptrdiff_t>(steps.first));
+      if (steps.count > 0 && frames.size() > steps.count + 1) frames.resize(steps.count + 1);
       for (std::size_t z = 0; z < 2; ++z) {
         const double thickness = z == 0 ? loaded.scene().thickness() : 0.0;
         const Scene scene = loaded.scene().with_thickness(thickness);
@@ -130,31 +141,21 @@ TEST_F(OpenClParity, TheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
   for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"})) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
 }
 
-/// Steps of the longer suite runs under AddressSanitizer, which makes them several times slower on CI's two cores:
-/// the same code runs in fewer steps there, and the Release run of CI compares every step.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr std::size_t kSanitizerSteps = 10;
-/// The knobs' runs (nine knobs, two scenes, two δ): 5 steps, in which both ci scenes collide at both δ and
-/// sessions outlive their first frame with every knob (checked in the Release build with 5 steps).
-constexpr std::size_t kSanitizerKnobSteps = 5;
-#else
-constexpr std::size_t kSanitizerSteps = 0;
-constexpr std::size_t kSanitizerKnobSteps = 0;
-#endif
-
+// The default suite in two parts (Steps). Five of its six scenes collide at both δ over all its steps; the flag at
+// resolution 16 does not fold onto itself in 20 frames.
 TEST_F(OpenClParity, TheDefaultSuiteGivesTheCpuAnswersAtBothThicknesses) {
-  // Five of its six scenes collide at both δ (at least three in the first 10 steps, measured under ASan in CI); the
-  // flag at resolution 16 does not fold onto itself in 20 frames.
-  for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"}, kSanitizerSteps)) {
-    EXPECT_GE(scenes, kSanitizerSteps > 0 ? 3u : 5u);
-  }
+  for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"}, {0, 10})) EXPECT_GE(scenes, 3u);
+}
+
+TEST_F(OpenClParity, TheDefaultSuiteGivesTheCpuAnswersAtBothThicknesses_from_step_10) {
+  for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"}, {10, 0})) EXPECT_GE(scenes, 5u);
 }
 
 // full:filter=on (the separation filter before the narrow phase) on both backends: the same sets and the same
 // pairs dropped by the filter.
 TEST_F(OpenClParity, FullWithTheFilterOnGivesTheCpuAnswers) {
   std::map<std::string, double> counters;
-  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, 0, "full", ":filter=on", &counters)) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
+  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, {}, "full", ":filter=on", &counters)) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
   EXPECT_GT(counters["distance_filtered"], 0.0);
 }
 
@@ -162,7 +163,7 @@ TEST_F(OpenClParity, FullWithTheFilterOnGivesTheCpuAnswers) {
 // (session starts, nf, pending pairs, dangling vertices and triangles, pairs the distance heuristic drops).
 TEST_F(OpenClParity, ApccdOnTheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
   std::map<std::string, double> counters;
-  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"}, 0, "apccd", "", &counters)) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
+  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"}, {}, "apccd", "", &counters)) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
   // Sessions longer than a frame, with dangling triangles (at δ = 0), and the distance heuristic at work.
   EXPECT_GT(counters["dangling_triangles"], 0.0);
   EXPECT_GT(counters["distance_filtered"], 0.0);
@@ -171,25 +172,40 @@ TEST_F(OpenClParity, ApccdOnTheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
 // The default suite's first 8 steps (static objects: drape's table, funnel's funnel, pile's ground, whose trees
 // are fitted once; flag does not collide that early).
 TEST_F(OpenClParity, ApccdOnTheDefaultSuiteGivesTheCpuAnswers) {
-  for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"}, 8, "apccd")) EXPECT_GE(scenes, 3u);
+  for (const std::size_t scenes : suite_at_both_thicknesses("default", {"conservative"}, {0, 8}, "apccd")) EXPECT_GE(scenes, 3u);
 }
 
-// Each knob that changes the session logic, on the ci suite's first scene at both δ: skipping off, nf bounds,
-// inflation (local, global, inflation_max), the session's end (dangling_max, pending_max), the front end off,
-// pairs across objects from the session's trees, and history.
+// Each knob that changes the session logic, on the ci suite at both δ: skipping off, nf bounds, inflation (local,
+// global, inflation_max), the session's end (dangling_max, pending_max), the front end off, pairs across objects
+// from the session's trees, and history; in two parts (Steps): the first 5 steps, in which every ci scene collides
+// at both δ and sessions outlive their first frame with every knob, and the rest (the two fold scenes).
+const std::vector<const char*> kApccdKnobs{":skip=off", ":nf_min=2:nf_max=4", ":nf_max=16:inflation_max=1e9", ":local=2.5:global=0",
+                                           ":local=0.5:global=1.5:inflation_max=0.25", ":dangling_max=0.001:pending_max=1.5",
+                                           ":heuristic=off", ":object_pairs=session", ":history=persistent:inflation_max=1e9"};
+
 TEST_F(OpenClParity, ApccdKnobsGiveTheCpuAnswers) {
-  for (const char* keys : {":skip=off", ":nf_min=2:nf_max=4", ":nf_max=16:inflation_max=1e9", ":local=2.5:global=0",
-                           ":local=0.5:global=1.5:inflation_max=0.25", ":dangling_max=0.001:pending_max=1.5", ":heuristic=off",
-                           ":object_pairs=session", ":history=persistent:inflation_max=1e9"}) {
+  for (const char* keys : kApccdKnobs) {
     SCOPED_TRACE(keys);
     std::map<std::string, double> counters;
-    for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, kSanitizerKnobSteps, "apccd", keys, &counters)) {
+    for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, {0, 5}, "apccd", keys, &counters)) {
       EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
     }
     if (std::string(keys) != ":skip=off") {
       EXPECT_GT(counters["dangling_vertices"], 0.0) << "no session outlived its first frame";
     }
   }
+}
+
+// The rest of the steps: the same answers and session decisions with every knob (whether sessions outlive their
+// first frame with each knob is the first part's check; from a fresh start at step 5, nf_max=16 with no inflation
+// cap keeps every vertex within its budget).
+TEST_F(OpenClParity, ApccdKnobsGiveTheCpuAnswers_from_step_5) {
+  std::map<std::string, double> counters;
+  for (const char* keys : kApccdKnobs) {
+    SCOPED_TRACE(keys);
+    for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, {5, 0}, "apccd", keys, &counters)) EXPECT_EQ(scenes, 2u);
+  }
+  EXPECT_GT(counters["dangling_vertices"], 0.0) << "no session outlived its first frame";
 }
 
 // apccd:backend=opencl, verified against the exact truth on every step of the ci suite at both δ: 0 missed.
@@ -227,7 +243,7 @@ TEST_F(OpenClParity, TheSuiteAskedForGivesTheCpuAnswersAtBothThicknesses) {
   const std::vector<std::string> narrow_phases =
       narrow != nullptr ? std::vector<std::string>{narrow} : std::vector<std::string>{"conservative", "cubic64"};
   std::map<std::string, double> counters;
-  for (const std::size_t scenes : suite_at_both_thicknesses(suite, narrow_phases, max_steps, strategy != nullptr ? strategy : "full", "", &counters)) {
+  for (const std::size_t scenes : suite_at_both_thicknesses(suite, narrow_phases, {0, max_steps}, strategy != nullptr ? strategy : "full", "", &counters)) {
     EXPECT_GT(scenes, 0u);
   }
   std::cout << "[ counts   ] " << (strategy != nullptr ? strategy : "full") << " on " << suite << ", device's totals over both δ";
@@ -264,32 +280,30 @@ TEST_F(OpenClParity, TheSceneAskedForGivesTheCpuAnswers) {
   }
 }
 
-// The two public steps of ../shared/data/scalable-ccd-sample (80k and 18k faces): δ = 0 and δ = 5% of the step's
-// mean edge length.
-TEST_F(OpenClParity, ThePublicStepsGiveTheCpuAnswersAtBothThicknesses) {
+// The two public steps of ../shared/data/scalable-ccd-sample (80k and 18k faces), one test each: δ = 0 and δ = 5%
+// of the step's mean edge length. Under AddressSanitizer rod-twist's two δ take nearly four minutes of CI's two
+// cores, so the sanitizer run leaves it out by name (CMakePresets.json); cloth-funnel runs the same code there.
+class OpenClParityOnPublicSteps : public OpenClParity, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(OpenClParityOnPublicSteps, GiveTheCpuAnswersAtBothThicknesses) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
-  std::vector<const char*> names{"cloth-funnel", "rod-twist"};
-#if defined(__SANITIZE_ADDRESS__)
-  // Under AddressSanitizer rod-twist's two δ take nearly four minutes of CI's two cores; the Release run of CI
-  // compares it, and cloth-funnel runs the same code here.
-  names.pop_back();
-#endif
-  for (const char* name : names) {
-    const datasets::SampleStep sample = datasets::load_sample_step(data / "scalable-ccd-sample" / name);
-    double length = 0;
-    for (EdgeId e = 0; e < sample.topology.num_edges(); ++e) {
-      length += (sample.x0[sample.topology.edge(e).v1] - sample.x0[sample.topology.edge(e).v0]).norm();
-    }
-    const double mean_edge = length / static_cast<double>(sample.topology.num_edges());
-    for (const double thickness : {0.0, 0.05 * mean_edge}) {
-      ObjectDescription object{"mesh", ObjectKind::deformable, true, sample.topology.num_vertices(), sample.topology.faces()};
-      const Scene scene({object}, {}, thickness);
-      SCOPED_TRACE(std::string(name) + ", δ = " + std::to_string(thickness));
-      const std::size_t colliding = expect_same_answers("full", "full:backend=opencl", scene, {sample.x0, sample.x1});
-      EXPECT_GT(colliding, 0u);
-    }
+  const std::string name = GetParam();
+  const datasets::SampleStep sample = datasets::load_sample_step(data / "scalable-ccd-sample" / name);
+  double length = 0;
+  for (EdgeId e = 0; e < sample.topology.num_edges(); ++e) {
+    length += (sample.x0[sample.topology.edge(e).v1] - sample.x0[sample.topology.edge(e).v0]).norm();
+  }
+  const double mean_edge = length / static_cast<double>(sample.topology.num_edges());
+  for (const double thickness : {0.0, 0.05 * mean_edge}) {
+    ObjectDescription object{"mesh", ObjectKind::deformable, true, sample.topology.num_vertices(), sample.topology.faces()};
+    const Scene scene({object}, {}, thickness);
+    SCOPED_TRACE(name + ", δ = " + std::to_string(thickness));
+    const std::size_t colliding = expect_same_answers("full", "full:backend=opencl", scene, {sample.x0, sample.x1});
+    EXPECT_GT(colliding, 0u);
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(PublicSteps, OpenClParityOnPublicSteps, ::testing::Values("cloth-funnel", "rod-twist"), testing::param_name);
 
 /// The backend's memory keys at their smallest: every list starts with room for one entry (so every list-filling
 /// stage grows and runs again) and a work item holds 4 sub-boxes (so conservative queries overflow and are decided
@@ -311,7 +325,7 @@ TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
 TEST_F(OpenClParity, ApccdGrowingListsGiveTheSameAnswers) {
   std::map<std::string, double> counters;
   const std::vector<std::size_t> colliding_scenes =
-      suite_at_both_thicknesses("ci", {"conservative"}, 0, "apccd", "", &counters, kSmallestDeviceMemory);
+      suite_at_both_thicknesses("ci", {"conservative"}, {}, "apccd", "", &counters, kSmallestDeviceMemory);
   for (const std::size_t scenes : colliding_scenes) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
   EXPECT_GT(counters["host_decided_pairs"], 0.0);
   // pending_table_builds is a running total: summed over steps it exceeds the steps only when a session rebuilt it.

@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <stdexcept>
+#include <string_view>
 
 namespace ccd::testing {
 
@@ -47,6 +48,11 @@ std::vector<Vec3> grid_positions(std::size_t n, double z) {
 }
 
 std::vector<Face> tetrahedron_faces() { return {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}}; }
+
+bool external_data_required() {
+  const char* value = std::getenv("CCDBENCH_REQUIRE_DATA");
+  return value != nullptr && std::string_view(value) == "1";
+}
 
 std::optional<std::filesystem::path> external_data_or_reason(std::string& reason) {
   const auto dir = datasets::external_data_dir();

@@ -17,14 +17,31 @@
 
 namespace ccd::testing {
 
-/// Under AddressSanitizer (CI's second run) the tests of many random or suite inputs take 1 in kSanitizerStride of
-/// them: the reference's exact path runs several times slower there, on CI's two cores. The Release run checks
-/// every input; the sanitizer run looks for memory errors in the same code.
-#if defined(__SANITIZE_ADDRESS__)
-inline constexpr std::size_t kSanitizerStride = 4;
-#else
-inline constexpr std::size_t kSanitizerStride = 1;
-#endif
+/// One of `count` parts of a test's inputs: item i belongs to part i % count. A test of many inputs that is too long
+/// for the sanitizer run (CI's second, on two cores, where the reference's exact path runs several times slower) is
+/// instantiated once per part: every build runs every part, and the ASan test preset leaves out parts 2.. by name
+/// (CMakePresets.json), so each test checks the same thing in every build type and the sanitizer run still goes
+/// through the same code.
+struct Part {
+  std::size_t index = 0;
+  std::size_t count = 1;
+  bool holds(std::size_t item) const { return item % count == index; }
+  /// "part1of4".
+  std::string name() const { return "part" + std::to_string(index + 1) + "of" + std::to_string(count); }
+};
+
+/// Prints a part as its name (in ctest's list of test names).
+inline void PrintTo(const Part& part, std::ostream* out) { *out << part.name(); }
+
+/// The parts 1..count of a test's inputs.
+inline std::vector<Part> parts(std::size_t count) {
+  std::vector<Part> all;
+  for (std::size_t i = 0; i < count; ++i) all.push_back({i, count});
+  return all;
+}
+
+/// Names an instance of a test parametrized over parts: "part1of4".
+inline std::string part_name(const ::testing::TestParamInfo<Part>& param) { return param.param.name(); }
 
 /// A fresh folder under the system temporary directory, removed with its contents on destruction.
 class TempDir {
@@ -79,6 +96,9 @@ inline std::string param_name(const ::testing::TestParamInfo<std::string>& param
   return name;
 }
 
+/// Whether CCDBENCH_REQUIRE_DATA=1: a test that would skip for lack of data fails instead (CI sets it).
+bool external_data_required();
+
 /// The external data folder, when present with the expected content; otherwise nullopt and the reason.
 std::optional<std::filesystem::path> external_data_or_reason(std::string& reason);
 
@@ -103,7 +123,7 @@ inline std::size_t shared_query_count(const std::string& folder) {
     std::string ccd_reason_;                                                             \
     const auto ccd_found_ = ::ccd::testing::external_data_or_reason(ccd_reason_);       \
     if (!ccd_found_) {                                                                   \
-      if (::ccd::datasets::external_data_required()) FAIL() << ccd_reason_;              \
+      if (::ccd::testing::external_data_required()) FAIL() << ccd_reason_;              \
       GTEST_SKIP() << ccd_reason_;                                                       \
     }                                                                                    \
     dir = *ccd_found_;                                                                   \
