@@ -2,6 +2,8 @@
 
 #include "core/error.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <fcntl.h>
 #include <sys/file.h>
 
@@ -76,6 +78,12 @@ void require_writable_file(const std::filesystem::path& file) {
   }
   const std::filesystem::path folder = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
   require_writable_directory(folder);
+}
+
+void write_json_file(const std::filesystem::path& path, const nlohmann::json& document) {
+  AtomicFile file(path, std::ios::out);
+  file.stream() << document.dump(2) << '\n';
+  file.commit();
 }
 
 }  // namespace ccd::datasets

@@ -2,6 +2,8 @@
 /// @file
 /// Writing a file so that readers never see half of it: write a temporary beside it, rename when complete.
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <filesystem>
 #include <fstream>
 
@@ -40,6 +42,10 @@ class FileLock {
  private:
   int fd_;
 };
+
+/// Writes `document` (pretty-printed) to `path` atomically: the one writer of JSON result files (reports, --json,
+/// scene.json of generated scenes).
+void write_json_file(const std::filesystem::path& path, const nlohmann::json& document);
 
 /// Checks before any work that `directory` can be written: creates it and writes and removes a probe file there.
 /// @throws InputError (directory) naming why not.

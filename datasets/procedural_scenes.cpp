@@ -166,9 +166,7 @@ void write_scene_json(const std::filesystem::path& out, const std::string& name,
   for (const auto& [a, b] : setup.collidable) collidable.push_back({a, b});
   const nlohmann::json document = {{"name", name}, {"thickness", setup.thickness}, {"objects", objects},
                                    {"collidable", collidable}};
-  AtomicFile file(out / "scene.json", std::ios::out);
-  file.stream() << document.dump(2) << '\n';
-  file.commit();
+  write_json_file(out / "scene.json", document);
 }
 
 /// Whether `out` holds this generation whole: caches with the key, every PLY, and scene.json (written last).

@@ -6,11 +6,11 @@
 #include "datasets/sample_step.hpp"
 #include "datasets/scene_file.hpp"
 #include "harness/inspect.hpp"
-#include "harness/json_output.hpp"
 #include "harness/progress.hpp"
 #include "harness/query_scoring.hpp"
 #include "harness/sample_comparison.hpp"
 #include "harness/stress.hpp"
+#include "harness/table.hpp"
 #include "harness/truth_cache.hpp"
 #include "harness/work_queue.hpp"
 #include "reference/step_truth.hpp"
@@ -122,7 +122,7 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
   if (options.json) {
     nlohmann::json rows = nlohmann::json::array();
     for (const QueryScore& score : scores) rows.push_back(to_json(score));
-    write_json_file(*options.json, rows);
+    datasets::write_json_file(*options.json, rows);
   }
   if (options.report) {
     write_query_report(*options.report, scores, options.command_line);
@@ -248,28 +248,29 @@ int run_truth_steps(const TruthOptions& options, std::ostream& out) {
               << (rank_info().size > 1 ? " on rank " + std::to_string(rank) : std::string()) << "\n";
   });
   out << "truth for " << options.scene->string() << " steps " << options.step << ".." << last - 1 << " (thickness "
-      << records.front()["thickness"].get<double>() << "), stored in the truth cache\n"
-      << std::setw(6) << "step" << std::setw(10) << "vf" << std::setw(10) << "ee" << std::setw(14) << "vf enum."
-      << std::setw(14) << "ee enum." << std::setw(8) << "slices" << std::setw(12) << "filter" << std::setw(10)
-      << "exactly" << std::setw(12) << "ms" << "\n";
+      << records.front()["thickness"].get<double>() << "), stored in the truth cache\n";
+  using Align = Table::Align;
+  Table table({{"step", Align::right}, {"vf", Align::right}, {"ee", Align::right}, {"vf enum.", Align::right}, {"ee enum.", Align::right},
+               {"slices", Align::right}, {"filter", Align::right}, {"exactly", Align::right}, {"ms", Align::right}});
   std::size_t vf = 0, ee = 0;
   double ms = 0;
   for (const nlohmann::json& r : records) {
     const double step_ms = r["enumeration_ms"].get<double>() + r["decision_ms"].get<double>();
-    out << std::setw(6) << r["index"].get<std::size_t>() << std::setw(10) << r["vf"].get<std::size_t>() << std::setw(10)
-        << r["ee"].get<std::size_t>() << std::setw(14) << r["vf_pairs_enumerated"].get<std::size_t>() << std::setw(14)
-        << r["ee_pairs_enumerated"].get<std::size_t>() << std::setw(8) << r["time_slices"].get<std::size_t>()
-        << std::setw(12) << r["decided_by_filter"].get<std::size_t>() << std::setw(10)
-        << r["decided_exactly"].get<std::size_t>() << std::setw(12) << std::fixed << std::setprecision(1) << step_ms << "\n";
-    out.unsetf(std::ios::fixed);
+    std::vector<std::string> row;
+    for (const char* field : {"index", "vf", "ee", "vf_pairs_enumerated", "ee_pairs_enumerated", "time_slices", "decided_by_filter", "decided_exactly"}) {
+      row.push_back(std::to_string(r[field].get<std::size_t>()));
+    }
+    row.push_back(fixed(step_ms, 1));
+    table.add_row(std::move(row));
     vf += r["vf"].get<std::size_t>();
     ee += r["ee"].get<std::size_t>();
     ms += step_ms;
   }
+  table.print(out);
   out << "total: " << records.size() << " steps, colliding pairs vertex-face " << vf << ", edge-edge " << ee
       << std::fixed << std::setprecision(1) << ", " << ms << " ms of truth computation\n";
   out.unsetf(std::ios::fixed);
-  if (options.json) write_json_file(*options.json, nlohmann::json(records));
+  if (options.json) datasets::write_json_file(*options.json, nlohmann::json(records));
   return 0;
 }
 
@@ -310,7 +311,7 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
         << "\n";
     for (const std::string& missing : comparison.missing) out << "  MISSING " << missing << "\n";
   }
-  if (options.json) write_json_file(*options.json, result);
+  if (options.json) datasets::write_json_file(*options.json, result);
   return 0;
 }
 
@@ -329,7 +330,7 @@ int run_stress_command(const StressOptions& options, std::ostream& out) {
   if (options.json) {
     nlohmann::json document = nlohmann::json::array();
     for (const StressRow& row : rows) document.push_back(to_json(row));
-    write_json_file(*options.json, document);
+    datasets::write_json_file(*options.json, document);
   }
   if (options.write_queries) {
     write_extremes_queries(suite, *options.write_queries);
@@ -372,15 +373,14 @@ int run_devices(bool json, std::ostream& out) {
 int run_scenes(std::ostream& out) {
   for (const datasets::ProceduralSceneInfo& scene : datasets::procedural_scenes()) {
     out << scene.name << ": " << scene.description << "\n";
+    Table table({{"  parameter"}, {"default", Table::Align::right}, {"meaning"}});
     for (const datasets::SceneParameter& parameter : scene.parameters) {
-      out << "  " << std::left << std::setw(12) << parameter.name << std::right << std::setw(8);
-      if (parameter.choices.empty()) {
-        out << parameter.default_value;
-      } else {
-        out << parameter.choices[static_cast<std::size_t>(parameter.default_value)];
-      }
-      out << "  " << parameter.description << "\n";
+      table.add_row({"  " + parameter.name,
+                     parameter.choices.empty() ? significant(parameter.default_value, 6)
+                                               : parameter.choices[static_cast<std::size_t>(parameter.default_value)],
+                     parameter.description});
     }
+    table.print(out);
   }
   out << "Generate one with: ccdbench generate NAME [--resolution N] [--frames N] [--seed S] [--set NAME=VALUE] --out DIR\n"
       << "or name it in a scene file: {\"generator\": {\"name\": \"flag\", \"wind\": 12}}\n";
@@ -423,25 +423,23 @@ int run_generate(const GenerateOptions& options, std::ostream& out) {
     parameters[setting.substr(0, equals)] = number;
   }
   Progress progress("generate " + options.name + ": frames", 0);
-  bool header_printed = false;
+  std::optional<Table> measurements;
   datasets::GenerateRequest request{options.name, parameters, options.out,
                                     [&](std::size_t done, std::size_t total) { progress.update(done, total); }, {}};
   if (options.report) {
     request.report = [&](const datasets::FrameReport& report) {
-      if (!header_printed) {
-        out << std::setw(6) << "frame";
-        for (const auto& [name, value] : report.metrics) out << "  " << std::setw(std::max<int>(12, static_cast<int>(name.size()))) << name;
-        out << "\n";
-        header_printed = true;
+      if (!measurements) {
+        std::vector<Table::Column> columns{{"frame", Table::Align::right}};
+        for (const auto& [name, value] : report.metrics) columns.push_back({name, Table::Align::right});
+        measurements.emplace(std::move(columns));
       }
-      out << std::setw(6) << report.frame;
-      for (const auto& [name, value] : report.metrics) {
-        out << "  " << std::setw(std::max<int>(12, static_cast<int>(name.size()))) << std::setprecision(5) << value;
-      }
-      out << "\n";
+      std::vector<std::string> row{std::to_string(report.frame)};
+      for (const auto& [name, value] : report.metrics) row.push_back(significant(value, 5));
+      measurements->add_row(std::move(row));
     };
   }
   const datasets::GenerateResult result = datasets::generate_procedural_scene(request);
+  if (measurements) measurements->print(out);
   out << options.name << ": " << result.frames << " frames, " << result.cloth_triangles << " cloth triangles ("
       << result.triangles << " in all), thickness " << result.thickness << ", "
       << (result.from_cache ? "from the cache in " : "generated in ") << std::fixed << std::setprecision(2)

@@ -56,7 +56,8 @@ struct TruthOptions {
 int run_truth(const TruthOptions& options, std::ostream& out);
 
 struct StressOptions {
-  std::vector<std::string> methods{"cubic32", "cubic64", "conservative", "advancement"};
+  /// Narrow-phase specs (main.cpp's default: every narrow phase of the registry).
+  std::vector<std::string> methods;
   std::uint64_t seed = 1;
   std::optional<std::filesystem::path> json;
   std::optional<std::filesystem::path> write_queries;

@@ -1,16 +1,17 @@
 // ccdbench: the command line of the harness.
 
+#include "datasets/atomic_file.hpp"
 #include "ccd/config.hpp"
 #include "datasets/input_file.hpp"
 #include "datasets/scene_file.hpp"
 #include "core/error.hpp"
 #include "harness/commands.hpp"
-#include "harness/json_output.hpp"
 #include "harness/query_scoring.hpp"
+#include "harness/registry_listing.hpp"
 #include "harness/run.hpp"
 #include "harness/work_queue.hpp"
+#include "strategies/narrowphase/registry.hpp"
 #include "strategies/registry.hpp"
-
 
 #include <CLI/CLI.hpp>
 
@@ -39,6 +40,20 @@ constexpr int kMaxRepeats = 1000;
 int refuse(const std::string& where, const std::string& reason) {
   std::cerr << "ccdbench: error: command line:" << where << (where.empty() ? " " : ": ") << reason << '\n';
   return 2;
+}
+
+/// "full, apccd, brute, fcl, fcl-bvh": the registry's strategies.
+std::string strategy_names() {
+  std::string names;
+  for (const ccd::strategies::StrategyEntry& entry : ccd::strategies::strategy_entries()) names += (names.empty() ? "" : ", ") + entry.name;
+  return names;
+}
+
+/// The methods `queries` takes.
+std::string method_names() {
+  std::string names;
+  for (const std::string& name : ccd::harness::query_method_names()) names += (names.empty() ? "" : ", ") + name;
+  return names;
 }
 
 std::string version_text() {
@@ -89,7 +104,9 @@ int run_command_line(int argc, char** argv) {
       "file under vertex-face/ or named *vf.csv is vertex-face, under edge-edge/ or *ee.csv edge-edge; truth\n"
       "is column 7 or mma_bool/NAME_mma_bool.json beside queries/NAME.csv.");
   queries->add_option("PATH", queries_options.paths, "query files or folders")->required();
-  queries->add_option("--method", methods, "comma-separated methods; `exact` is the reference itself")
+  queries->add_option("--method", methods,
+                      "comma-separated methods: " + method_names() + " (`exact` is the reference itself;\n"
+                      "narrow phases take their keys, NAME:key=value, as `ccdbench strategies` lists them)")
       ->capture_default_str();
   queries->add_option("--thickness", queries_options.thickness, "thickness δ >= 0 (the data's truth is for 0)")
       ->check(CLI::Range(0.0, std::numeric_limits<double>::max()))
@@ -139,14 +156,15 @@ int run_command_line(int argc, char** argv) {
   truth->add_option("--json", truth_options.json, "also write the counts and statistics as JSON to this file");
 
   ccd::harness::StressOptions stress_options;
-  std::string stress_methods = "cubic32,cubic64,conservative,advancement";
+  std::string stress_methods;
+  for (const ccd::narrowphase::NarrowPhaseEntry& entry : ccd::narrowphase::narrow_phases()) stress_methods += (stress_methods.empty() ? "" : ",") + entry.name;
   CLI::App* stress = app.add_subcommand(
       "stress",
       "Run every narrow phase on the extremes suite (coplanar motion, parallel and collinear edges, zero\n"
       "motion, touching at t = 0 and 1, exact-thickness distances and one ulp either side, magnitudes from\n"
       "1e-12 to 1e9, degenerate primitives, ...), labelled by the exact reference, at δ = 0 and at each case's\n"
       "δ > 0. Prints family x variant -> false negatives (FN) and false positives (FP).");
-  stress->add_option("--method", stress_methods, "comma-separated narrow-phase specs")->capture_default_str();
+  stress->add_option("--method", stress_methods, "comma-separated narrow-phase specs (`ccdbench strategies` lists them)")->capture_default_str();
   stress->add_option("--seed", stress_options.seed, "seed of the suite's exact transformations")->capture_default_str();
   stress->add_option("--json", stress_options.json, "also write the rows as a JSON array to this file");
   stress->add_option("--write-queries", stress_options.write_queries,
@@ -161,25 +179,8 @@ int run_command_line(int argc, char** argv) {
       "scene and strategy: ms per step (median; stage breakdown), speed-up over `full` (cells of this run only),\n"
       "candidate triangle pairs, elementary tests, colliding pairs, missed (culled: never tested / tested: the\n"
       "elementary test said no) and false alarms. Strategies: NAME[+NARROW][:key=value...], comma-separated:\n"
-      "full (BVH refit + full traversal every step), apccd (skipping-frame sessions, Wong 2009), brute (every\n"
-      "triangle pair; small scenes), fcl (FCL's BVH and its own continuous tests; judged by triangle pairs) and\n"
-      "fcl-bvh (FCL's BVH as the broad phase, then NARROW); both take bv=aabb|obbrss|kdop24 (default aabb) and\n"
-      "run at δ = 0 only (--thickness 0). NARROW is conservative (default), cubic64, cubic32 or advancement.\n"
-      "full takes backend=cpu|opencl and device=INDEX|NAME-SUBSTRING: full:backend=opencl runs every stage on an\n"
-      "OpenCL device (see `ccdbench devices`) with the CPU's answers bit for bit (narrow phases conservative, cubic64);\n"
-      "device_iterations=N (default 200, 0: never) hands a conservative query on after N iterations on a work item.\n"
-      "apccd takes the same three keys: apccd:backend=opencl runs apccd's sessions on the device with the CPU\n"
-      "apccd's sets and session decisions (devices with 64-bit atomics). full:filter=on runs apccd's separation\n"
-      "filter (its front end's distance heuristic) before the narrow phase: the baseline that splits apccd's gain.\n"
-      "apccd knobs (defaults): skip=on, nf_min=1, nf_max=8 (session length bounds), local=1.0 and global=0.25\n"
-      "(inflation by a vertex's own speed and by its object's mean speed, per frame left in the session),\n"
-      "dangling_max=0.05 (fraction of dangling vertices that ends a session), pending_max=4 (pending pairs per\n"
-      "admissible pair that ends a session), inflation_max=0.5 (a session is shortened so that the mean budget\n"
-      "stays within this fraction of the mean edge length), heuristic=on (front end),\n"
-      "history=off (on: orientations of the pairs tested last step; persistent: the paper's, of every pair\n"
-      "tested since the first step, checked whenever one is tested again), object_pairs=fresh (pairs across\n"
-      "objects from tight trees refitted every step; session: from the session's inflated trees).\n"
-      "Narrow-phase keys go after the strategy's: apccd+cubic64:nf_max=4:eta=1e-5.\n"
+      "NAME is " + strategy_names() + "; NARROW is " + ccd::narrowphase::narrow_phase_list() + " (default conservative).\n"
+      "`ccdbench strategies` lists what each is, its keys with their values and defaults, and its backends.\n"
       "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
   run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper");
   run->add_option("--scene", run_scenes, "scene files (or folders with scene.json); repeat or list several");
@@ -225,6 +226,13 @@ int run_command_line(int argc, char** argv) {
   check->add_option("RESULTS", results_files, "`ccdbench run --json` summary files, taken together")->required();
 
   CLI::App* scenes = app.add_subcommand("scenes", "List the built-in procedural scenes, their parameters and defaults.");
+
+  bool strategies_json = false;
+  CLI::App* strategies = app.add_subcommand(
+      "strategies",
+      "List the strategies and narrow phases (the registries): what each is, its keys with their values and\n"
+      "defaults, its backends, and for a strategy what it is judged by and its speed-up baseline.");
+  strategies->add_flag("--json", strategies_json, "print one JSON object ({strategies, narrow_phases}) for scripts");
 
   bool devices_json = false;
   CLI::App* devices = app.add_subcommand(
@@ -279,6 +287,7 @@ int run_command_line(int argc, char** argv) {
     }
     if (*truth) return ccd::harness::run_truth(truth_options, std::cout);
     if (*scenes) return ccd::harness::run_scenes(std::cout);
+    if (*strategies) return ccd::harness::run_strategies(strategies_json, std::cout);
     if (*devices) return ccd::harness::run_devices(devices_json, std::cout);
     if (*run) {
       const int sources = (run_suite.empty() ? 0 : 1) + (run_scenes.empty() ? 0 : 1) + (run_frames.empty() ? 0 : 1);

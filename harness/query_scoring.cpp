@@ -2,8 +2,8 @@
 
 #include "datasets/atomic_file.hpp"
 #include "datasets/rational.hpp"
-#include "harness/json_output.hpp"
 #include "harness/statistics.hpp"
+#include "harness/table.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase/registry.hpp"
 #include "strategies/registry.hpp"
@@ -266,33 +266,34 @@ QueryScore from_message(const nlohmann::json& m) {
   return s;
 }
 
-void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out) {
-  std::size_t file_width = 4, method_width = 6;
-  for (const QueryScore& s : scores) {
-    file_width = std::max(file_width, s.file.size());
-    method_width = std::max(method_width, s.method.size());
-  }
-  const int method_column = static_cast<int>(method_width) + 2, file_column = static_cast<int>(file_width) + 2;
-  out << std::left << std::setw(method_column) << "method" << std::setw(file_column) << "file" << std::right
-      << std::setw(9) << "queries" << std::setw(10) << "positive" << std::setw(10) << "reported" << std::setw(8)
-      << "FN" << std::setw(8) << "FP" << std::setw(14) << "ns/query";
+namespace {
+
+/// The scores as a table: text on a terminal, Markdown in a report.
+Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
+  using Align = Table::Align;
+  Table table({{"method"}, {"file"}, {"queries", Align::right}, {"positives", Align::right}, {"reported", Align::right},
+               {"FN", Align::right}, {"FP", Align::right}, {"ns/query", Align::right}});
   const bool with_toi = !scores.empty() && scores.front().with_toi;
-  if (with_toi) out << std::setw(10) << "TOI late" << std::setw(16) << "TOI error max" << std::setw(16) << "TOI error mean";
-  out << '\n';
-  for (const QueryScore& s : scores) {
-    out << std::left << std::setw(method_column) << s.method << std::setw(file_column) << s.file << std::right
-        << std::setw(9) << s.queries << std::setw(10) << labelled_text(s, s.positives) << std::setw(10) << s.reported
-        << std::setw(8) << labelled_text(s, s.false_negatives) << std::setw(8) << labelled_text(s, s.false_positives)
-        << std::setw(14) << std::fixed
-        << std::setprecision(0) << s.ns_per_query;
-    out.unsetf(std::ios::fixed);
-    if (with_toi) {
-      out << std::setw(10) << s.toi_late << std::setw(16) << std::setprecision(3) << s.toi_error_max << std::setw(16)
-          << (s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0);
-    }
-    out << '\n';
+  if (with_toi) {
+    for (const char* header : {"TOI late", "TOI error max", "TOI error mean"}) table.add_column({header, Align::right});
   }
+  for (const QueryScore& s : scores) {
+    std::vector<std::string> row = {markdown ? "`" + s.method + "`" : s.method, s.file, std::to_string(s.queries),
+                                    labelled_text(s, s.positives), std::to_string(s.reported), labelled_text(s, s.false_negatives),
+                                    labelled_text(s, s.false_positives), fixed(s.ns_per_query, 0)};
+    if (with_toi) {
+      row.push_back(std::to_string(s.toi_late));
+      row.push_back(significant(s.toi_error_max, 3));
+      row.push_back(significant(s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0, 3));
+    }
+    table.add_row(std::move(row));
+  }
+  return table;
 }
+
+}  // namespace
+
+void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out) { query_table(scores, false).print(out); }
 
 std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent) {
   std::size_t left_out = 0;
@@ -353,28 +354,15 @@ void write_query_report(const std::filesystem::path& directory, const std::vecto
                         const std::string& command) {
   nlohmann::json rows = nlohmann::json::array();
   for (const QueryScore& score : scores) rows.push_back(to_json(score));
-  write_json_file(directory / "scores.json", rows);
+  datasets::write_json_file(directory / "scores.json", rows);
   datasets::AtomicFile file(directory / "README.md", std::ios::out);
   std::ostream& out = file.stream();
   out << "# Narrow phases: time per query against misses and false alarms\n\n"
       << "Every method on the same queries, in one run. ns/query is the median over the repeats of each file's time\n"
       << "divided by its queries; FN are missed collisions (truth positive, answer no), FP false alarms. Narrow phases\n"
       << "get the doubles the query's rationals round to; `exact` is the reference on the rationals. The truth labels are\n"
-      << "for zero thickness. Reproduce every number with:\n\n```sh\n" << command << "\n```\n\n"
-      << "| method | file | queries | positives | reported | FN | FP | ns/query |";
-  const bool with_toi = !scores.empty() && scores.front().with_toi;
-  out << (with_toi ? " TOI late | TOI error max | TOI error mean |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
-                   : "\n|---|---|---:|---:|---:|---:|---:|---:|\n");
-  for (const QueryScore& s : scores) {
-    out << "| `" << s.method << "` | " << s.file << " | " << s.queries << " | " << labelled_text(s, s.positives) << " | "
-        << s.reported << " | " << labelled_text(s, s.false_negatives) << " | " << labelled_text(s, s.false_positives)
-        << " | " << static_cast<long long>(s.ns_per_query) << " |";
-    if (with_toi) {
-      out << ' ' << s.toi_late << " | " << std::setprecision(3) << s.toi_error_max << " | "
-          << (s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0) << " |";
-    }
-    out << '\n';
-  }
+      << "for zero thickness. Reproduce every number with:\n\n```sh\n" << command << "\n```\n\n";
+  query_table(scores, true).print_markdown(out);
   out << "\nThe trade, per variant over all files (`(all)` rows): `tradeoff.png`, drawn by `scripts/plot_narrowphase.py`.\n";
   file.commit();
 }

@@ -4,7 +4,6 @@
 #include "datasets/atomic_file.hpp"
 #include "datasets/procedural_scenes.hpp"
 #include "harness/cell_store.hpp"
-#include "harness/json_output.hpp"
 #include "harness/run/cells.hpp"
 #include "harness/run/provenance.hpp"
 #include "harness/run/tables.hpp"
@@ -227,7 +226,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   const Table table = summary_table(summaries);
   table.print(out);
   out << summary_notes(table);
-  if (options.json) write_json_file(*options.json, summaries);
+  if (options.json) datasets::write_json_file(*options.json, summaries);
   if (options.report) {
     std::vector<json> finished;
     for (const std::optional<json>& cell : cells) finished.push_back(*cell);

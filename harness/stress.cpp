@@ -1,12 +1,12 @@
 #include "harness/stress.hpp"
 
 #include "harness/query_scoring.hpp"
+#include "harness/table.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase/registry.hpp"
 
 #include <nlohmann/json.hpp>
 
-#include <iomanip>
 #include <map>
 #include <ostream>
 
@@ -62,20 +62,13 @@ std::vector<StressRow> run_stress(const std::vector<datasets::ExtremeQuery>& sui
 }
 
 void print_stress(const std::vector<StressRow>& rows, std::ostream& out) {
-  std::size_t method_width = 6, family_width = 6;
+  using Align = Table::Align;
+  Table table({{"family"}, {"method"}, {"δ"}, {"queries", Align::right}, {"positive", Align::right}, {"FN", Align::right}, {"FP", Align::right}});
   for (const StressRow& row : rows) {
-    method_width = std::max(method_width, row.method.size());
-    family_width = std::max(family_width, row.family.size());
+    table.add_row({row.family, row.method, row.thickness == "zero" ? "0" : "positive", std::to_string(row.queries),
+                   std::to_string(row.positives), std::to_string(row.false_negatives), std::to_string(row.false_positives)});
   }
-  out << std::left << std::setw(static_cast<int>(family_width) + 2) << "family" << std::setw(static_cast<int>(method_width) + 2)
-      << "method" << std::setw(10) << "δ" << std::right << std::setw(8) << "queries" << std::setw(10) << "positive"
-      << std::setw(6) << "FN" << std::setw(6) << "FP" << '\n';
-  for (const StressRow& row : rows) {
-    out << std::left << std::setw(static_cast<int>(family_width) + 2) << row.family
-        << std::setw(static_cast<int>(method_width) + 2) << row.method << std::setw(10)
-        << (row.thickness == "zero" ? "0" : "positive") << std::right << std::setw(8) << row.queries << std::setw(10)
-        << row.positives << std::setw(6) << row.false_negatives << std::setw(6) << row.false_positives << '\n';
-  }
+  table.print(out);
 }
 
 std::vector<datasets::QueryFile> extremes_query_files(const std::vector<datasets::ExtremeQuery>& suite) {

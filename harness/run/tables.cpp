@@ -1,7 +1,6 @@
 #include "harness/run/tables.hpp"
 
 #include "datasets/atomic_file.hpp"
-#include "harness/json_output.hpp"
 #include "harness/run/provenance.hpp"
 #include "strategies/registry.hpp"
 
@@ -88,7 +87,7 @@ void write_report(const std::filesystem::path& directory, const Table& table, co
   for (const json& cell : cells) {
     for (const json& step : cell["steps"]) steps.push_back(step);
   }
-  write_json_file(directory / "steps.json", steps);
+  datasets::write_json_file(directory / "steps.json", steps);
   datasets::AtomicFile file(directory / "README.md", std::ios::out);
   std::ostream& out = file.stream();
   out << "# ccdbench run\n\nEvery number below comes from one invocation (speed-ups only between cells of this run):\n\n```sh\n"

@@ -55,8 +55,8 @@ KeySpec KeySpec::text(std::string name, std::string help) {
 std::string KeySpec::allowed() const {
   std::ostringstream text;
   switch (kind) {
-    case Kind::number: text << "[" << range.minimum << ", " << range.maximum << "]"; break;
-    case Kind::integer: text << "integer in [" << range.minimum << ", " << range.maximum << "]"; break;
+    case Kind::number: text << "[" << format_spec_number(range.minimum) << ", " << format_spec_number(range.maximum) << "]"; break;
+    case Kind::integer: text << "integer in [" << format_spec_number(range.minimum) << ", " << format_spec_number(range.maximum) << "]"; break;
     case Kind::choice:
       for (std::size_t i = 0; i < choices.size(); ++i) text << (i ? "|" : "") << choices[i];
       break;
@@ -126,8 +126,8 @@ double parse_spec_number(const std::string& owner, const std::string& key, const
   if (used == 0 || used != value.size() || !std::isfinite(number) || number < range.minimum || number > range.maximum ||
       (range.integer && number != std::floor(number))) {
     std::ostringstream message;
-    message << owner << ": " << key << "=" << value << " must be " << (range.integer ? "an integer" : "a number")
-            << " in [" << range.minimum << ", " << range.maximum << "]";
+    message << owner << ": " << key << "=" << value << " must be " << (range.integer ? "an integer" : "a number") << " in ["
+            << format_spec_number(range.minimum) << ", " << format_spec_number(range.maximum) << "]";
     throw std::invalid_argument(message.str());
   }
   return number;

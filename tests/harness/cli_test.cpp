@@ -2,6 +2,8 @@
 
 #include "ccd/config.hpp"
 #include "datasets/procedural_scenes.hpp"
+#include "strategies/narrowphase/registry.hpp"
+#include "strategies/registry.hpp"
 #include "tests/support/cli.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -32,6 +34,53 @@ TEST(Cli, HelpExplainsTheCommands) {
   EXPECT_NE(run_ccdbench("").exit_code, 0);
   EXPECT_NE(run_ccdbench("no-such-command").exit_code, 0);
   EXPECT_EQ(run_ccdbench("--version").exit_code, 0);
+}
+
+/// Checks a listed entry's keys against the registry's declarations: names in order, values and defaults.
+void expect_same_keys(const nlohmann::json& listed, const std::vector<narrowphase::KeySpec>& keys) {
+  ASSERT_EQ(listed.size(), keys.size());
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    EXPECT_EQ(listed[k]["name"], keys[k].name);
+    EXPECT_EQ(listed[k]["default"], keys[k].default_value) << keys[k].name;
+    EXPECT_EQ(listed[k]["allowed"], keys[k].allowed()) << keys[k].name;
+    EXPECT_FALSE(listed[k]["help"].get<std::string>().empty()) << keys[k].name;
+    if (keys[k].kind == narrowphase::KeySpec::Kind::number || keys[k].kind == narrowphase::KeySpec::Kind::integer) {
+      EXPECT_EQ(listed[k]["minimum"].get<double>(), keys[k].range.minimum) << keys[k].name;
+      EXPECT_EQ(listed[k]["maximum"].get<double>(), keys[k].range.maximum) << keys[k].name;
+    }
+  }
+}
+
+// `ccdbench strategies --json` is the registries as a script reads them: every strategy and narrow phase, in order,
+// with every key's values and default; the table for people names them too, and `run --help` points to it.
+TEST(Cli, StrategiesListsEveryEntryOfTheRegistries) {
+  const CommandResult listed = run_ccdbench("strategies --json");
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  const nlohmann::json listing = nlohmann::json::parse(listed.output);
+  const auto& strategies = strategies::strategy_entries();
+  ASSERT_EQ(listing["strategies"].size(), strategies.size());
+  for (std::size_t i = 0; i < strategies.size(); ++i) {
+    SCOPED_TRACE(strategies[i].name);
+    const nlohmann::json& s = listing["strategies"][i];
+    EXPECT_EQ(s["name"], strategies[i].name);
+    EXPECT_EQ(s["backends"].get<std::vector<std::string>>(), strategies[i].backends);
+    EXPECT_EQ(s["baseline"], strategies[i].baseline);
+    expect_same_keys(s["keys"], strategies[i].keys);
+  }
+  const auto& narrow_phases = narrowphase::narrow_phases();
+  ASSERT_EQ(listing["narrow_phases"].size(), narrow_phases.size());
+  for (std::size_t i = 0; i < narrow_phases.size(); ++i) {
+    SCOPED_TRACE(narrow_phases[i].name);
+    const nlohmann::json& n = listing["narrow_phases"][i];
+    EXPECT_EQ(n["name"], narrow_phases[i].name);
+    EXPECT_EQ(n["conservative"], narrow_phases[i].conservative);
+    expect_same_keys(n["keys"], narrow_phases[i].keys);
+  }
+  const CommandResult table = run_ccdbench("strategies");
+  ASSERT_EQ(table.exit_code, 0);
+  for (const auto& entry : strategies) EXPECT_NE(table.output.find(entry.name + ": "), std::string::npos) << entry.name;
+  for (const auto& entry : narrow_phases) EXPECT_NE(table.output.find(entry.name + ": "), std::string::npos) << entry.name;
+  EXPECT_NE(run_ccdbench("run --help").output.find("ccdbench strategies"), std::string::npos);
 }
 
 // A shape object is shown by its shape and size; its centre is not counted as a stray unused vertex.

@@ -1,0 +1,20 @@
+#pragma once
+/// @file
+/// `ccdbench strategies`: what the registries hold (strategies/registry.hpp, strategies/narrowphase/registry.hpp),
+/// for people and for scripts.
+
+#include <nlohmann/json.hpp>
+
+#include <iosfwd>
+
+namespace ccd::harness {
+
+/// {"strategies": [...], "narrow_phases": [...]}: each entry's name, help, keys (name, kind, allowed values,
+/// default, help) and backends; a strategy's narrow phase, judging, baseline and availability; a narrow phase's
+/// promise (conservative) and the key its sweep varies.
+nlohmann::json registry_listing();
+
+/// Prints the listing as tables (`json`: as one JSON object). Exit status 0.
+int run_strategies(bool json, std::ostream& out);
+
+}  // namespace ccd::harness
