@@ -1,5 +1,6 @@
 #include "strategies/registry.hpp"
 
+#include "strategies/narrowphase/entry_list.hpp"
 #include "strategies/narrowphase/registry.hpp"
 
 #include <algorithm>
@@ -13,25 +14,15 @@ namespace ccd::strategies {
 #undef CCD_STRATEGY_FILE
 
 const std::vector<StrategyEntry>& strategy_entries() {
-  static const std::vector<StrategyEntry> entries = [] {
-    std::vector<StrategyEntry> all;
-#define CCD_STRATEGY_FILE(file) \
-  for (StrategyEntry& entry : file##_entries()) all.push_back(std::move(entry));
+  static const std::vector<StrategyEntry> entries = narrowphase::gather_entries<StrategyEntry>({
+#define CCD_STRATEGY_FILE(file) file##_entries,
 #include "ccd/strategy_files.inc"
 #undef CCD_STRATEGY_FILE
-    return all;
-  }();
+  });
   return entries;
 }
 
-const StrategyEntry& find_strategy(const std::string& name) {
-  for (const StrategyEntry& entry : strategy_entries()) {
-    if (entry.name == name) return entry;
-  }
-  std::string known;
-  for (const StrategyEntry& entry : strategy_entries()) known += (known.empty() ? "" : ", ") + entry.name;
-  throw std::invalid_argument("unknown strategy '" + name + "' (known: " + known + ")");
-}
+const StrategyEntry& find_strategy(const std::string& name) { return narrowphase::entry_named(strategy_entries(), name, "strategy"); }
 
 StrategySpec parse_strategy_spec(const std::string& spec) {
   StrategySpec parsed;

@@ -1,6 +1,6 @@
 #include "strategies/narrowphase/registry.hpp"
 
-#include <stdexcept>
+#include "strategies/narrowphase/entry_list.hpp"
 
 namespace ccd::narrowphase {
 
@@ -10,36 +10,19 @@ namespace ccd::narrowphase {
 #undef CCD_NARROW_PHASE_FILE
 
 const std::vector<NarrowPhaseEntry>& narrow_phases() {
-  static const std::vector<NarrowPhaseEntry> entries = [] {
-    std::vector<NarrowPhaseEntry> all;
-#define CCD_NARROW_PHASE_FILE(file) \
-  for (NarrowPhaseEntry& entry : file##_entries()) all.push_back(std::move(entry));
+  static const std::vector<NarrowPhaseEntry> entries = gather_entries<NarrowPhaseEntry>({
+#define CCD_NARROW_PHASE_FILE(file) file##_entries,
 #include "ccd/narrow_phase_files.inc"
 #undef CCD_NARROW_PHASE_FILE
-    return all;
-  }();
+  });
   return entries;
 }
 
-std::string narrow_phase_list() {
-  std::string names;
-  for (const NarrowPhaseEntry& entry : narrow_phases()) names += (names.empty() ? "" : ", ") + entry.name;
-  return names;
-}
+std::string narrow_phase_list() { return entry_names(narrow_phases()); }
 
-bool is_narrow_phase(const std::string& name) {
-  for (const NarrowPhaseEntry& entry : narrow_phases()) {
-    if (entry.name == name) return true;
-  }
-  return false;
-}
+bool is_narrow_phase(const std::string& name) { return find_entry(narrow_phases(), name) != nullptr; }
 
-const NarrowPhaseEntry& find_narrow_phase(const std::string& name) {
-  for (const NarrowPhaseEntry& entry : narrow_phases()) {
-    if (entry.name == name) return entry;
-  }
-  throw std::invalid_argument("unknown narrow phase '" + name + "' (known: " + narrow_phase_list() + ")");
-}
+const NarrowPhaseEntry& find_narrow_phase(const std::string& name) { return entry_named(narrow_phases(), name, "narrow phase"); }
 
 std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const SpecParameters& parameters) {
   const NarrowPhaseEntry& entry = find_narrow_phase(name);

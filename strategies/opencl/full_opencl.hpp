@@ -43,7 +43,7 @@ std::vector<OpenClDeviceSummary> opencl_devices();
 /// run is planned. The context, the program and the device's arithmetic self-test come at init().
 /// @throws std::invalid_argument for a narrow phase without a device form, a missing device, or a device without
 ///         (denormal-keeping) fp64, or when this build has no OpenCL.
-/// `separation_filter`: full's filter=on (full_traversal.hpp), the same filter on the device.
+/// `separation_filter`: full's filter=on (full_traversal.cpp), the same filter on the device.
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, const BackendChoice& backend,
                                            bool separation_filter = false);
 

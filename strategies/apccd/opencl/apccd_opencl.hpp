@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// `apccd:backend=opencl`: apccd's pipeline (cpu/apccd.hpp) with its heavy stages on an OpenCL device, testing the
+/// `apccd:backend=opencl`: apccd's pipeline (cpu/apccd.cpp) with its heavy stages on an OpenCL device, testing the
 /// same pairs as the CPU backend and so giving its collision set and TOIs bit for bit (same narrow phase).
 ///
 /// What runs where. On the device: positions in each object's frame, the session's inflated refit and full self

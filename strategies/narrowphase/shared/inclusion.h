@@ -495,7 +495,7 @@ static inline int ccd_within_thickness_at_start(const ccd_v3 r[8], double thickn
   return squared <= thickness * thickness - CCD_START_DISTANCE_MARGIN * scale * scale;
 }
 
-/* The whole conservative test of one pair (inclusion.hpp): rescale, stage 0, stage 1 (the whole domain at once
+/* The whole conservative test of one pair (the `conservative` narrow phase, inclusion.cpp): rescale, stage 0, stage 1 (the whole domain at once
  * excludes far pairs), stage 2 (a cheap proof of a contact, then only a lower bound of its TOI with a small
  * budget), stage 3 (the full search). `storage` holds `capacity` sub-boxes; on overflow the caller retries with
  * more. give_up_after > 0 ends a long search with an overflow (the caller reruns it with 0). Runs in
