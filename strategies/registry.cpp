@@ -60,7 +60,7 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
     return entry.make({narrowphase::SpecReader(entry.name, entry.keys, parsed.parameters), nullptr});
   }
   const narrowphase::NarrowPhaseEntry& narrow =
-      narrowphase::find_narrow_phase(parsed.narrow_phase.empty() ? "conservative" : parsed.narrow_phase);
+      narrowphase::find_narrow_phase(parsed.narrow_phase.empty() ? narrowphase::kDefaultNarrowPhase : parsed.narrow_phase);
   // Each key to its owner; one that neither has is refused naming both lists (so `apccd:foo=1` is not blamed on
   // the narrow phase alone).
   narrowphase::SpecParameters own, narrow_keys;

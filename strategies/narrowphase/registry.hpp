@@ -31,6 +31,9 @@ struct NarrowPhaseEntry {
   std::function<std::unique_ptr<NarrowPhase>(const SpecReader&)> make;
 };
 
+/// The narrow phase of a strategy spec that names none (DESIGN.md §3): the one that never misses.
+inline constexpr const char* kDefaultNarrowPhase = "conservative";
+
 /// Every narrow phase, in the order every listing shows them.
 const std::vector<NarrowPhaseEntry>& narrow_phases();
 
