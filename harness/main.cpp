@@ -17,6 +17,7 @@
 
 #include <tbb/global_control.h>
 
+#include <cmath>
 #include <iostream>
 #include <limits>
 #include <optional>
@@ -187,8 +188,10 @@ int run_command_line(int argc, char** argv) {
   run->add_option("--frames", run_frames, "mesh files: one deformable self-colliding object, one step per pair")
       ->expected(2, 100000);
   run->add_option("--strategy", run_strategies, "comma-separated strategy specs")->capture_default_str();
-  run->add_option("--thickness", run_options.thickness, "thickness δ >= 0 (default: the scene's; 0 for --frames)")
-      ->check(CLI::Range(0.0, std::numeric_limits<double>::max()));
+  std::string run_thickness;
+  run->add_option("--thickness", run_thickness,
+                  "thickness δ >= 0, or `scene` (the scene's own; the default, 0 for --frames); a comma-separated list\n"
+                  "(e.g. scene,0) runs every scene at each, and a strategy that refuses one (fcl at δ > 0) is left out there");
   run->add_option("--verify", run_verify, "exact (every step against the exact truth) or none")
       ->check(CLI::IsMember({"exact", "none"}))
       ->capture_default_str();
@@ -303,6 +306,25 @@ int run_command_line(int argc, char** argv) {
         const std::string folder = first.parent_path().filename().string();
         run_options.scenes.push_back({(folder.empty() ? "" : folder + "/") + first.filename().string(),
                                       [files] { return ccd::datasets::scene_from_frame_files(files, 0.0); }});
+      }
+      if (!run_thickness.empty()) {
+        for (const std::string& value : CLI::detail::split(run_thickness, ',')) {
+          if (value == "scene") {
+            run_options.thicknesses.emplace_back(std::nullopt);
+            continue;
+          }
+          std::size_t used = 0;
+          double thickness = -1;
+          try {
+            thickness = std::stod(value, &used);
+          } catch (const std::exception&) {
+            used = 0;
+          }
+          if (used == 0 || used != value.size() || !(thickness >= 0) || !std::isfinite(thickness)) {
+            return refuse("--thickness " + value, "must be `scene` or a finite number >= 0");
+          }
+          run_options.thicknesses.emplace_back(thickness);
+        }
       }
       run_options.strategies = CLI::detail::split(run_strategies, ',');
       for (const std::string& spec : run_options.strategies) {

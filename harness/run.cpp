@@ -22,11 +22,27 @@ using nlohmann::json;
 
 namespace {
 
-/// The scenes this rank has loaded, by index in RunOptions::scenes: loaded when a work item first needs one, and
+/// A scene at one of the run's thicknesses (nullopt: its own).
+struct SceneVariant {
+  const SceneSource* source;
+  std::optional<double> thickness;
+};
+
+/// Every scene at every thickness, scene by scene.
+std::vector<SceneVariant> scene_variants(const RunOptions& options) {
+  const std::vector<std::optional<double>> thicknesses = options.thicknesses.empty() ? std::vector<std::optional<double>>{std::nullopt} : options.thicknesses;
+  std::vector<SceneVariant> variants;
+  for (const SceneSource& source : options.scenes) {
+    for (const std::optional<double>& thickness : thicknesses) variants.push_back({&source, thickness});
+  }
+  return variants;
+}
+
+/// The scenes this rank has loaded, by index in the run's variants: loaded when a work item first needs one, and
 /// at most kKept at once (a rank may alternate between scenes when the work queue hands out cells of several).
 class SceneStore {
  public:
-  explicit SceneStore(const RunOptions& options) : options_(options) {}
+  SceneStore(const RunOptions& options, const std::vector<SceneVariant>& variants) : options_(options), variants_(variants) {}
 
   SceneData& get(std::size_t index) {
     for (auto it = loaded_.begin(); it != loaded_.end(); ++it) {
@@ -34,9 +50,10 @@ class SceneStore {
       loaded_.splice(loaded_.begin(), loaded_, it);
       return *loaded_.front().second;
     }
-    const SceneSource& source = options_.scenes.at(index);
-    auto data = std::make_unique<SceneData>(SceneData{source.label, source.load(), {}, {}, {}, 0});
-    if (options_.thickness) data->sequence.set_thickness(*options_.thickness);
+    const SceneVariant& variant = variants_.at(index);
+    const SceneSource& source = *variant.source;
+    auto data = std::make_unique<SceneData>(SceneData{source.label, source.load(), {}, {}, {}, 0, variant.thickness ? "command line" : "scene"});
+    if (variant.thickness) data->sequence.set_thickness(*variant.thickness);
     data->steps = data->sequence.num_steps();
     if (options_.max_steps > 0) data->steps = std::min(data->steps, options_.max_steps);
     if (data->steps == 0) throw InputError(source.label, {}, "the scene has no steps (one frame)");
@@ -51,6 +68,7 @@ class SceneStore {
  private:
   static constexpr std::size_t kKept = 2;
   const RunOptions& options_;
+  const std::vector<SceneVariant>& variants_;
   std::list<std::pair<std::size_t, std::unique_ptr<SceneData>>> loaded_;
 };
 
@@ -82,7 +100,8 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     if (options.misses) datasets::require_writable_directory(*options.misses);
   }
   const TruthCache truth_cache(datasets::procedural_cache_root() / "truth");
-  SceneStore store(options);
+  const std::vector<SceneVariant> variants = scene_variants(options);
+  SceneStore store(options, variants);
 
   // Work items (harness/work_queue.hpp): {"truth", scene, step} computes or reads one step's truth into the cache
   // (and this rank's memory); {"cell", scene, spec, file} runs a cell. Steps of a cell are never split: strategies
@@ -124,11 +143,14 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   }
 
   std::vector<std::optional<json>> cells;
+  std::vector<std::string> cell_specs;  // each cell's spec as --strategy gave it (the table's short name)
   std::vector<WorkItem> items;
   std::vector<PlannedItem> planned;
   // Plans scene s: its kept cells go into `cells`, its truth steps and pending cells become work items.
+  // Cells a strategy refused (several δ only): per spec, the scenes and δ, and the first refusal's reason.
+  std::vector<std::pair<std::string, std::pair<std::vector<std::string>, std::string>>> left_out;
   auto plan_scene = [&](std::size_t s) {
-    const SceneSource& source = options.scenes[s];
+    const SceneSource& source = *variants[s].source;
     std::cerr << "run: loading " << source.label << "\n";
     const SceneData& data = store.get(s);
     const std::size_t steps = data.steps;
@@ -142,9 +164,19 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     };
     std::vector<Pending> pending;
     for (const std::string& spec : options.strategies) {
-      CellKey key{source.label, content, steps, scene.thickness(), options.thickness ? "command line" : "scene",
-                  strategies::make_strategy(spec)->name(), options.verify, options.toi, options.repeats,
-                  worker_threads(), executable_digest()};
+      const auto strategy = strategies::make_strategy(spec);
+      if (options.thicknesses.size() > 1) {
+        try {
+          strategy->check_scene(scene);
+        } catch (const std::invalid_argument& refusal) {
+          auto it = std::find_if(left_out.begin(), left_out.end(), [&](const auto& entry) { return entry.first == spec; });
+          if (it == left_out.end()) it = left_out.insert(left_out.end(), {spec, {{}, refusal.what()}});
+          it->second.first.push_back(source.label + " at δ " + significant(scene.thickness(), 3));
+          continue;
+        }
+      }
+      CellKey key{source.label, content, steps, scene.thickness(), data.thickness_from, strategy->name(), options.verify,
+                  options.toi, options.repeats, worker_threads(), executable_digest()};
       const auto file = options.out / "cells" / cell_file_name(key);
       std::optional<json> kept;
       if (!options.fresh) {
@@ -160,9 +192,11 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
                   << "strategy, steps, δ, repeats, threads and executable (--fresh reruns it)"
                   << (options.misses ? "; its misses are not written to --misses again" : "") << "\n";
         cells.push_back(std::move(*kept));
+        cell_specs.push_back(spec);
       } else {
         pending.push_back({spec, file, std::move(key), cells.size()});
         cells.emplace_back();
+        cell_specs.push_back(spec);
       }
     }
     if (pending.empty()) return;
@@ -205,14 +239,14 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   };
   if (rank_info().size == 1) {
     // One process: scene by scene, as before MPI (each scene loaded once, when its turn comes).
-    for (std::size_t s = 0; s < options.scenes.size(); ++s) {
+    for (std::size_t s = 0; s < variants.size(); ++s) {
       items.clear();
       planned.clear();
       plan_scene(s);
       distribute(items, work, done);
     }
   } else {
-    for (std::size_t s = 0; s < options.scenes.size(); ++s) plan_scene(s);
+    for (std::size_t s = 0; s < variants.size(); ++s) plan_scene(s);
     cell_count = static_cast<std::size_t>(std::count_if(planned.begin(), planned.end(), [](const PlannedItem& p) { return p.cell; }));
     say_on_termination("run: stopped before every cell finished (a rank died, or the run was interrupted): finished "
                        "cells are kept in " + (options.out / "cells").string() +
@@ -222,15 +256,24 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   }
 
   std::vector<json> summaries;
-  for (const std::optional<json>& cell : cells) summaries.push_back(cell->at("summary"));
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    summaries.push_back(cells[c]->at("summary"));
+    summaries.back()["spec"] = cell_specs[c];
+  }
+  attach_speedups(summaries);
   const Table table = summary_table(summaries);
   table.print(out);
-  out << summary_notes(table);
+  out << summary_notes(table) << resolved_names(summaries);
+  for (const auto& [spec, refused] : left_out) {
+    out << "left out: " << spec << " on " << refused.first.size() << " scene" << (refused.first.size() == 1 ? "" : "s") << " (";
+    for (std::size_t i = 0; i < refused.first.size(); ++i) out << (i ? ", " : "") << refused.first[i];
+    out << "), which it refuses; the first said: " << refused.second << "\n";
+  }
   if (options.json) datasets::write_json_file(*options.json, summaries);
   if (options.report) {
     std::vector<json> finished;
     for (const std::optional<json>& cell : cells) finished.push_back(*cell);
-    write_report(*options.report, table, finished, options.command_line);
+    write_report(*options.report, table, summaries, finished, options.command_line);
     out << "report: " << (*options.report / "README.md").string() << "\n";
   }
   out << "results: " << (options.out / "results.jsonl").string() << " (every finished cell of every run into "

@@ -33,7 +33,9 @@ std::string scene_file_label(const std::filesystem::path& path);
 struct RunOptions {
   std::vector<SceneSource> scenes;
   std::vector<std::string> strategies{"full"};
-  std::optional<double> thickness;
+  /// The thicknesses every scene runs at: nullopt is the scene's own δ; empty means {nullopt}. With more than one, a
+  /// strategy that refuses a scene at one of them (fcl at δ > 0) is left out there, and said so, not an error.
+  std::vector<std::optional<double>> thicknesses;
   /// Verify every step against the exact truth.
   bool verify = true;
   /// Also compare every reported TOI with the exact earliest contact (DESIGN.md §5; needs verify): toi_late

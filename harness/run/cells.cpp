@@ -82,6 +82,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
     for (const auto& [stage, value] : r.stages.entries()) stages[stage] = value;
     json record = {{"record", "step"},
                    {"scene", data.label},
+                   {"thickness", scene.thickness()},
                    {"strategy", resolved},
                    {"step", k},
                    {"ms", ms},
@@ -165,7 +166,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                   {"history_bytes", history},
                   {"reported", reported},
                   {"judged_by", judging == strategies::Judging::triangle_pairs ? "triangle pairs" : "elementary pairs"},
-                  {"thickness_from", options.thickness ? "command line" : "scene"},
+                  {"thickness_from", data.thickness_from},
                   {"verified", options.verify},
                   {"repeats", options.repeats},
                   {"cell", std::filesystem::path(cell_name).stem().string()},

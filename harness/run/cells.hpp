@@ -20,6 +20,7 @@ struct SceneData {
   std::vector<CollisionSet> truth;  // per step, when verifying
   std::vector<bool> has_truth;      // which steps' truth this rank holds
   std::size_t steps = 0;            // the steps run (--max-steps may cut the scene's)
+  std::string thickness_from;       // "scene" or "command line"
 };
 
 /// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.

@@ -47,10 +47,16 @@ std::vector<SceneSource> suite_scenes(const std::string& suite) {
             generated("fold", {{"resolution", 8}, {"frames", 24}, {"obstacles", 1}})};
   }
   if (suite == "default") {
+    // Every scene collides at its δ and at δ = 0, so that every cell of the main job (scripts/run.sh: every strategy
+    // family at both) can miss something: the simulated scenes touch at δ = 0 too (drape's cloth through the
+    // table's mesh between its vertices, twist and pile against themselves and each other), the flag only once it
+    // folds onto itself, after its 20th frame; the kinematic fold crosses itself and its blade.
     std::vector<SceneSource> scenes;
-    for (const char* name : {"spinning-ball", "drape", "flag", "twist", "funnel", "pile"}) {
+    for (const char* name : {"spinning-ball", "drape", "twist", "funnel", "pile"}) {
       scenes.push_back(generated(name, {{"resolution", 16}, {"frames", 20}}));
     }
+    scenes.insert(scenes.begin() + 2, generated("flag", {{"resolution", 16}, {"frames", 40}}));
+    scenes.push_back(generated("fold", {{"resolution", 16}, {"frames", 24}}));
     return scenes;
   }
   if (suite == "paper") {

@@ -214,7 +214,7 @@ TEST_F(OpenClParity, ApccdOnTheDeviceMissesNothingOnTheCiSuite) {
     harness::RunOptions options;
     options.scenes = harness::suite_scenes("ci");
     options.strategies = {"apccd:backend=opencl", "apccd+cubic64:backend=opencl"};
-    if (zero) options.thickness = 0.0;
+    if (zero) options.thicknesses = {0.0};
     options.out = cache_.path() / (zero ? "results-zero" : "results");
     std::ostringstream table;
     const std::vector<nlohmann::json> summaries = harness::run_benchmark(options, table);
