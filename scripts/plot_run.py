@@ -30,59 +30,84 @@ def short(summary):
     return f"{head} δ {summary['thickness']:.3g}"
 
 
-def cell_labels(summaries):
-    return [f"{s['scene']}\n{short(s)}" for s in summaries]
+def by_scene(summaries):
+    """The scenes in order of first appearance, each with its cells."""
+    scenes = []
+    for s in summaries:
+        if s["scene"] not in scenes:
+            scenes.append(s["scene"])
+    return [(scene, [s for s in summaries if s["scene"] == scene]) for scene in scenes]
+
+
+def panels(count, height_per_row):
+    """One panel per scene, two columns."""
+    columns = min(2, count)
+    rows = (count + columns - 1) // columns
+    figure, axes = plt.subplots(rows, columns, figsize=(7.5 * columns, height_per_row * rows + 0.6), squeeze=False)
+    for axis in list(axes.flat)[count:]:
+        axis.axis("off")
+    return figure, list(axes.flat)
 
 
 def speedups(summaries, directory):
-    scenes = sorted({s["scene"] for s in summaries})
-    figure, axes = plt.subplots(len(scenes), 1, figsize=(9, 2.2 * len(scenes) + 0.8), squeeze=False)
-    for axis, scene in zip(axes.flat, scenes):
-        cells = [s for s in summaries if s["scene"] == scene and s.get("speedup") is not None]
+    scenes = by_scene(summaries)
+    figure, axes = panels(len(scenes), 0.22 * max(len(cells) for _, cells in scenes) + 1.0)
+    for axis, (scene, cells) in zip(axes, scenes):
+        cells = [s for s in cells if s.get("speedup") is not None]
         axis.barh(range(len(cells)), [s["speedup"] for s in cells], color="tab:blue")
         axis.axvline(1.0, color="black", linewidth=0.8)
         axis.set_yticks(range(len(cells)))
         axis.set_yticklabels([short(s) for s in cells], fontsize=7)
+        axis.invert_yaxis()
         axis.set_title(scene, fontsize=9)
-        axis.set_xlabel("speed-up over full (same narrow phase, same invocation); > 1: faster", fontsize=8)
+        axis.set_xlabel("speed-up over full (same narrow phase and δ, same invocation); > 1: faster", fontsize=7)
     figure.tight_layout()
     figure.savefig(f"{directory}/speedup.png", dpi=100)
 
 
 def verdicts(summaries, directory):
-    verified = [s for s in summaries if s.get("verified")]
-    if not verified:
+    scenes = by_scene([s for s in summaries if s.get("verified")])
+    if not scenes:
         return
-    figure, axis = plt.subplots(figsize=(max(7, 0.55 * len(verified)), 4.5))
-    x = range(len(verified))
-    width = 0.27
-    axis.bar([i - width for i in x], [s["colliding"] for s in verified], width, label="colliding (truth)", color="tab:gray")
-    axis.bar(list(x), [s["missed"] for s in verified], width, label="missed", color="tab:red")
-    axis.bar([i + width for i in x], [s["false_alarms"] for s in verified], width, label="false alarms", color="tab:orange")
-    for i, s in enumerate(verified):
-        axis.annotate(str(s["missed"]), (i, s["missed"]), ha="center", va="bottom", fontsize=6, color="tab:red")
-    axis.set_xticks(list(x))
-    axis.set_xticklabels(cell_labels(verified), rotation=70, ha="right", fontsize=6)
-    axis.set_ylabel("pairs over all steps (symlog)")
-    axis.set_yscale("symlog", linthresh=1)
-    axis.legend(fontsize=8)
+    figure, axes = panels(len(scenes), 0.3 * max(len(cells) for _, cells in scenes) + 1.0)
+    height = 0.27
+    for axis, (scene, cells) in zip(axes, scenes):
+        y = range(len(cells))
+        axis.barh([i - height for i in y], [s["colliding"] for s in cells], height, label="colliding (truth)", color="tab:gray")
+        axis.barh(list(y), [s["missed"] for s in cells], height, label="missed", color="tab:red")
+        axis.barh([i + height for i in y], [s["false_alarms"] for s in cells], height, label="false alarms", color="tab:orange")
+        for i, s in enumerate(cells):
+            axis.annotate(f" {s['missed']} missed", (max(s["missed"], 0), i), va="center", fontsize=6, color="tab:red")
+        axis.set_yticks(list(y))
+        axis.set_yticklabels([short(s) for s in cells], fontsize=7)
+        axis.invert_yaxis()
+        axis.set_xscale("symlog", linthresh=1)
+        axis.set_title(scene, fontsize=9)
+        axis.set_xlabel("pairs over all steps (symlog)", fontsize=7)
+    axes[0].legend(fontsize=7, loc="lower right")
     figure.tight_layout()
     figure.savefig(f"{directory}/verdicts.png", dpi=100)
 
 
 def stages(summaries, directory):
     names = sorted({stage for s in summaries for stage in s["stage_ms"]})
-    figure, axis = plt.subplots(figsize=(max(7, 0.55 * len(summaries)), 4.5))
-    bottom = [0.0] * len(summaries)
-    for stage in names:
-        heights = [s["stage_ms"].get(stage, 0.0) for s in summaries]
-        axis.bar(range(len(summaries)), heights, bottom=bottom, label=stage)
-        bottom = [b + h for b, h in zip(bottom, heights)]
-    axis.set_xticks(range(len(summaries)))
-    axis.set_xticklabels(cell_labels(summaries), rotation=70, ha="right", fontsize=6)
-    axis.set_ylabel("median ms per step, by stage (linear)")
-    axis.legend(fontsize=7, ncol=2)
-    figure.tight_layout()
+    colors = {stage: plt.get_cmap("tab20")(i % 20) for i, stage in enumerate(names)}
+    scenes = by_scene(summaries)
+    figure, axes = panels(len(scenes), 0.22 * max(len(cells) for _, cells in scenes) + 1.0)
+    for axis, (scene, cells) in zip(axes, scenes):
+        left = [0.0] * len(cells)
+        for stage in names:
+            widths = [s["stage_ms"].get(stage, 0.0) for s in cells]
+            axis.barh(range(len(cells)), widths, left=left, color=colors[stage], label=stage)
+            left = [a + b for a, b in zip(left, widths)]
+        axis.set_yticks(range(len(cells)))
+        axis.set_yticklabels([short(s) for s in cells], fontsize=7)
+        axis.invert_yaxis()
+        axis.set_title(scene, fontsize=9)
+        axis.set_xlabel("median ms per step, by stage (linear: a stage's share of the bar is its share of the time)", fontsize=7)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=colors[stage]) for stage in names]
+    figure.legend(handles, names, loc="lower center", ncol=min(6, len(names)), fontsize=7)
+    figure.tight_layout(rect=(0, 0.06, 1, 1))
     figure.savefig(f"{directory}/stages.png", dpi=100)
 
 
