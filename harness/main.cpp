@@ -8,6 +8,7 @@
 #include "harness/commands.hpp"
 #include "harness/query_scoring.hpp"
 #include "harness/registry_listing.hpp"
+#include "harness/run/provenance.hpp"
 #include "harness/run.hpp"
 #include "harness/work_queue.hpp"
 #include "strategies/narrowphase/registry.hpp"
@@ -77,8 +78,12 @@ int main(int argc, char** argv) {
 
 int run_command_line(int argc, char** argv) {
   CLI::App app(kDescription, "ccdbench");
-  app.set_version_flag("--version", version_text());
-  app.require_subcommand(1);
+  bool version = false, verbose = false;
+  app.add_flag("--version", version, "print ccdbench's version and which optional parts it was built with");
+  app.add_flag("--verbose", verbose,
+               "with --version: also the build's provenance, as every result records it (revision, build type and flags,\n"
+               "compiler, and the version of every library)");
+  app.require_subcommand(0, 1);
   std::size_t threads = 0;
   app.add_option("--threads", threads,
                  "worker threads for every command, 1 to " + std::to_string(kMaxThreads) +
@@ -265,11 +270,21 @@ int run_command_line(int argc, char** argv) {
     return app.exit(help);
   } catch (const CLI::CallForAllHelp& help) {
     return app.exit(help);
-  } catch (const CLI::CallForVersion& version) {
-    return app.exit(version);
   } catch (const CLI::ParseError& error) {
     return refuse({}, error.what() + std::string(" (see ccdbench --help)"));
   }
+
+  if (version) {
+    std::cout << version_text() << '\n';
+    if (verbose) {
+      const nlohmann::json provenance = ccd::harness::build_provenance();
+      for (const auto& [name, value] : provenance.items()) {
+        std::cout << "  " << name << ": " << (value.is_string() ? value.get<std::string>() : value.dump()) << '\n';
+      }
+    }
+    return 0;
+  }
+  if (app.get_subcommands().empty()) return refuse({}, "a command is required (see ccdbench --help)");
 
   std::optional<tbb::global_control> thread_limit;
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, threads);

@@ -373,4 +373,18 @@ void distribute(const std::vector<WorkItem>& items, const WorkFunction& work, co
   run_in_plan_order(items, work, done);
 }
 
+std::string mpi_library_version() {
+#if CCDBENCH_WITH_MPI
+  // Callable before MPI_Init (MPI 3.0 §8.1.1).
+  char text[MPI_MAX_LIBRARY_VERSION_STRING] = {};
+  int length = 0;
+  if (MPI_Get_library_version(text, &length) != MPI_SUCCESS) return "unknown";
+  std::string version(text, static_cast<std::size_t>(length));
+  // The first line names the library and its version; the rest is its build's configuration.
+  return version.substr(0, version.find_first_of(",\n"));
+#else
+  return "";
+#endif
+}
+
 }  // namespace ccd::harness

@@ -42,6 +42,9 @@ class RankSession {
 
 RankInfo rank_info();
 
+/// The MPI library's own version text (MPI_Get_library_version: "Open MPI v4.1.4, ..."), or "" without MPI.
+std::string mpi_library_version();
+
 /// What rank 0 prints (to stderr) if it is terminated while work is under way, e.g. by mpirun after another rank
 /// died: where the finished work is kept and how to do the rest (at most 4 KiB; empty: nothing). Only under MPI
 /// with more than one rank.

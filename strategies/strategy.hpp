@@ -10,6 +10,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ccd::strategies {
@@ -60,6 +61,9 @@ class Strategy {
   virtual void init(const Scene& scene, std::span<const Vec3> first_frame) = 0;
   /// One step, in order. With `audit`, also returns the elementary pairs tested (outside the timed stages).
   virtual StepResult step(const StepView& step, bool audit) = 0;
+  /// What a result of this strategy depends on beyond the build (DESIGN.md §5 provenance), as name-value pairs: the
+  /// OpenCL backend's platform, device and driver. Empty for a strategy that runs on the host alone.
+  virtual std::vector<std::pair<std::string, std::string>> provenance() const { return {}; }
 };
 
 }  // namespace ccd::strategies

@@ -24,9 +24,11 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   std::string resolved;
   const strategies::StrategyEntry& strategy_entry = strategies::strategy_entry_of(spec);
   const strategies::Judging judging = strategy_entry.judging;
+  json environment_of_cell = environment();
   for (int repeat = 0; repeat < std::max(1, options.repeats); ++repeat) {
     auto strategy = strategies::make_strategy(spec);
     resolved = strategy->name();
+    for (const auto& [name, value] : strategy->provenance()) environment_of_cell["provenance"][name] = value;
     strategy->init(scene, data.frames[0]);
     for (std::size_t k = 0; k < steps; ++k) {
       const StepView view{&scene, k, data.frames[k], data.frames[k + 1]};
@@ -129,7 +131,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
     candidates += static_cast<double>(r.counters.candidate_triangle_pairs);
     tests += static_cast<double>(r.counters.elementary_tests);
     history = std::max(history, static_cast<double>(r.counters.history_bytes));
-    record.update(environment());
+    record.update(environment_of_cell);
     step_records.push_back(record);
   }
   json stage_summary = json::object();
@@ -190,7 +192,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                           {"toi_error_mean", toi_total.checked ? toi_total.error_sum / static_cast<double>(toi_total.checked) : 0.0}});
     }
   }
-  summary.update(environment());
+  summary.update(environment_of_cell);
   return {{"summary", summary}, {"steps", step_records}};
 }
 

@@ -5,8 +5,11 @@
 #include "harness/cell_store.hpp"
 #include "harness/work_queue.hpp"
 
+#include <gmp.h>
+#include <mpfr.h>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
+#include <tbb/version.h>
 
 #include <algorithm>
 #include <chrono>
@@ -19,6 +22,26 @@ namespace ccd::harness {
 std::size_t worker_threads() {
   return std::min<std::size_t>(static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()),
                                tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+}
+
+nlohmann::json build_provenance() {
+  nlohmann::json provenance = {{"ccdbench", CCDBENCH_VERSION},
+                               {"git_revision", CCDBENCH_GIT_REVISION},
+                               {"build_type", CCDBENCH_BUILD_TYPE},
+                               {"cxx_flags", CCDBENCH_CXX_FLAGS},
+                               {"compiler", CCDBENCH_COMPILER},
+                               {"cgal", CCDBENCH_VERSION_CGAL},
+                               {"eigen", CCDBENCH_VERSION_EIGEN},
+                               {"nlohmann_json", CCDBENCH_VERSION_NLOHMANN_JSON},
+                               {"gmp", gmp_version},
+                               {"mpfr", mpfr_get_version()},
+                               {"tbb", TBB_runtime_version()},
+                               {"tbb_interface", TBB_runtime_interface_version()}};
+  provenance["fcl"] = CCDBENCH_WITH_FCL ? CCDBENCH_VERSION_FCL : "not built";
+  provenance["libccd"] = CCDBENCH_VERSION_LIBCCD;
+  provenance["mpi"] = CCDBENCH_WITH_MPI ? mpi_library_version() : "not built";
+  provenance["opencl"] = CCDBENCH_WITH_OPENCL ? std::string("OpenCL ") + CCDBENCH_VERSION_OPENCL + " headers, ICD loader" : "not built";
+  return provenance;
 }
 
 nlohmann::json environment() {
@@ -35,9 +58,10 @@ nlohmann::json environment() {
     }
     const std::string revision = CCDBENCH_GIT_REVISION;  // of the build, not of the source folder at run time
     return nlohmann::json{{"machine", std::string(host) + " (" + cpu + ", " + std::to_string(::sysconf(_SC_NPROCESSORS_ONLN)) + " cores)"},
-                {"build_type", CCDBENCH_BUILD_TYPE},
-                {"git_revision", revision},
-                {"executable", executable_digest()}};
+                          {"build_type", CCDBENCH_BUILD_TYPE},
+                          {"git_revision", revision},
+                          {"executable", executable_digest()},
+                          {"provenance", build_provenance()}};
   }();
   nlohmann::json env = cached;
   env["threads"] = worker_threads();

@@ -125,7 +125,10 @@ void write_report(const std::filesystem::path& directory, const Table& table, co
   if (const std::string names = resolved_names(summaries); !names.empty()) out << "\n```\n" << names << "```\n";
   const json env = environment();
   out << "\nMachine: " << env["machine"].get<std::string>() << "; build " << env["build_type"].get<std::string>() << ", "
-      << env["threads"] << " threads, revision " << env["git_revision"].get<std::string>() << ".\n\n"
+      << env["threads"] << " threads, revision " << env["git_revision"].get<std::string>() << ".\n\nProvenance (every record in "
+      << "`summaries.json` and `steps.json` carries it, with the OpenCL platform, device and driver of OpenCL cells):";
+  for (const auto& [name, value] : env["provenance"].items()) out << " " << name << " " << (value.is_string() ? value.get<std::string>() : value.dump()) << ";";
+  out << "\n\n"
       << "How to read it: `vs full` is a cell's speed-up over `full` with the same narrow phase on the same scene at the same\n"
       << "δ (> 1: faster); `missed` counts truth pairs the strategy did not report (culled: never tested; tested: its test\n"
       << "said no), a defect for a conservative method; false alarms are reported pairs that do not collide, a cost.\n\n"

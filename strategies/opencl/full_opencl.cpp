@@ -25,6 +25,8 @@ class FullOpenCl final : public Strategy {
   FullOpenCl(opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device, const BackendChoice& backend, bool separation_filter)
       : pipeline_(std::move(narrow_phase), std::move(device), backend, "full:backend=opencl"), separation_filter_(separation_filter) {}
 
+  std::vector<std::pair<std::string, std::string>> provenance() const override { return pipeline_.provenance(); }
+
   std::string name() const override {
     const opencl::NarrowPhaseChoice& narrow = pipeline_.narrow_phase();
     return "full+" + narrow.host->name() + (separation_filter_ ? ":filter=on" : "") +

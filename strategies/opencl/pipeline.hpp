@@ -103,6 +103,11 @@ class DevicePipeline {
   const std::string& label() const { return label_; }
   const NarrowPhaseChoice& narrow_phase() const { return narrow_phase_; }
   const DeviceInfo& device() const { return device_; }
+  /// The device as results record it: platform, device, its OpenCL version and driver.
+  std::vector<std::pair<std::string, std::string>> provenance() const {
+    return {{"opencl_platform", device_.platform}, {"opencl_device", device_.name}, {"opencl_version", device_.version},
+            {"opencl_driver", device_.driver}};
+  }
 
   // Topology on the device.
   const Buffer& faces() const { return faces_; }

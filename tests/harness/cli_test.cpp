@@ -87,6 +87,38 @@ TEST(Cli, StrategiesListsEveryEntryOfTheRegistries) {
   EXPECT_NE(run_ccdbench("run --help").output.find("ccdbench strategies"), std::string::npos);
 }
 
+// Every run record carries the provenance a result from another machine needs to be reproduced: ccdbench's version
+// and revision, the build type and flags, the compiler, every library's version, and for OpenCL cells the platform,
+// device and driver; `ccdbench --version --verbose` prints the same.
+TEST(Cli, EveryRecordCarriesItsProvenance) {
+  testing::TempDir dir;
+  ::setenv("CCDBENCH_CACHE_DIR", (dir / "cache").c_str(), 1);
+  const std::string strategies = CCDBENCH_WITH_OPENCL ? "full,full:backend=opencl" : "full";
+  const CommandResult run = run_ccdbench("run --suite ci --max-steps 1 --strategy " + strategies + " --out '" + (dir / "out").string() +
+                                         "' --json '" + (dir / "summary.json").string() + "' --report '" + (dir / "report").string() + "'");
+  ::unsetenv("CCDBENCH_CACHE_DIR");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const CommandResult verbose = run_ccdbench("--version --verbose");
+  ASSERT_EQ(verbose.exit_code, 0);
+  std::vector<nlohmann::json> records;
+  for (const nlohmann::json& summary : read_json(dir / "summary.json")) records.push_back(summary);
+  for (const nlohmann::json& step : read_json(dir / "report" / "steps.json")) records.push_back(step);
+  ASSERT_FALSE(records.empty());
+  for (const nlohmann::json& record : records) {
+    ASSERT_TRUE(record.contains("provenance")) << record.dump();
+    const nlohmann::json& provenance = record["provenance"];
+    for (const char* item : {"ccdbench", "git_revision", "build_type", "cxx_flags", "compiler", "cgal", "gmp", "mpfr", "tbb", "fcl",
+                             "libccd", "eigen", "nlohmann_json", "mpi", "opencl"}) {
+      ASSERT_TRUE(provenance.contains(item) && !provenance[item].get<std::string>().empty()) << item << " in " << provenance.dump();
+      EXPECT_NE(verbose.output.find(std::string(item) + ": " + provenance[item].get<std::string>()), std::string::npos) << item;
+    }
+    const bool opencl_cell = record["strategy"].get<std::string>().find(":backend=opencl") != std::string::npos;
+    for (const char* item : {"opencl_platform", "opencl_device", "opencl_driver"}) {
+      EXPECT_EQ(provenance.contains(item), opencl_cell) << item << " in " << record["strategy"];
+    }
+  }
+}
+
 // A shape object is shown by its shape and size; its centre is not counted as a stray unused vertex.
 TEST(Cli, InspectShowsShapesAndTheirSize) {
   testing::TempDir dir;

@@ -33,6 +33,8 @@ class ApccdOpenCl final : public Strategy {
   ApccdOpenCl(const ApccdSettings& settings, opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device, const BackendChoice& backend)
       : settings_(settings), pipeline_(std::move(narrow_phase), std::move(device), backend, "apccd:backend=opencl") {}
 
+  std::vector<std::pair<std::string, std::string>> provenance() const override { return pipeline_.provenance(); }
+
   std::string name() const override {
     const opencl::NarrowPhaseChoice& narrow = pipeline_.narrow_phase();
     return apccd_name(settings_, narrow.host->name()) + pipeline_.backend().resolved(pipeline_.device().name, narrow.conservative());
