@@ -4,6 +4,7 @@
 #include "datasets/atomic_file.hpp"
 #include "datasets/procedural_scenes.hpp"
 #include "harness/cell_store.hpp"
+#include "harness/progress.hpp"
 #include "harness/run/cells.hpp"
 #include "harness/run/provenance.hpp"
 #include "harness/run/tables.hpp"
@@ -70,6 +71,10 @@ class SceneStore {
   const RunOptions& options_;
   const std::vector<SceneVariant>& variants_;
   std::list<std::pair<std::size_t, std::unique_ptr<SceneData>>> loaded_;
+
+ public:
+  /// The scene a work item used last (the one a cell in progress runs on), or nullptr.
+  const SceneData* last() const { return loaded_.empty() ? nullptr : loaded_.front().second.get(); }
 };
 
 /// What rank 0 knows of a work item beside its payload: for whom it prints progress and where a cell goes.
@@ -102,6 +107,33 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   const TruthCache truth_cache(datasets::procedural_cache_root() / "truth");
   const std::vector<SceneVariant> variants = scene_variants(options);
   SceneStore store(options, variants);
+  // Rank 0's view of the run: cells done of every cell planned (a bar on a terminal, plain lines in a log).
+  std::size_t cell_total = variants.size() * options.strategies.size(), cells_finished = 0;
+  std::optional<Progress> progress;
+  if (planner) progress.emplace("run: cells", cell_total);
+  auto say = [&](const std::string& text) {
+    if (progress) {
+      progress->line(text);
+    } else {
+      std::cerr << text << "\n";
+    }
+  };
+  // A cell in progress on rank 0: its steps move the estimate; a log gets a line per pass, as before.
+  const CellProgress cell_progress = [&](int pass, std::size_t step, const std::string& strategy) {
+    if (!progress) return;
+    const SceneData* data = store.last();
+    const std::size_t steps = data ? data->steps : 1;
+    const double passes = std::max(1, options.repeats);
+    const double fraction = (pass + static_cast<double>(step + 1) / static_cast<double>(steps)) / passes;
+    const std::string label = data ? data->label : "";
+    progress->update(static_cast<double>(cells_finished) + fraction, cell_total,
+                     label + " / " + strategy.substr(0, strategy.find(':')) + ": pass " + std::to_string(pass + 1) + ", step " +
+                         std::to_string(step + 1) + "/" + std::to_string(steps));
+    if (!progress->terminal() && step + 1 == steps) {
+      say("run: " + label + " / " + strategy.substr(0, strategy.find(':')) + ": pass " + std::to_string(pass + 1) + " of " +
+          std::to_string(options.repeats) + " done");
+    }
+  };
 
   // Work items (harness/work_queue.hpp): {"truth", scene, step} computes or reads one step's truth into the cache
   // (and this rank's memory); {"cell", scene, spec, file} runs a cell. Steps of a cell are never split: strategies
@@ -134,7 +166,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
         if (!data.has_truth[k]) load_truth(k);
       }
     }
-    json result = run_cell(data, task.at("spec"), options, data.steps, task.at("file"));
+    json result = run_cell(data, task.at("spec"), options, data.steps, task.at("file"), planner ? cell_progress : CellProgress{});
     return result.dump();
   };
   if (!planner) {
@@ -151,7 +183,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   std::vector<std::pair<std::string, std::pair<std::vector<std::string>, std::string>>> left_out;
   auto plan_scene = [&](std::size_t s) {
     const SceneSource& source = *variants[s].source;
-    std::cerr << "run: loading " << source.label << "\n";
+    say("run: loading " + source.label + (variants[s].thickness ? " at δ " + significant(*variants[s].thickness, 6) : std::string()));
     const SceneData& data = store.get(s);
     const std::size_t steps = data.steps;
     const Scene& scene = data.sequence.scene();
@@ -172,6 +204,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
           auto it = std::find_if(left_out.begin(), left_out.end(), [&](const auto& entry) { return entry.first == spec; });
           if (it == left_out.end()) it = left_out.insert(left_out.end(), {spec, {{}, refusal.what()}});
           it->second.first.push_back(source.label + " at δ " + significant(scene.thickness(), 3));
+          --cell_total;
           continue;
         }
       }
@@ -188,9 +221,9 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
       }
       if (kept) {
         (*kept)["summary"]["resumed"] = true;
-        std::cerr << "run: " << source.label << " / " << key.strategy << ": kept from an earlier run with the same inputs, "
-                  << "strategy, steps, δ, repeats, threads and executable (--fresh reruns it)"
-                  << (options.misses ? "; its misses are not written to --misses again" : "") << "\n";
+        say("run: " + source.label + " / " + key.strategy + ": kept from an earlier run with the same inputs, strategy, steps, δ, "
+            "repeats, threads and executable (--fresh reruns it)" + (options.misses ? "; its misses are not written to --misses again" : ""));
+        ++cells_finished;
         cells.push_back(std::move(*kept));
         cell_specs.push_back(spec);
       } else {
@@ -222,8 +255,14 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     PlannedItem& item = planned.at(index);
     json result = json::parse(text);
     if (!item.cell) {
-      std::cerr << "run: " << item.label << ": truth of step " << item.step + 1 << "/" << item.steps
-                << (result.at("computed").get<bool>() ? " computed" : " cached") << on_rank(rank) << "\n";
+      const std::string truth = item.label + ": truth of step " + std::to_string(item.step + 1) + "/" + std::to_string(item.steps) +
+                                (result.at("computed").get<bool>() ? " computed" : " cached") + on_rank(rank);
+      // In a log only computed truth gets a line (read from the cache it is quick); the bar shows either.
+      if (progress->terminal()) {
+        progress->update(static_cast<double>(cells_finished), cell_total, truth);
+      } else if (result.at("computed").get<bool>()) {
+        say("run: " + truth);
+      }
       return;
     }
     result["key"] = item.key.to_json();
@@ -231,9 +270,11 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     write_cell(item.file, result);
     rebuild_results_log(options.out, std::cerr);
     ++cells_done;
+    ++cells_finished;
+    progress->update(static_cast<double>(cells_finished), cell_total, item.label + " / " + item.key.strategy.substr(0, item.key.strategy.find(':')) + " done");
     if (rank_info().size > 1) {
-      std::cerr << "run: " << item.label << " / " << item.key.strategy << ": cell " << cells_done << " of " << cell_count
-                << " done" << on_rank(rank) << "\n";
+      say("run: " + item.label + " / " + item.key.strategy + ": cell " + std::to_string(cells_done) + " of " + std::to_string(cell_count) +
+          " done" + on_rank(rank));
     }
     cells[item.slot] = std::move(result);
   };

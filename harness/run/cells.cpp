@@ -8,7 +8,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <iostream>
 #include <map>
 
 namespace ccd::harness {
@@ -16,7 +15,7 @@ namespace ccd::harness {
 using nlohmann::json;
 
 json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps,
-             const std::string& cell_name) {
+             const std::string& cell_name, const CellProgress& progress) {
   const Scene& scene = data.sequence.scene();
   std::vector<std::vector<double>> step_ms(steps);
   std::map<std::string, std::vector<double>> stage_ms;
@@ -37,8 +36,8 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
       step_ms[k].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
       for (const auto& [stage, ms] : result.stages.entries()) stage_ms[stage].push_back(ms);
       if (repeat == 0) first_pass.push_back(std::move(result));
+      if (progress) progress(repeat, k, resolved);
     }
-    std::cerr << "run: " << data.label << " / " << resolved << ": pass " << repeat + 1 << " of " << options.repeats << " done\n";
   }
   std::vector<Verdict> verdicts(steps);
   std::vector<strategies::TestedPairs> audited;

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -23,9 +24,13 @@ struct SceneData {
   std::string thickness_from;       // "scene" or "command line"
 };
 
+/// Told after each timed step of a cell: its pass (0-based) and step, and the resolved strategy, so that a long
+/// cell shows that it moves (outside the timed region).
+using CellProgress = std::function<void(int pass, std::size_t step, const std::string& strategy)>;
+
 /// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.
 /// Returns {"summary": ..., "steps": [...]} (DESIGN.md §5 fields).
 nlohmann::json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps,
-                        const std::string& cell_name);
+                        const std::string& cell_name, const CellProgress& progress = {});
 
 }  // namespace ccd::harness
