@@ -32,6 +32,8 @@ std::ifstream open_input_file(const std::filesystem::path& path, const std::stri
   return in;
 }
 
+std::string line_at(std::size_t line) { return "line " + std::to_string(line); }
+
 std::uintmax_t input_file_size(const std::filesystem::path& path) {
   std::error_code error;
   const std::uintmax_t size = std::filesystem::file_size(path, error);

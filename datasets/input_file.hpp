@@ -19,6 +19,9 @@ namespace ccd::datasets {
 std::ifstream open_input_file(const std::filesystem::path& path, const std::string& what,
                               std::ios::openmode mode = std::ios::in);
 
+/// "line N": where in a text file an InputError points (1-based).
+std::string line_at(std::size_t line);
+
 /// The size of an input file in bytes, for checking counts in headers against the bytes that back them.
 /// @throws InputError when it cannot be determined.
 std::uintmax_t input_file_size(const std::filesystem::path& path);

@@ -12,8 +12,6 @@
 namespace ccd::datasets {
 namespace {
 
-std::string line_at(std::size_t line) { return "line " + std::to_string(line); }
-
 double parse_coordinate(const std::filesystem::path& path, std::size_t line, const std::string& token) {
   double value = 0.0;
   const auto result = std::from_chars(token.data(), token.data() + token.size(), value);

@@ -78,8 +78,6 @@ std::vector<std::string> split_words(const std::string& line) {
   return words;
 }
 
-std::string line_at(std::size_t line) { return "line " + std::to_string(line); }
-
 PlyHeader parse_header(const std::filesystem::path& path, std::istream& in) {
   PlyHeader header;
   std::string line;

@@ -16,8 +16,6 @@ namespace {
 
 constexpr std::size_t kRowsPerQuery = 8;
 
-std::string line_at(std::size_t line) { return "line " + std::to_string(line); }
-
 bool ends_with(const std::string& text, std::string_view suffix) {
   return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }

@@ -18,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -318,8 +319,21 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
 int run_stress_command(const StressOptions& options, std::ostream& out) {
   if (options.json) datasets::require_writable_file(*options.json);
   if (options.write_queries) datasets::require_writable_directory(*options.write_queries);
-  const std::vector<datasets::ExtremeQuery> suite = datasets::extremes_suite(options.seed);
-  out << "extremes suite: " << suite.size() << " queries in " << datasets::extremes_families().size()
+  const std::vector<std::string> all_families = datasets::extremes_families();
+  for (const std::string& family : options.families) {
+    if (std::find(all_families.begin(), all_families.end(), family) == all_families.end()) {
+      std::string known;
+      for (const std::string& name : all_families) known += (known.empty() ? "" : ", ") + name;
+      throw std::invalid_argument("--family " + family + ": the extremes suite has no such family (it has: " + known + ")");
+    }
+  }
+  std::vector<datasets::ExtremeQuery> suite;
+  for (datasets::ExtremeQuery& query : datasets::extremes_suite(options.seed)) {
+    const bool chosen = options.families.empty() ||
+                        std::find(options.families.begin(), options.families.end(), query.family) != options.families.end();
+    if (chosen) suite.push_back(std::move(query));
+  }
+  out << "extremes suite: " << suite.size() << " queries in " << (options.families.empty() ? all_families.size() : options.families.size())
       << " families (seed " << options.seed << "), at δ = 0 and at each case's δ > 0; truth from the exact reference\n";
   const std::vector<StressRow> rows = run_stress(suite, options.methods);
   print_stress(rows, out);

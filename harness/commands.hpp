@@ -59,6 +59,8 @@ struct StressOptions {
   /// Narrow-phase specs (main.cpp's default: every narrow phase of the registry).
   std::vector<std::string> methods;
   std::uint64_t seed = 1;
+  /// Only these families of the suite (empty: every family).
+  std::vector<std::string> families;
   std::optional<std::filesystem::path> json;
   std::optional<std::filesystem::path> write_queries;
 };

@@ -172,6 +172,8 @@ int run_command_line(int argc, char** argv) {
       "δ > 0. Prints family x variant -> false negatives (FN) and false positives (FP).");
   stress->add_option("--method", stress_methods, "comma-separated narrow-phase specs (`ccdbench strategies` lists them)")->capture_default_str();
   stress->add_option("--seed", stress_options.seed, "seed of the suite's exact transformations")->capture_default_str();
+  std::string stress_families;
+  stress->add_option("--family", stress_families, "only these families of the suite, comma-separated (default: every family)");
   stress->add_option("--json", stress_options.json, "also write the rows as a JSON array to this file");
   stress->add_option("--write-queries", stress_options.write_queries,
                      "also write the suite as rational query files (zero-thickness truth) under this folder");
@@ -366,6 +368,7 @@ int run_command_line(int argc, char** argv) {
     }
     if (*stress) {
       stress_options.methods = CLI::detail::split(stress_methods, ',');
+      if (!stress_families.empty()) stress_options.families = CLI::detail::split(stress_families, ',');
       return ccd::harness::run_stress_command(stress_options, std::cout);
     }
     if (*generate) return ccd::harness::run_generate(generate_options, std::cout);

@@ -4,6 +4,7 @@
 # then the same queries rescaled by 2^-960, 2^-530, 2^500 and 2^960 (and 2^0 beside them) under scales/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+scripts/setup.sh python3-matplotlib  # for the plot
 scripts/build.sh release
 data=${CCDBENCH_DATA_DIR:-../shared/data}
 [[ -d $data ]] || data=data/external

@@ -7,6 +7,7 @@
 # Extra arguments go to `ccdbench run` (e.g. --fresh, or --strategy LIST to run other strategies).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+scripts/setup.sh python3-matplotlib  # for the report's plots
 scripts/build.sh release
 export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-$PWD/build/cache}
 ccdbench=build/release/bin/ccdbench

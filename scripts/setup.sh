@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs what a fresh Debian 12 machine lacks to build, test and run ccdbench: exactly the missing
 # packages, all from the distribution. Safe to run again: it installs nothing when nothing is missing.
-# Usage: scripts/setup.sh [EXTRA_PACKAGE...]   (scripts/fuzz.sh adds clang-14 and libclang-rt-14-dev)
+# Usage: scripts/setup.sh [EXTRA_PACKAGE...]   (scripts/fuzz.sh adds clang-14 and libclang-rt-14-dev; the scripts that
+# draw plots, run.sh and narrowphase-report.sh, add python3-matplotlib, which building and testing do not need: CI,
+# which runs the tests on a fresh machine, is spared its few dozen packages)
 set -euo pipefail
 
 packages=(
@@ -12,7 +14,6 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev libxxhash-dev
   libopenmpi-dev openmpi-bin
-  python3-matplotlib
   "$@"
 )
 

@@ -13,7 +13,8 @@ using testing::write_text;
 /// 8 rows of one query: `columns` per row, truth `t` in column 7 when asked.
 std::string query_rows(int truth = -1, const std::string& coordinate = "1,2,-3,4,0,1") {
   std::string text;
-  for (int r = 0; r < 8; ++r) text += coordinate + (truth >= 0 ? "," + std::to_string(truth) : "") + "\n";
+  const std::string label = truth >= 0 ? std::string(",").append(std::to_string(truth)) : std::string();
+  for (int r = 0; r < 8; ++r) text.append(coordinate).append(label).append("\n");
   return text;
 }
 
