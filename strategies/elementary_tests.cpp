@@ -6,6 +6,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <algorithm>
+#include <array>
+#include <cstdint>
 #include <type_traits>
 
 namespace ccd::strategies {
@@ -18,7 +21,14 @@ struct Local {
   TestedPairs tested;
   /// The pairs the separation filter kept, for the narrow phase's own pass.
   TestedPairs kept;
+  /// Faults of the narrow phase, each with its pair's order key (VF before EE, then by pair), and how many.
+  std::vector<std::pair<std::array<std::uint32_t, 5>, Fault>> faults;
+  std::size_t fault_count = 0;
 };
+
+/// A pair's place among a step's faults: vertex-face pairs first, then edge-edge pairs, each in pair order.
+std::array<std::uint32_t, 5> order_key(const VertexFacePair& p) { return {0, p.v, p.f, 0, 0}; }
+std::array<std::uint32_t, 5> order_key(const EdgeEdgePair& p) { return {1, p.a.v0, p.a.v1, p.b.v0, p.b.v1}; }
 
 bool corner_of(VertexId v, const Face& f) { return v == f[0] || v == f[1] || v == f[2]; }
 
@@ -85,6 +95,15 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     if (audit) list_of<vertex_face>(local.tested).push_back(pair);
     const narrowphase::NarrowPhaseResult r = vertex_face ? narrow_phase.vertex_face(rows, thickness) : narrow_phase.edge_edge(rows, thickness);
     if (r.collides) local.collisions.add(pair, r.toi);
+    if (!r.fault.empty()) {
+      ++local.fault_count;
+      local.faults.push_back({order_key(pair), Fault{r.fault, rows, vertex_face}});
+      // A thread keeps its first faults in pair order only: the step keeps kKeptFaults of every thread's.
+      if (local.faults.size() > 4 * kKeptFaults) {
+        std::sort(local.faults.begin(), local.faults.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        local.faults.resize(kKeptFaults);
+      }
+    }
   };
   // The swept vertex boxes, then every elementary pair of every candidate handed to visit(local, pair), in parallel.
   auto visit_candidates = [&](auto&& visit) {
@@ -137,16 +156,22 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   }
   ElementaryOutcome outcome;
   if (audit) outcome.tested.emplace();
+  std::vector<std::pair<std::array<std::uint32_t, 5>, Fault>> faults;
   for (Local& local : locals) {
     outcome.collisions.append(local.collisions);
     outcome.tests += local.tests;
     outcome.filtered += local.filtered;
+    outcome.fault_count += local.fault_count;
+    for (auto& fault : local.faults) faults.push_back(std::move(fault));
     if (audit) {
       outcome.tested->vertex_face.insert(outcome.tested->vertex_face.end(), local.tested.vertex_face.begin(), local.tested.vertex_face.end());
       outcome.tested->edge_edge.insert(outcome.tested->edge_edge.end(), local.tested.edge_edge.begin(), local.tested.edge_edge.end());
     }
   }
   outcome.collisions.normalize();
+  // The first faults in pair order, whatever thread met them: the same for any thread count.
+  std::sort(faults.begin(), faults.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (std::size_t i = 0; i < std::min(faults.size(), kKeptFaults); ++i) outcome.faults.push_back(std::move(faults[i].second));
   if (audit) {
     tbb::parallel_sort(outcome.tested->vertex_face.begin(), outcome.tested->vertex_face.end());
     tbb::parallel_sort(outcome.tested->edge_edge.begin(), outcome.tested->edge_edge.end());
@@ -164,6 +189,8 @@ void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::spa
   result.tested = std::move(outcome.tested);
   result.counters.candidate_triangle_pairs = candidates.size();
   result.counters.elementary_tests = outcome.tests;
+  result.fault_count += outcome.fault_count;
+  for (Fault& fault : outcome.faults) result.faults.push_back(std::move(fault));
 }
 
 void append_all_elementary_pairs(const MeshTopology& topology, FaceId a, FaceId b, TestedPairs& out) {

@@ -24,6 +24,9 @@ struct ElementaryOutcome {
   /// Pairs the separation filter proved apart (not tested).
   std::size_t filtered = 0;
   std::optional<TestedPairs> tested;
+  /// Tests whose narrow phase gave no answer (NarrowPhaseResult::fault), and the first kKeptFaults in pair order.
+  std::size_t fault_count = 0;
+  std::vector<Fault> faults;
 };
 
 /// Tests every elementary pair of `candidates` with `narrow_phase` at `thickness`, in parallel, timed in `stages` as

@@ -2,8 +2,13 @@
 
 #include "strategies/narrowphase/entry_list.hpp"
 #include "strategies/narrowphase/registry.hpp"
+#include "strategies/plugin/plugin_narrow_phase.hpp"
+#include "strategies/plugin/plugin_strategy.hpp"
+
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <stdexcept>
 
 namespace ccd::strategies {
@@ -22,12 +27,53 @@ const std::vector<StrategyEntry>& strategy_entries() {
   return entries;
 }
 
-const StrategyEntry& find_strategy(const std::string& name) { return narrowphase::entry_named(strategy_entries(), name, "strategy"); }
+const StrategyEntry& find_strategy(const std::string& name) {
+  // Code from outside enters beside the built-ins: its entry is made at the first lookup (plugin_strategy.hpp).
+  if (plugin::names_plugin(name)) return narrowphase::entry_made_once<StrategyEntry>(name, plugin::whole_step_entry);
+  if (name.rfind(std::string(narrowphase::kAnswersHead) + ":", 0) == 0) {
+    return narrowphase::entry_made_once<StrategyEntry>(name, plugin::answers_entry);
+  }
+  return narrowphase::entry_named(strategy_entries(), name, "strategy");
+}
+
+namespace {
+
+/// A strategy whose narrow phase may not be called from several threads at once (a plugin without
+/// CCDBENCH_THREAD_SAFE), run on one thread: the calling one, in an arena of one (TBB then starts no worker in it).
+/// Its records say so (provenance "threads").
+class OnOneThread final : public Strategy {
+ public:
+  OnOneThread(std::unique_ptr<Strategy> inner, std::string why) : inner_(std::move(inner)), why_(std::move(why)), arena_(1) {}
+  std::string name() const override { return inner_->name(); }
+  void check_scene(const Scene& scene) const override { inner_->check_scene(scene); }
+  void name_scene(const std::string& label) override { inner_->name_scene(label); }
+  void init(const Scene& scene, std::span<const Vec3> first_frame) override {
+    arena_.execute([&] { inner_->init(scene, first_frame); });
+  }
+  StepResult step(const StepView& step, bool audit) override {
+    StepResult result;
+    arena_.execute([&] { result = inner_->step(step, audit); });
+    return result;
+  }
+  std::vector<std::pair<std::string, std::string>> provenance() const override {
+    auto values = inner_->provenance();
+    values.emplace_back("threads", "1: " + why_);
+    return values;
+  }
+
+ private:
+  std::unique_ptr<Strategy> inner_;
+  std::string why_;
+  tbb::task_arena arena_;
+};
+
+}  // namespace
 
 StrategySpec parse_strategy_spec(const std::string& spec) {
   StrategySpec parsed;
   auto [head, parameters] = narrowphase::split_spec(spec);
-  const std::size_t plus = head.find('+');
+  // The '+' that joins strategy and narrow phase comes before any path (a path may hold a '+').
+  const std::size_t plus = head.substr(0, head.find(':')).find('+');
   parsed.name = head.substr(0, plus);
   if (plus != std::string::npos) {
     parsed.narrow_phase = head.substr(plus + 1);
@@ -39,9 +85,24 @@ StrategySpec parse_strategy_spec(const std::string& spec) {
 }
 
 StrategySpec strategy_names_of(const std::string& spec) {
-  const std::string head = spec.substr(0, spec.find(':'));
-  const std::size_t plus = head.find('+');
+  std::string head = spec.substr(0, spec.find(':'));
+  const std::size_t plus = head.find('+');  // before the first ':', so never inside a path
+  // plugin:PATH and answers:DIR keep their path (split_spec's rule), before or after the '+'.
+  if (narrowphase::is_file_head(head.substr(plus == std::string::npos ? 0 : plus + 1)) && head.size() < spec.size()) {
+    const std::size_t end = spec.find(':', head.size() + 1);
+    head = spec.substr(0, end);
+  }
   return {head.substr(0, plus), plus == std::string::npos ? std::string() : head.substr(plus + 1), {}};
+}
+
+std::string short_label(const std::string& spec) {
+  const StrategySpec names = strategy_names_of(spec);
+  auto shorten = [](const std::string& name) {
+    const std::size_t colon = name.find(':');
+    if (colon == std::string::npos || !narrowphase::is_file_head(name.substr(0, colon))) return name;
+    return name.substr(0, colon + 1) + std::filesystem::path(name.substr(colon + 1)).filename().string();
+  };
+  return shorten(names.name) + (names.narrow_phase.empty() ? "" : "+" + shorten(names.narrow_phase));
 }
 
 const StrategyEntry& strategy_entry_of(const std::string& spec) { return find_strategy(strategy_names_of(spec).name); }
@@ -76,7 +137,12 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
     }
   }
   const narrowphase::SpecReader keys(entry.name, entry.keys, own);
-  return entry.make({keys, narrow.make(narrowphase::SpecReader(narrow.name, narrow.keys, narrow_keys))});
+  std::unique_ptr<narrowphase::NarrowPhase> narrow_phase = narrow.make(narrowphase::SpecReader(narrow.name, narrow.keys, narrow_keys));
+  if (!narrow_phase->thread_safe()) {
+    const std::string why = "narrow phase " + narrow.name + " may not be called from several threads at once";
+    return std::make_unique<OnOneThread>(entry.make({keys, std::move(narrow_phase)}), why);
+  }
+  return entry.make({keys, std::move(narrow_phase)});
 }
 
 }  // namespace ccd::strategies

@@ -7,6 +7,7 @@
 #include "core/step.hpp"
 #include "strategies/bvh/bvh.hpp"
 
+#include <array>
 #include <optional>
 #include <span>
 #include <string>
@@ -33,6 +34,18 @@ struct TestedPairs {
   std::vector<FaceShapePair> face_shape = {};
 };
 
+/// Something a step could not answer without ending the run (a plugin's error, undecided or refused answer, a crash
+/// or a hang of an isolated plugin): the harness counts it apart and writes it out to reproduce. With `rows`, an
+/// elementary pair's (written out as a query file); without, the whole step's (written out as its frame pair).
+struct Fault {
+  std::string message;
+  std::optional<std::array<Vec3, 8>> rows;
+  bool vertex_face = true;
+};
+
+/// Faults a step keeps whole (the count covers every one): enough to reproduce and read, not a second answer set.
+inline constexpr std::size_t kKeptFaults = 16;
+
 struct StepResult {
   /// Normalized; TOIs from the narrow phase.
   CollisionSet collisions;
@@ -43,6 +56,9 @@ struct StepResult {
   /// Strategies judged by triangle pairs only: the triangle pairs reported (a < b, sorted). `collisions` then
   /// holds every elementary pair of them (all_elementary_pairs).
   std::vector<bvh::TrianglePair> triangle_pairs;
+  /// How many faults the step had, and the first kKeptFaults of them (in a fixed order).
+  std::size_t fault_count = 0;
+  std::vector<Fault> faults;
 };
 
 /// How answers are judged (DESIGN.md §3; each registry entry says which, registry.hpp). By triangle pairs: a truth pair counts as found when a reported triangle
@@ -57,6 +73,9 @@ class Strategy {
   /// Throws std::invalid_argument when the strategy cannot run `scene` (fcl at δ > 0), before any work; init
   /// checks it too.
   virtual void check_scene(const Scene&) const {}
+  /// The scene's label in results, told before init: a strategy that reads answers made elsewhere (answers:DIR)
+  /// finds the scene's files by it; the others ignore it.
+  virtual void name_scene(const std::string& /*label*/) {}
   /// Prepares for `scene`; `first_frame` holds frame 0's global positions.
   virtual void init(const Scene& scene, std::span<const Vec3> first_frame) = 0;
   /// One step, in order. With `audit`, also returns the elementary pairs tested (outside the timed stages).

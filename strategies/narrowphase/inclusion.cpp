@@ -63,7 +63,7 @@ class InclusionTest final : public NarrowPhase {
     while (true) {
       const shared::f64::ccd_conservative_outcome outcome =
           conservative_search(rows.data(), thickness, vertex_face, settings_.tolerance, settings_.max_iterations, storage, capacity);
-      if (!outcome.overflow) return {outcome.collides != 0, outcome.toi, outcome.hit_iteration_cap != 0, outcome.achieved_tolerance};
+      if (!outcome.overflow) return {outcome.collides != 0, outcome.toi, outcome.hit_iteration_cap != 0, outcome.achieved_tolerance, {}};
       capacity *= 4;
       more.resize(static_cast<std::size_t>(capacity));
       storage = more.data();

@@ -26,6 +26,9 @@ struct NarrowPhaseResult {
   bool hit_iteration_cap = false;
   /// The distance tolerance the answer was reached with (0 when exact up to rounding).
   double achieved_tolerance = 0.0;
+  /// Not empty when the method gave no answer (a plugin's "undecided" or error, or an answer ccdbench refused: a
+  /// TOI out of [0, 1]): why. `collides` then says how it counts (a plugin's `errors` key); it is counted apart too.
+  std::string fault;
 };
 
 /// How the OpenCL kernels run a narrow phase: the same shared text (shared/*.h) compiled for the device, with the
@@ -50,6 +53,9 @@ class NarrowPhase {
   virtual NarrowPhaseResult edge_edge(const PairRows& rows, double thickness) const = 0;
   /// The form the OpenCL backend runs, or nullopt when it has no kernel for this narrow phase.
   virtual std::optional<DeviceForm> device_form() const { return std::nullopt; }
+  /// Whether it may be called from several threads at once. One that may not (a plugin without
+  /// CCDBENCH_THREAD_SAFE) makes its strategy run on one thread (make_strategy), said in every record.
+  virtual bool thread_safe() const { return true; }
 };
 
 }  // namespace ccd::narrowphase

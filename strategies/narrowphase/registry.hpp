@@ -37,10 +37,11 @@ inline constexpr const char* kDefaultNarrowPhase = "conservative";
 /// Every narrow phase, in the order every listing shows them.
 const std::vector<NarrowPhaseEntry>& narrow_phases();
 
-/// The entry named `name`. @throws std::invalid_argument naming the known narrow phases.
+/// The entry named `name`; `plugin:PATH` is the plugin's (strategies/plugin/plugin_narrow_phase.hpp), made at its
+/// first lookup. @throws std::invalid_argument naming the known narrow phases, or why the plugin cannot be used.
 const NarrowPhaseEntry& find_narrow_phase(const std::string& name);
 
-/// Whether `name` names a narrow phase.
+/// Whether `name` names a narrow phase (any `plugin:PATH` does; whether it loads is find_narrow_phase's to say).
 bool is_narrow_phase(const std::string& name);
 
 /// Makes narrow phase `name` from its keys.

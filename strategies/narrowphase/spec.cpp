@@ -148,13 +148,24 @@ std::pair<std::string, SpecParameters> split_spec(const std::string& spec) {
     if (colon == std::string::npos) break;
     begin = colon + 1;
   }
+  // A head that names a file (plugin:PATH, answers:DIR, after a strategy's '+' too) keeps the file as its own part.
+  std::size_t first_key = 1;
+  const std::string& head = parts[0];
+  const std::string kind = head.substr(head.find('+') == std::string::npos ? 0 : head.find('+') + 1);
+  if (is_file_head(kind)) {
+    if (parts.size() < 2 || parts[1].empty()) throw std::invalid_argument("'" + spec + "': " + kind + ": needs a path (" + kind + ":PATH)");
+    parts[0] += ":" + parts[1];
+    first_key = 2;
+  }
   SpecParameters parameters;
-  for (std::size_t i = 1; i < parts.size(); ++i) {
+  for (std::size_t i = first_key; i < parts.size(); ++i) {
     const std::size_t equals = parts[i].find('=');
     if (equals == std::string::npos || equals == 0) throw std::invalid_argument("'" + parts[i] + "' in '" + spec + "' is not key=value");
     parameters[parts[i].substr(0, equals)] = parts[i].substr(equals + 1);
   }
   return {parts[0], parameters};
 }
+
+bool is_file_head(const std::string& head) { return head == kPluginHead || head == kAnswersHead; }
 
 }  // namespace ccd::narrowphase

@@ -90,7 +90,15 @@ std::string format_spec_number(double value);
 /// The names of `keys`, comma-separated ("none" for none), for messages.
 std::string key_names(const std::vector<KeySpec>& keys);
 
-/// Splits `HEAD[:key=value...]` into HEAD and its parameters. @throws std::invalid_argument for a malformed key.
+/// The heads that name a file: plugin:PATH (a shared library, strategies/plugin/ccdbench_plugin.h) and answers:DIR (a
+/// folder of answer files). The path is one part of the spec: it may not hold ':'.
+inline constexpr const char* kPluginHead = "plugin";
+inline constexpr const char* kAnswersHead = "answers";
+bool is_file_head(const std::string& head);
+
+/// Splits `HEAD[:key=value...]` into HEAD and its parameters; a head that names a file (`plugin:PATH`, and
+/// `NAME+plugin:PATH`) keeps its path: ("plugin:PATH", keys). @throws std::invalid_argument for a malformed key or a
+/// file head without a path.
 std::pair<std::string, SpecParameters> split_spec(const std::string& spec);
 
 }  // namespace ccd::narrowphase

@@ -1,0 +1,162 @@
+// `answers:DIR` (plugin_strategy.hpp): a folder of per-step answer files judged as a strategy, for CCD code that
+// cannot be loaded into ccdbench (a CUDA program, a Python prototype, a run on another machine).
+//
+// DIR/LABEL/step_0000.csv, step_0001.csv, ... for a scene labelled LABEL in results (the suite's scene name, or a
+// scene file's folder). Each line is one colliding pair (README "Answer files"):
+//   vf,VERTEX,FACE[,TOI]
+//   ee,A0,A1,B0,B1[,TOI]
+// with the scene's global vertex and face ids (0-based) and an optional TOI in [0, 1]; '#' starts a comment line.
+// An empty file is a step with no contact. Every file of the scene is read and checked in init, before any step:
+// a malformed line, an index out of range, a pair that cannot collide, a pair given twice, a line cut short, or a
+// missing step is refused as FILE:line N: REASON.
+#include "core/error.hpp"
+#include "strategies/plugin/contact_check.hpp"
+#include "strategies/plugin/library.hpp"
+#include "strategies/plugin/plugin_strategy.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace ccd::plugin {
+namespace {
+
+std::string step_file_name(std::size_t step) {
+  char name[32];
+  std::snprintf(name, sizeof name, "step_%04zu.csv", step);
+  return name;
+}
+
+/// One step's file, checked against the scene. @throws InputError (the file, "line N", why).
+CollisionSet read_step_file(const std::filesystem::path& path, ContactCheck& check) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, {}, "cannot be read");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CollisionSet set;
+  check.reset();
+  std::size_t line_number = 0;
+  for (std::size_t begin = 0; begin < text.size();) {
+    ++line_number;
+    const std::size_t end = text.find('\n', begin);
+    const std::string where = "line " + std::to_string(line_number);
+    // A last line without its newline is a file cut short (a writer that stopped), never a whole answer.
+    if (end == std::string::npos) throw InputError(path, where, "the file ends inside this line (cut short?): every line ends with a newline");
+    std::string line = text.substr(begin, end - begin);
+    begin = end + 1;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line.front() == '#') continue;
+    std::vector<std::string> fields;
+    std::stringstream split(line);
+    for (std::string field; std::getline(split, field, ',');) fields.push_back(field);
+    if (!line.empty() && line.back() == ',') fields.emplace_back();
+    const bool vertex_face = fields[0] == "vf";
+    if (!vertex_face && fields[0] != "ee") throw InputError(path, where, "'" + fields[0] + "' is neither vf nor ee");
+    const std::size_t ids = vertex_face ? 2 : 4;
+    if (fields.size() != ids + 1 && fields.size() != ids + 2) {
+      throw InputError(path, where, fields[0] + " takes " + std::to_string(ids) + " indices and an optional TOI, not " +
+                                        std::to_string(fields.size() - 1) + " fields");
+    }
+    std::uint64_t id[4] = {};
+    for (std::size_t k = 0; k < ids; ++k) {
+      const std::string& field = fields[k + 1];
+      const auto [at, error] = std::from_chars(field.data(), field.data() + field.size(), id[k]);
+      if (error != std::errc() || at != field.data() + field.size() || field.empty()) {
+        throw InputError(path, where, "index " + std::to_string(k + 1) + " '" + field + "' is not a whole number");
+      }
+    }
+    double toi = kNoToi;
+    if (fields.size() == ids + 2 && !fields.back().empty()) {
+      const std::string& field = fields.back();
+      const auto [at, error] = std::from_chars(field.data(), field.data() + field.size(), toi);
+      if (error != std::errc() || at != field.data() + field.size() || std::isnan(toi)) {
+        throw InputError(path, where, "TOI '" + field + "' is not a number");
+      }
+    }
+    std::string why;
+    if (vertex_face) {
+      const auto pair = check.vertex_face(id[0], id[1], toi, why);
+      if (!pair) throw InputError(path, where, why);
+      set.add(*pair, toi);
+    } else {
+      const auto pair = check.edge_edge(id[0], id[1], id[2], id[3], toi, why);
+      if (!pair) throw InputError(path, where, why);
+      set.add(*pair, toi);
+    }
+  }
+  set.normalize();
+  return set;
+}
+
+class AnswersStrategy final : public strategies::Strategy {
+ public:
+  AnswersStrategy(std::filesystem::path folder, std::string digest) : folder_(std::move(folder)), digest_(std::move(digest)) {}
+
+  std::string name() const override { return std::string(narrowphase::kAnswersHead) + ":" + folder_.string() + ":digest=" + digest_; }
+
+  void name_scene(const std::string& label) override { label_ = label; }
+
+  void init(const Scene& scene, std::span<const Vec3>) override {
+    if (!scene.shape_objects().empty()) {
+      throw std::invalid_argument(name() + ": answer files name no analytic shapes; scene object '" +
+                                  scene.object(scene.shape_objects().front()).name + "' is one");
+    }
+    const std::filesystem::path folder = folder_ / label_;
+    if (label_.empty() || !std::filesystem::is_directory(folder)) {
+      throw InputError(folder, {}, "no answer folder for scene '" + label_ + "' (answers:DIR reads DIR/SCENE/" + step_file_name(0) +
+                                       ", one file per step; README \"Answer files\")");
+    }
+    ContactCheck check(scene, ContactCheck::Toi::optional);
+    steps_.clear();
+    for (std::size_t k = 0; std::filesystem::exists(folder / step_file_name(k)); ++k) steps_.push_back(read_step_file(folder / step_file_name(k), check));
+    folder_of_scene_ = folder;
+  }
+
+  strategies::StepResult step(const StepView& view, bool) override {
+    if (view.index >= steps_.size()) {
+      throw InputError(folder_of_scene_ / step_file_name(view.index), {},
+                       "missing: the folder answers steps 0 to " + std::to_string(steps_.size()) + " - 1 only, and the run has step " +
+                           std::to_string(view.index));
+    }
+    strategies::StepResult result;
+    result.collisions = steps_[view.index];
+    result.counters.elementary_tests = result.collisions.vertex_face().size() + result.collisions.edge_edge().size();
+    return result;
+  }
+
+ private:
+  std::filesystem::path folder_;
+  std::string digest_;
+  std::string label_;
+  std::filesystem::path folder_of_scene_;
+  std::vector<CollisionSet> steps_;
+};
+
+}  // namespace
+
+strategies::StrategyEntry answers_entry(const std::string& name) {
+  const std::filesystem::path given = name.substr(std::strlen(narrowphase::kAnswersHead) + 1);
+  if (!std::filesystem::is_directory(given)) {
+    throw std::invalid_argument(name + ": " + given.string() + " is not a folder (answers:DIR reads DIR/SCENE/" + step_file_name(0) + ", ...)");
+  }
+  const std::filesystem::path folder = std::filesystem::weakly_canonical(std::filesystem::absolute(given));
+  strategies::StrategyEntry entry;
+  entry.name = name;
+  entry.help = "answers read from " + folder.string() + " (one file per scene and step)";
+  entry.keys = {narrowphase::KeySpec::text("digest", "the folder's digest (filled in; a cell kept for other answers is never reused)")};
+  entry.takes_narrow_phase = false;
+  entry.explain_miss = [](const narrowphase::PairRows&, bool) { return std::string("unreported"); };
+  entry.make = [folder](strategies::StrategyRequest request) -> std::unique_ptr<strategies::Strategy> {
+    const std::string digest = content_digest(folder);
+    const std::string given_digest = request.keys.text("digest");
+    if (!given_digest.empty() && given_digest != digest) {
+      throw std::invalid_argument("answers " + folder.string() + ": its files changed (digest " + digest + ", the spec asks for " + given_digest + ")");
+    }
+    return std::make_unique<AnswersStrategy>(folder, digest);
+  };
+  return entry;
+}
+
+}  // namespace ccd::plugin

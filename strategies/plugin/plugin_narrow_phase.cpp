@@ -1,0 +1,132 @@
+#include "strategies/plugin/plugin_narrow_phase.hpp"
+
+#include "strategies/plugin/isolation.hpp"
+#include "strategies/plugin/library.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+
+namespace ccd::plugin {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+class PluginNarrowPhase final : public narrowphase::NarrowPhase {
+ public:
+  PluginNarrowPhase(std::shared_ptr<const Library> library, std::vector<std::string> values, HostSettings host)
+      : library_(std::move(library)), values_(std::move(values)), host_(std::move(host)) {
+    if (host_.isolate) {
+      isolated_ = std::make_unique<IsolatedPlugin>(*library_, values_, host_.timeout_seconds);
+    } else {
+      context_ = std::make_unique<Context>(library_, values_);
+    }
+  }
+
+  std::string name() const override { return resolved_name(*library_, values_, host_); }
+  bool conservative() const override { return library_->conservative(); }
+  /// Isolated, one child answers one query at a time: the strategy runs on one thread then too.
+  bool thread_safe() const override { return library_->thread_safe() && !host_.isolate; }
+
+  narrowphase::NarrowPhaseResult vertex_face(const narrowphase::PairRows& rows, double thickness) const override {
+    return answer(true, rows, thickness);
+  }
+  narrowphase::NarrowPhaseResult edge_edge(const narrowphase::PairRows& rows, double thickness) const override {
+    return answer(false, rows, thickness);
+  }
+
+ private:
+  narrowphase::NarrowPhaseResult answer(bool vertex_face, const narrowphase::PairRows& rows, double thickness) const {
+    double flat[24];
+    for (int p = 0; p < 8; ++p) {
+      for (int c = 0; c < 3; ++c) flat[3 * p + c] = rows[static_cast<std::size_t>(p)][c];
+    }
+    ccdbench_answer answer;
+    if (isolated_) {
+      answer = isolated_->query(vertex_face, flat, thickness);
+    } else {
+      // Only what the plugin writes into this answer counts: it starts with no outcome, so a plugin that writes
+      // none is caught, and nothing from an earlier call can leak into it.
+      std::memset(&answer, 0, sizeof answer);
+      answer.outcome = -1;
+      answer.toi = kNaN;
+      const ccdbench_plugin& table = library_->table();
+      std::unique_lock lock(context_->mutex(), std::defer_lock);
+      if (!library_->thread_safe()) lock.lock();
+      (vertex_face ? table.vertex_face : table.edge_edge)(context_->handle(), flat, thickness, &answer);
+    }
+    return checked_answer(answer, library_->reports_toi(), host_.errors_count_as_hits);
+  }
+
+  std::shared_ptr<const Library> library_;
+  std::vector<std::string> values_;
+  HostSettings host_;
+  std::unique_ptr<Context> context_;
+  std::unique_ptr<IsolatedPlugin> isolated_;
+};
+
+}  // namespace
+
+bool names_plugin(const std::string& name) { return name.rfind(std::string(narrowphase::kPluginHead) + ":", 0) == 0; }
+
+std::string isolated_spec(const std::string& spec) {
+  const std::string head = narrowphase::split_spec(spec).first;
+  const std::size_t plus = head.substr(0, head.find(':')).find('+');
+  const bool plugin = names_plugin(plus == std::string::npos ? head : head.substr(plus + 1));
+  if (!plugin || spec.find(":isolate=") != std::string::npos) return spec;
+  return spec + ":isolate=on";
+}
+
+narrowphase::NarrowPhaseResult checked_answer(const ccdbench_answer& answer, bool reports_toi, bool errors_count_as_hits) {
+  narrowphase::NarrowPhaseResult result;
+  auto message = [&] { return std::string(answer.message, strnlen(answer.message, CCDBENCH_MESSAGE_SIZE)); };
+  switch (answer.outcome) {
+    case CCDBENCH_APART: return result;
+    case CCDBENCH_CONTACT:
+      if (!reports_toi) {
+        result.collides = true;
+        return result;
+      }
+      if (std::isnan(answer.toi)) {
+        result.fault = "a contact with a TOI that is not a number";
+      } else if (!(answer.toi >= 0.0 && answer.toi <= 1.0)) {
+        result.fault = "a contact with TOI " + narrowphase::format_spec_number(answer.toi) + ", not in [0, 1]";
+      } else {
+        result.collides = true;
+        result.toi = answer.toi;
+        return result;
+      }
+      break;
+    case CCDBENCH_UNDECIDED: result.fault = "undecided: " + message(); break;
+    case CCDBENCH_ERROR: result.fault = "error: " + message(); break;
+    default: result.fault = "outcome " + std::to_string(answer.outcome) + " is none of the ABI's (0 apart, 1 contact, 2 undecided, 3 error)";
+  }
+  // A fault counts as the plugin's `errors` key says; as a hit, at the start of the step (never late).
+  result.collides = errors_count_as_hits;
+  if (errors_count_as_hits && reports_toi) result.toi = 0.0;
+  return result;
+}
+
+narrowphase::NarrowPhaseEntry narrow_phase_entry(const std::string& name) {
+  const std::string path = name.substr(std::strlen(narrowphase::kPluginHead) + 1);
+  std::shared_ptr<const Library> library = load_library(path);
+  if (!library->answers_queries()) {
+    throw std::invalid_argument("plugin " + library->path() + " answers whole steps, not queries: run it as --strategy " + name +
+                                " (its whole step), not as a narrow phase");
+  }
+  narrowphase::NarrowPhaseEntry entry;
+  entry.name = name;
+  entry.help = library->description();
+  entry.keys = library->keys();
+  for (narrowphase::KeySpec& key : host_keys()) entry.keys.push_back(std::move(key));
+  entry.conservative = library->conservative();
+  entry.make = [library](const narrowphase::SpecReader& keys) -> std::unique_ptr<narrowphase::NarrowPhase> {
+    return std::make_unique<PluginNarrowPhase>(library, plugin_values(keys, *library), read_host_settings(keys, *library));
+  };
+  return entry;
+}
+
+}  // namespace ccd::plugin

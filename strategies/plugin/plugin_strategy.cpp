@@ -1,0 +1,207 @@
+#include "strategies/plugin/plugin_strategy.hpp"
+
+#include "core/stage_timer.hpp"
+#include "strategies/plugin/contact_check.hpp"
+#include "strategies/plugin/isolation.hpp"
+#include "strategies/plugin/library.hpp"
+
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+
+namespace ccd::plugin {
+namespace {
+
+/// The mesh as the ABI hands it over (ccdbench_scene), kept for as long as the plugin may read it.
+struct SceneTables {
+  std::vector<std::uint32_t> faces, edges, face_object, collidable;
+  std::vector<std::uint8_t> self_collision;
+  ccdbench_scene scene{};
+
+  explicit SceneTables(const Scene& s) {
+    const MeshTopology& topology = s.topology();
+    for (const Face& face : topology.faces()) faces.insert(faces.end(), {face[0], face[1], face[2]});
+    for (const Edge& edge : topology.edges()) edges.insert(edges.end(), {edge.v0, edge.v1});
+    for (FaceId f = 0; f < topology.num_faces(); ++f) face_object.push_back(s.object_of_face(f));
+    for (const SceneObject& object : s.objects()) self_collision.push_back(object.self_collision ? 1 : 0);
+    for (const auto& [a, b] : s.collidable_pairs()) collidable.insert(collidable.end(), {a, b});
+    scene = {topology.num_vertices(), topology.num_faces(), faces.data(), topology.edges().size(), edges.data(),
+             s.objects().size(), face_object.data(), self_collision.data(), s.collidable_pairs().size(), collidable.data()};
+  }
+};
+
+/// What a step reported, before the checks.
+struct Reported {
+  struct VertexFace {
+    std::uint32_t v, f;
+    double toi;
+  };
+  struct EdgeEdge {
+    std::uint32_t a0, a1, b0, b1;
+    double toi;
+  };
+  std::vector<VertexFace> vertex_face;
+  std::vector<EdgeEdge> edge_edge;
+};
+
+class WholeStepPlugin final : public strategies::Strategy {
+ public:
+  WholeStepPlugin(std::shared_ptr<const Library> library, std::vector<std::string> values, HostSettings host)
+      : library_(std::move(library)), values_(std::move(values)), host_(std::move(host)) {
+    if (host_.isolate) {
+      isolated_ = std::make_unique<IsolatedPlugin>(*library_, values_, host_.timeout_seconds);
+    } else {
+      context_ = std::make_unique<Context>(library_, values_);
+    }
+  }
+  ~WholeStepPlugin() override { finish(); }
+
+  std::string name() const override { return resolved_name(*library_, values_, host_); }
+
+  void check_scene(const Scene& scene) const override {
+    if (!scene.shape_objects().empty()) {
+      throw std::invalid_argument(name() + ": the plugin ABI has no analytic shapes; scene object '" +
+                                  scene.object(scene.shape_objects().front()).name + "' is one");
+    }
+  }
+
+  void init(const Scene& scene, std::span<const Vec3>) override {
+    check_scene(scene);
+    finish();
+    tables_ = std::make_unique<SceneTables>(scene);
+    check_ = std::make_unique<ContactCheck>(scene, library_->reports_toi() ? ContactCheck::Toi::required : ContactCheck::Toi::ignored);
+    begin_error_.clear();
+    std::string message;
+    int status = 0;
+    if (isolated_) {
+      status = isolated_->begin(tables_->scene, message);
+    } else if (library_->table().begin) {
+      char error[CCDBENCH_MESSAGE_SIZE] = {};
+      status = library_->table().begin(context_->handle(), &tables_->scene, error);
+      message.assign(error, strnlen(error, CCDBENCH_MESSAGE_SIZE));
+    }
+    // A plugin that refuses the scene answers no step: each step is then its fault (the run goes on).
+    if (status != 0) begin_error_ = "begin failed: " + (message.empty() ? std::string("no reason given") : message);
+    begun_ = true;
+  }
+
+  strategies::StepResult step(const StepView& view, bool /*audit*/) override {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double), "positions are handed over as 3 doubles per vertex, in place");
+    strategies::StepResult result;
+    if (!begin_error_.empty()) {
+      add_step_fault(result, begin_error_);
+      return result;
+    }
+    Reported reported;
+    std::string message;
+    int status = 0;
+    {
+      ScopedStageTimer timer(result.stages, "plugin step");
+      const ccdbench_step step{view.index, view.x0.data()->data(), view.x1.data()->data(), view.scene->thickness()};
+      const ccdbench_contacts contacts{&reported,
+                                       [](void* host, std::uint32_t v, std::uint32_t f, double toi) {
+                                         static_cast<Reported*>(host)->vertex_face.push_back({v, f, toi});
+                                       },
+                                       [](void* host, std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1, double toi) {
+                                         static_cast<Reported*>(host)->edge_edge.push_back({a0, a1, b0, b1, toi});
+                                       }};
+      if (isolated_) {
+        status = isolated_->step(step, view.x0.size(), contacts, message);
+      } else {
+        char error[CCDBENCH_MESSAGE_SIZE] = {};
+        status = library_->table().step(context_->handle(), &step, &contacts, error);
+        message.assign(error, strnlen(error, CCDBENCH_MESSAGE_SIZE));
+      }
+    }
+    if (status != 0) {
+      // A failed step reports nothing: what it sent before failing is not an answer.
+      add_step_fault(result, "step " + std::to_string(view.index) + " failed: " + (message.empty() ? std::string("no reason given") : message));
+      return result;
+    }
+    ScopedStageTimer timer(result.stages, "check answers");
+    check_->reset();
+    std::string why;
+    const MeshTopology& topology = view.scene->topology();
+    for (Reported::VertexFace c : reported.vertex_face) {
+      if (auto pair = check_->vertex_face(c.v, c.f, c.toi, why)) {
+        result.collisions.add(*pair, c.toi);
+      } else {
+        add_fault(result, why, c.v < topology.num_vertices() && c.f < topology.num_faces()
+                                   ? std::optional(pair_rows(topology, view.x0, view.x1, VertexFacePair{c.v, c.f}))
+                                   : std::nullopt, true);
+      }
+    }
+    for (Reported::EdgeEdge c : reported.edge_edge) {
+      if (auto pair = check_->edge_edge(c.a0, c.a1, c.b0, c.b1, c.toi, why)) {
+        result.collisions.add(*pair, c.toi);
+      } else {
+        const std::size_t n = topology.num_vertices();
+        const bool in_range = c.a0 < n && c.a1 < n && c.b0 < n && c.b1 < n;
+        add_fault(result, why, in_range ? std::optional(pair_rows(topology, view.x0, view.x1, EdgeEdgePair{{c.a0, c.a1}, {c.b0, c.b1}}))
+                                        : std::nullopt, false);
+      }
+    }
+    result.collisions.normalize();
+    result.counters.elementary_tests = reported.vertex_face.size() + reported.edge_edge.size();
+    return result;
+  }
+
+  std::vector<std::pair<std::string, std::string>> provenance() const override {
+    const ccdbench_plugin& table = library_->table();
+    return {{"plugin", std::string(table.name) + " " + (table.version ? table.version : "")},
+            {"plugin_file_digest", library_->digest()},
+            {"plugin_isolated", host_.isolate ? "yes (a child process)" : "no"}};
+  }
+
+ private:
+  static void add_fault(strategies::StepResult& result, const std::string& why, std::optional<std::array<Vec3, 8>> rows, bool vertex_face) {
+    ++result.fault_count;
+    if (result.faults.size() < strategies::kKeptFaults) result.faults.push_back({why, rows, vertex_face});
+  }
+  static void add_step_fault(strategies::StepResult& result, const std::string& why) { add_fault(result, why, std::nullopt, true); }
+
+  void finish() {
+    if (!begun_) return;
+    begun_ = false;
+    if (isolated_) {
+      isolated_->end();
+    } else if (library_->table().end) {
+      library_->table().end(context_->handle());
+    }
+  }
+
+  std::shared_ptr<const Library> library_;
+  std::vector<std::string> values_;
+  HostSettings host_;
+  std::unique_ptr<Context> context_;
+  std::unique_ptr<IsolatedPlugin> isolated_;
+  std::unique_ptr<SceneTables> tables_;
+  std::unique_ptr<ContactCheck> check_;
+  std::string begin_error_;
+  bool begun_ = false;
+};
+
+}  // namespace
+
+strategies::StrategyEntry whole_step_entry(const std::string& name) {
+  const std::string path = name.substr(std::strlen(narrowphase::kPluginHead) + 1);
+  std::shared_ptr<const Library> library = load_library(path);
+  if (!library->answers_steps()) {
+    throw std::invalid_argument("plugin " + library->path() + " answers queries, not whole steps: run it as a narrow phase (--strategy full+" +
+                                name + ", or apccd+" + name + ")");
+  }
+  strategies::StrategyEntry entry;
+  entry.name = name;
+  entry.help = library->description();
+  entry.keys = library->keys();
+  for (narrowphase::KeySpec& key : host_keys()) entry.keys.push_back(std::move(key));
+  entry.takes_narrow_phase = false;
+  // Its misses have one cause ccdbench can tell: the plugin did not report the pair (it tests no pair ccdbench sees).
+  entry.explain_miss = [](const narrowphase::PairRows&, bool) { return std::string("unreported"); };
+  entry.make = [library](strategies::StrategyRequest request) -> std::unique_ptr<strategies::Strategy> {
+    return std::make_unique<WholeStepPlugin>(library, plugin_values(request.keys, *library), read_host_settings(request.keys, *library));
+  };
+  return entry;
+}
+
+}  // namespace ccd::plugin
