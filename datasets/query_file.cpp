@@ -210,11 +210,14 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
 void write_query_file(const std::filesystem::path& path, const std::vector<Query>& queries) {
   AtomicFile file(path, std::ios::out);
   std::ofstream& out = file.stream();
+  // Labelled (7 columns) or not (6): a file is one or the other.
+  const bool labelled = !queries.empty() && queries.front().truth.has_value();
   for (const Query& query : queries) {
-    if (!query.truth) throw std::invalid_argument("write_query_file: every query needs a truth label");
+    if (query.truth.has_value() != labelled) throw std::invalid_argument("write_query_file: every query needs a truth label, or none does");
     for (const Query::RationalPoint& point : query.exact) {
-      for (int k = 0; k < 3; ++k) out << point[k].get_num().get_str() << ',' << point[k].get_den().get_str() << ',';
-      out << (*query.truth ? 1 : 0) << '\n';
+      for (int k = 0; k < 3; ++k) out << point[k].get_num().get_str() << ',' << point[k].get_den().get_str() << (k < 2 || labelled ? "," : "");
+      if (labelled) out << (*query.truth ? 1 : 0);
+      out << '\n';
     }
   }
   file.commit();

@@ -76,7 +76,7 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
 /// A JSON array of booleans (an mma_bool file). @throws InputError when malformed.
 std::vector<bool> read_truth_file(const std::filesystem::path& path);
 
-/// Writes queries as the 7-column format (truth required on every query), atomically.
+/// Writes queries as the 7-column format (truth on every query) or the 6-column one (on none), atomically.
 void write_query_file(const std::filesystem::path& path, const std::vector<Query>& queries);
 
 }  // namespace ccd::datasets

@@ -5,6 +5,7 @@
 #include "datasets/content_hash.hpp"
 #include "datasets/input_file.hpp"
 #include "harness/truth_cache.hpp"
+#include "strategies/registry.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -75,7 +76,7 @@ std::string safe_path_component(const std::string& text) {
 std::string cell_file_name(const CellKey& key) {
   datasets::ContentHash hash;
   hash.text(key.to_json().dump());
-  const std::string strategy_name = key.strategy.substr(0, key.strategy.find(':'));
+  const std::string strategy_name = strategies::short_label(key.strategy);
   return safe_path_component(key.scene) + "__" + safe_path_component(strategy_name) + "_" + hash.hex().substr(0, 20) + ".json";
 }
 

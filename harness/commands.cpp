@@ -14,7 +14,9 @@
 #include "harness/truth_cache.hpp"
 #include "harness/work_queue.hpp"
 #include "reference/step_truth.hpp"
+#include "harness/cell_store.hpp"
 #include "strategies/opencl/full_opencl.hpp"
+#include "strategies/plugin/plugin_narrow_phase.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -22,6 +24,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <map>
 
 namespace ccd::harness {
 
@@ -37,12 +40,58 @@ int run_inspect(const InspectOptions& options, std::ostream& out) {
   return 0;
 }
 
+namespace {
+
+/// The queries each method gave no answer to, written as query files under options.faults/METHOD/KIND/FILE.csv (the
+/// file's label kept), with FAULTS.txt beside them saying which query and why; said on `out`.
+void write_query_faults(const std::vector<QueryScore>& scores, const std::vector<datasets::QueryFile>& files, const QueriesOptions& options,
+                        std::ostream& out) {
+  std::map<std::filesystem::path, std::string> notes_of_folder;
+  for (const QueryScore& score : scores) {
+    if (score.file == "(all)" || score.fault_queries.empty()) continue;
+    const auto file = std::find_if(files.begin(), files.end(), [&](const datasets::QueryFile& f) { return f.path.string() == score.file; });
+    if (file == files.end()) continue;
+    const std::filesystem::path folder = options.faults / safe_path_component(score.method.substr(0, 120));
+    std::vector<datasets::QueryFile> kept(1);
+    kept[0].kind = file->kind;
+    std::string notes;
+    for (const QueryScore::Fault& fault : score.fault_queries) {
+      kept[0].queries.push_back(file->queries.at(fault.index));
+      notes += score.file + " query " + std::to_string(fault.index + 1) + " (index " + std::to_string(fault.index) + ", line " +
+               std::to_string(fault.line) + "): " + fault.message + "\n";
+    }
+    // Under MPI the files were scaled by the ranks that scored them: scale the copies alike.
+    if (options.scale_exponent != 0 && rank_info().size > 1) scale_query_files(kept, options.scale_exponent);
+    const std::filesystem::path written = folder / std::string(datasets::to_string(file->kind)) / file->path.filename();
+    datasets::write_query_file(written, kept[0].queries);
+    notes_of_folder[folder] += notes;
+    out << score.method << ": " << score.faults << " of " << score.queries << " queries of " << score.file << " got no answer; first: query "
+        << score.fault_queries.front().index + 1 << " (line " << score.fault_queries.front().line << "): " << score.fault_queries.front().message
+        << "\n  written to " << written.string() << " (replay: ccdbench queries " << written.string() << " --allow-unlabelled)\n";
+  }
+  for (const auto& [folder, notes] : notes_of_folder) {
+    datasets::AtomicFile list(folder / "FAULTS.txt", std::ios::out);
+    list.stream() << notes;
+    list.commit();
+  }
+}
+
+}  // namespace
+
 int run_queries(const QueriesOptions& options, std::ostream& out) {
-  const std::vector<std::string> methods = options.sweep ? sweep_methods(options.methods) : options.methods;
-  for (const std::string& method : methods) make_query_method(method);  // unknown names fail before work
+  std::vector<std::string> methods = options.sweep ? sweep_methods(options.methods) : options.methods;
+  if (options.isolate) {
+    for (std::string& method : methods) method = plugin::isolated_spec(method);
+  }
+  auto answer_file = [](const std::string& method) { return method.rfind("answers:", 0) == 0; };
+  // Unknown names fail before any work; answer files once they are matched to the queries, below.
+  for (const std::string& method : methods) {
+    if (!answer_file(method)) make_query_method(method);
+  }
   if (rank_info().rank == 0) {  // only rank 0 writes
     if (options.json) datasets::require_writable_file(*options.json);
     if (options.report) datasets::require_writable_directory(*options.report);
+    if (options.write_answers) datasets::require_writable_file(*options.write_answers);
   }
   std::vector<datasets::QueryFile> files;
   for (const auto& path : datasets::discover_query_files(options.paths)) files.push_back(datasets::read_query_file(path));
@@ -50,6 +99,12 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
     for (datasets::QueryFile& file : extremes_query_files(datasets::extremes_suite())) files.push_back(std::move(file));
   }
   if (files.empty()) throw InputError({}, {}, "no query files found under the given paths");
+  const bool any_answer_file = std::any_of(methods.begin(), methods.end(), answer_file);
+  if (any_answer_file && options.scale_exponent != 0) {
+    throw InputError("command line", "--scale-exponent", "answer files answer the queries as written: they cannot be scaled");
+  }
+  // Answer files are matched to the queries before any work: one that does not answer exactly these is refused.
+  bind_answer_files(methods, files);
   for (const datasets::QueryFile& file : files) {
     const std::size_t unlabelled = file.queries.size() - file.labelled();
     if (unlabelled > 0 && !options.allow_unlabelled) {
@@ -68,7 +123,7 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
     }
     if (std::ldexp(thickness, -options.scale_exponent) < options.thickness) thickness = std::nextafter(thickness, INFINITY);
   }
-  const QueryScoringRequest request{methods, thickness, options.repeats, options.toi};
+  const QueryScoringRequest request{methods, thickness, options.repeats, options.toi, options.write_answers.has_value()};
   std::size_t left_out = 0;
   std::vector<QueryScore> scores;
   if (rank_info().size == 1) {
@@ -112,6 +167,11 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
     scores = score_query_files(files, request, [&](std::size_t done, std::size_t) { progress.update(done); });
   }
   print_query_scores(scores, out);
+  write_query_faults(scores, files, options, out);
+  if (options.write_answers) {
+    write_query_answers(*options.write_answers, scores);
+    out << "answers: " << options.write_answers->string() << "\n";
+  }
   if (const QueryScore& total = scores.back(); total.unlabeled > 0) {
     out << "note: " << total.unlabeled << " of " << total.queries
         << " queries had no truth label: FN and FP count the labelled ones only ('-': none labelled).\n";

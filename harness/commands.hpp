@@ -34,6 +34,12 @@ struct QueriesOptions {
   int scale_exponent = 0;
   /// Write README.md and scores.json into this folder, with `command_line` above the table.
   std::optional<std::filesystem::path> report;
+  /// Write every method's answers as an answer file (query_answers.hpp).
+  std::optional<std::filesystem::path> write_answers;
+  /// Run every plugin in a child process (isolate=on).
+  bool isolate = false;
+  /// Where queries without an answer (faults) are written as query files.
+  std::filesystem::path faults = "ccdbench-faults";
   std::string command_line;
 };
 /// Scores every method on every discovered query file; prints a table. Exit status 0.

@@ -6,6 +6,8 @@
 #include "datasets/scene_file.hpp"
 #include "core/error.hpp"
 #include "harness/commands.hpp"
+#include "strategies/plugin/isolation.hpp"
+#include "strategies/plugin/plugin_narrow_phase.hpp"
 #include "harness/query_scoring.hpp"
 #include "harness/registry_listing.hpp"
 #include "harness/run/provenance.hpp"
@@ -68,6 +70,9 @@ std::string version_text() {
 int run_command_line(int argc, char** argv);
 
 int main(int argc, char** argv) {
+  // A plugin's child process (strategies/plugin/isolation.hpp) answers on its pipes and is no rank of anything:
+  // handled before MPI is started, so a crash of the plugin never touches the run's ranks.
+  if (argc >= 2 && std::string(argv[1]) == ccd::plugin::kPluginHostCommand) return ccd::plugin::serve_plugin(argc, argv);
   // Under mpirun every rank parses the same command line; rank 0 plans and prints, the others work
   // (harness/work_queue.hpp). A failure that one rank alone sees ends every rank, never leaves them waiting.
   const ccd::harness::RankSession ranks(argc, argv);
@@ -112,7 +117,21 @@ int run_command_line(int argc, char** argv) {
   queries->add_option("PATH", queries_options.paths, "query files or folders")->required();
   queries->add_option("--method", methods,
                       "comma-separated methods: " + method_names() + " (`exact` is the reference itself;\n"
-                      "narrow phases take their keys, NAME:key=value, as `ccdbench strategies` lists them)")
+                      "narrow phases take their keys, NAME:key=value, as `ccdbench strategies` lists them);\n"
+                      "plugin:PATH[:key=value] is a plugin's queries (README: Audit your CCD)")
+      ->capture_default_str();
+  std::vector<std::string> query_answer_files;
+  queries->add_option("--answers", query_answer_files,
+                      "also score the answers in this CSV (file,index,hit,toi per query, README: Answer files) as a\n"
+                      "method: answers:FILE; answers:FILE:method=NAME picks one method of a file that holds several");
+  queries->add_option("--write-answers", queries_options.write_answers,
+                      "write every method's answer and TOI per query, with the label and the exact TOI floor, as an\n"
+                      "answer file (CSV) that --answers reads back");
+  queries->add_flag("--isolate", queries_options.isolate,
+                    "run every plugin in a child process (isolate=on): a crash or a hang is that query's error, and\n"
+                    "the run goes on");
+  queries->add_option("--faults", queries_options.faults,
+                      "where queries a method gave no answer to are written as query files, to replay")
       ->capture_default_str();
   queries->add_option("--thickness", queries_options.thickness, "thickness δ >= 0 (the data's truth is for 0)")
       ->check(CLI::Range(0.0, std::numeric_limits<double>::max()))
@@ -222,6 +241,20 @@ int run_command_line(int argc, char** argv) {
                   "write each cell's missed pairs here as rational query files by cause (DIR/SCENE/CELL/{vertex-face,"
                   "edge-edge}/CAUSE.csv; cause culled or tested, or for fcl why FCL's test said no), to replay with "
                   "`ccdbench queries`");
+  std::vector<std::string> run_answer_folders;
+  bool run_isolate = false;
+  run->add_option("--answers", run_answer_folders,
+                  "also judge the answers in this folder as a strategy, answers:DIR: DIR/SCENE/step_0000.csv, ... one\n"
+                  "colliding pair per line (README: Answer files)");
+  run->add_option("--write-answers", run_options.write_answers,
+                  "write each cell's answers here as DIR/STRATEGY/SCENE/step_0000.csv, ..., as --answers DIR/STRATEGY\n"
+                  "reads them (STRATEGY@δ when the run has several δ: a folder of answers is for one δ)");
+  run->add_flag("--isolate", run_isolate,
+                "run every plugin in a child process (isolate=on): a crash or a hang is that query's or step's\n"
+                "error, and the run goes on");
+  run->add_option("--faults", run_options.faults,
+                  "where what a step could not answer (a plugin's errors, crashes, hangs) is written to replay\n"
+                  "(default: OUT/faults)");
 
   std::string baseline_file;
   std::vector<std::string> results_files;
@@ -243,6 +276,8 @@ int run_command_line(int argc, char** argv) {
       "List the strategies and narrow phases (the registries): what each is, its keys with their values and\n"
       "defaults, its backends, and for a strategy what it is judged by and its speed-up baseline.");
   strategies->add_flag("--json", strategies_json, "print one JSON object ({strategies, narrow_phases}) for scripts");
+  std::vector<std::string> listed_plugins;
+  strategies->add_option("--plugin", listed_plugins, "also list this plugin (a shared library, README: Audit your CCD) with its keys");
 
   bool devices_json = false;
   CLI::App* devices = app.add_subcommand(
@@ -301,13 +336,14 @@ int run_command_line(int argc, char** argv) {
     if (*inspect) return ccd::harness::run_inspect(inspect_options, std::cout);
     if (*queries) {
       queries_options.methods = CLI::detail::split(methods, ',');
+      for (const std::string& file : query_answer_files) queries_options.methods.push_back(std::string("answers:") + file);
       queries_options.command_line = "build/release/bin/ccdbench";
       for (int i = 1; i < argc; ++i) queries_options.command_line += std::string(" ") + argv[i];
       return ccd::harness::run_queries(queries_options, std::cout);
     }
     if (*truth) return ccd::harness::run_truth(truth_options, std::cout);
     if (*scenes) return ccd::harness::run_scenes(std::cout);
-    if (*strategies) return ccd::harness::run_strategies(strategies_json, std::cout);
+    if (*strategies) return ccd::harness::run_strategies(strategies_json, std::cout, listed_plugins);
     if (*devices) return ccd::harness::run_devices(devices_json, std::cout);
     if (*run) {
       const int sources = (run_suite.empty() ? 0 : 1) + (run_scenes.empty() ? 0 : 1) + (run_frames.empty() ? 0 : 1);
@@ -344,6 +380,12 @@ int run_command_line(int argc, char** argv) {
         }
       }
       run_options.strategies = CLI::detail::split(run_strategies, ',');
+      // Answers alone (no --strategy) are judged alone: the default `full` is for runs that name no strategy at all.
+      if (!run_answer_folders.empty() && run->count("--strategy") == 0) run_options.strategies.clear();
+      for (const std::string& folder : run_answer_folders) run_options.strategies.push_back("answers:" + folder);
+      if (run_isolate) {
+        for (std::string& spec : run_options.strategies) spec = ccd::plugin::isolated_spec(spec);
+      }
       for (const std::string& spec : run_options.strategies) {
         try {
           ccd::strategies::make_strategy(spec);

@@ -2,6 +2,7 @@
 
 #include "datasets/atomic_file.hpp"
 #include "datasets/rational.hpp"
+#include "harness/query_answers.hpp"
 #include "harness/statistics.hpp"
 #include "harness/table.hpp"
 #include "reference/elementary_pair.hpp"
@@ -10,8 +11,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "strategies/plugin/library.hpp"
+#include "strategies/plugin/plugin_narrow_phase.hpp"
+
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstring>
 #include <iomanip>
 #include <map>
 #include <ostream>
@@ -32,8 +38,8 @@ reference::Decision decide_exactly(const datasets::Query& query, datasets::Query
 class ExactQueryMethod final : public QueryMethod {
  public:
   std::string name() const override { return kExactMethod; }
-  QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
-    return {decide_exactly(query, kind, thickness, false).collides, std::numeric_limits<double>::quiet_NaN()};
+  QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const override {
+    return {decide_exactly(file.queries[index], file.kind, thickness, false).collides, std::numeric_limits<double>::quiet_NaN(), {}};
   }
 };
 
@@ -43,11 +49,11 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
   explicit NarrowPhaseQueryMethod(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase)
       : narrow_phase_(std::move(narrow_phase)) {}
   std::string name() const override { return narrow_phase_->name(); }
-  QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
-    const narrowphase::NarrowPhaseResult result = kind == datasets::QueryKind::vertex_face
-                                                      ? narrow_phase_->vertex_face(query.rounded, thickness)
-                                                      : narrow_phase_->edge_edge(query.rounded, thickness);
-    return {result.collides, result.collides ? result.toi : std::numeric_limits<double>::quiet_NaN()};
+  QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const override {
+    const datasets::Query& query = file.queries[index];
+    narrowphase::NarrowPhaseResult result = file.kind == datasets::QueryKind::vertex_face ? narrow_phase_->vertex_face(query.rounded, thickness)
+                                                                                          : narrow_phase_->edge_edge(query.rounded, thickness);
+    return {result.collides, result.collides ? result.toi : std::numeric_limits<double>::quiet_NaN(), std::move(result.fault)};
   }
 
  private:
@@ -59,17 +65,72 @@ class OwnTestsQueryMethod final : public QueryMethod {
  public:
   explicit OwnTestsQueryMethod(const strategies::StrategyEntry& strategy) : strategy_(strategy) {}
   std::string name() const override { return strategy_.name; }
-  QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const override {
+  QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const override {
     if (thickness > 0) throw std::invalid_argument("method " + strategy_.name + " has no thickness: run it with --thickness 0");
     // No time: such tests answer yes or no.
-    return {strategy_.elementary_test(query.rounded, kind == datasets::QueryKind::vertex_face), std::numeric_limits<double>::quiet_NaN()};
+    return {strategy_.elementary_test(file.queries[index].rounded, file.kind == datasets::QueryKind::vertex_face),
+            std::numeric_limits<double>::quiet_NaN(), {}};
   }
 
  private:
   const strategies::StrategyEntry& strategy_;
 };
 
+/// The answer files named by `answers:FILE[:method=NAME]` specs, read once per process (every rank reads its own).
+std::map<std::string, AnswerTable>& answer_tables() {
+  static std::map<std::string, AnswerTable> tables;
+  return tables;
+}
+
+bool names_answers(const std::string& spec) { return spec.rfind(std::string(narrowphase::kAnswersHead) + ":", 0) == 0; }
+
+AnswerTable& answer_table(const std::string& spec) {
+  auto it = answer_tables().find(spec);
+  if (it != answer_tables().end()) return it->second;
+  const auto [head, parameters] = narrowphase::split_spec(spec);
+  const std::vector<narrowphase::KeySpec> keys{
+      narrowphase::KeySpec::text("method", "which method's answers, when the file holds several (its name, or its name's head)"),
+      narrowphase::KeySpec::text("digest", "the file's digest (filled in; checked when given)")};
+  const narrowphase::SpecReader reader(head, keys, parameters);
+  const std::filesystem::path path = head.substr(std::strlen(narrowphase::kAnswersHead) + 1);
+  AnswerTable table = read_answer_table(path, reader.text("method"));
+  table.digest = plugin::content_digest(path);
+  if (reader.given("digest") && reader.text("digest") != table.digest) {
+    throw std::invalid_argument(spec + ": the file changed (digest " + table.digest + ")");
+  }
+  return answer_tables().emplace(spec, std::move(table)).first->second;
+}
+
+/// Answers read from a file (query_answers.hpp): a method whose code ran elsewhere, judged like the others.
+class AnswerFileMethod final : public QueryMethod {
+ public:
+  explicit AnswerFileMethod(const AnswerTable& table) : table_(table) {}
+  std::string name() const override {
+    std::string name = std::string(narrowphase::kAnswersHead) + ":" + std::filesystem::absolute(table_.path).lexically_normal().string();
+    if (!table_.method.empty()) name += ":method=" + table_.method;
+    return name + ":digest=" + table_.digest;
+  }
+  QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double) const override {
+    const auto it = table_.by_file.find(file.path.string());
+    if (it == table_.by_file.end() || index >= it->second.size() || it->second[index] == nullptr) {
+      throw std::logic_error("answers " + table_.path.string() + " were not matched to " + file.path.string() + " (bind_answer_files)");
+    }
+    const AnswerLine& line = *it->second[index];
+    if (line.hit < 0) return {false, std::numeric_limits<double>::quiet_NaN(), "error (" + table_.path.string() + " line " + std::to_string(line.line) + ")"};
+    return {line.hit == 1, line.hit == 1 ? line.toi : std::numeric_limits<double>::quiet_NaN(), {}};
+  }
+
+ private:
+  const AnswerTable& table_;
+};
+
 }  // namespace
+
+void bind_answer_files(const std::vector<std::string>& methods, const std::vector<datasets::QueryFile>& files) {
+  for (const std::string& spec : methods) {
+    if (names_answers(spec)) bind_answers(answer_table(spec), files);
+  }
+}
 
 reference::PairKind reference_kind(datasets::QueryKind kind) {
   return kind == datasets::QueryKind::vertex_face ? reference::PairKind::vertex_face : reference::PairKind::edge_edge;
@@ -77,7 +138,8 @@ reference::PairKind reference_kind(datasets::QueryKind kind) {
 
 std::unique_ptr<QueryMethod> make_query_method(const std::string& spec) {
   if (spec == kExactMethod) return std::make_unique<ExactQueryMethod>();
-  const std::string name = spec.substr(0, spec.find(':'));
+  if (names_answers(spec)) return std::make_unique<AnswerFileMethod>(answer_table(spec));
+  const std::string name = narrowphase::split_spec(spec).first;
   if (narrowphase::is_narrow_phase(name)) return std::make_unique<NarrowPhaseQueryMethod>(narrowphase::make_narrow_phase_from_spec(spec));
   for (const strategies::StrategyEntry& strategy : strategies::strategy_entries()) {
     if (strategy.name == spec && strategy.elementary_test) return std::make_unique<OwnTestsQueryMethod>(strategy);
@@ -121,7 +183,12 @@ nlohmann::json to_json(const QueryScore& s) {
           {"false_positives", labelled_count(s, s.false_positives)},
           {"unlabeled", s.unlabeled},
           {"ns_per_query", s.ns_per_query},
-          {"false_negative_lines", s.false_negative_lines}};
+          {"false_negative_lines", s.false_negative_lines},
+          {"errors", s.faults}};
+  if (!s.fault_queries.empty()) {
+    row["error_queries"] = nlohmann::json::array();
+    for (const QueryScore::Fault& f : s.fault_queries) row["error_queries"].push_back({{"index", f.index}, {"line", f.line}, {"message", f.message}});
+  }
   if (s.with_toi) {
     row["toi_checked"] = s.toi_checked;
     row["toi_late"] = s.toi_late;
@@ -138,7 +205,7 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
   // Exact TOI floors, once per file for every method, outside the timed passes: of the doubles the narrow phases
   // are given (for a query that is not exactly doubles, its rationals are another question).
   std::vector<double> exact_toi(file.queries.size(), std::numeric_limits<double>::quiet_NaN());
-  if (request.toi) {
+  if (request.toi || request.keep_answers) {
     for (std::size_t q = 0; q < file.queries.size(); ++q) {
       if (file.queries[q].truth == false) continue;
       const reference::Decision decision =
@@ -157,7 +224,7 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
       std::vector<QueryAnswer> answers(file.queries.size());
       const auto start = std::chrono::steady_clock::now();
       for (std::size_t q = 0; q < file.queries.size(); ++q) {
-        answers[q] = method->answer(file.queries[q], file.kind, request.thickness);
+        answers[q] = method->answer(file, q, request.thickness);
       }
       const std::chrono::duration<double, std::nano> elapsed = std::chrono::steady_clock::now() - start;
       per_query.push_back(file.queries.empty() ? 0.0 : elapsed.count() / static_cast<double>(file.queries.size()));
@@ -165,6 +232,10 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
       for (std::size_t q = 0; q < file.queries.size(); ++q) {
         const datasets::Query& query = file.queries[q];
         const bool reported = answers[q].collides;
+        if (!answers[q].fault.empty()) {
+          score.faults += 1;
+          if (score.fault_queries.size() < kKeptQueryFaults) score.fault_queries.push_back({q, query.first_line, answers[q].fault});
+        }
         // Lateness is exact: exact_toi is the largest double not after the earliest contact.
         if (request.toi && reported && !std::isnan(exact_toi[q]) && !std::isnan(answers[q].toi)) {
           const double error = std::abs(answers[q].toi - exact_toi[q]);
@@ -185,6 +256,11 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
           if (score.false_negative_lines.size() < 20) score.false_negative_lines.push_back(query.first_line);
         }
         if (!*query.truth && reported) score.false_positives += 1;
+      }
+      if (request.keep_answers) {
+        score.answers = std::move(answers);
+        score.exact_toi = exact_toi;
+        for (const datasets::Query& query : file.queries) score.labels.push_back(query.truth);
       }
     }
     score.ns_per_query = median(per_query);
@@ -212,6 +288,7 @@ void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std:
     total.toi_late += score.toi_late;
     total.toi_error_max = std::max(total.toi_error_max, score.toi_error_max);
     total.toi_error_sum += score.toi_error_sum;
+    total.faults += score.faults;
     total_nanoseconds[score.method] += score.ns_per_query * static_cast<double>(score.queries);
   }
   for (const std::string& name : methods) {
@@ -236,13 +313,47 @@ std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>
   return scores;
 }
 
+namespace {
+
+/// NaN is not JSON: null stands for it in messages.
+nlohmann::json number_list(const std::vector<double>& values) {
+  nlohmann::json list = nlohmann::json::array();
+  for (double v : values) list.push_back(std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v));
+  return list;
+}
+std::vector<double> numbers_of(const nlohmann::json& list) {
+  std::vector<double> values;
+  for (const nlohmann::json& v : list) values.push_back(v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>());
+  return values;
+}
+nlohmann::json fault_list(const QueryScore& s) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const QueryScore::Fault& f : s.fault_queries) list.push_back({f.index, f.line, f.message});
+  return list;
+}
+nlohmann::json label_list(const QueryScore& s) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const std::optional<bool>& label : s.labels) list.push_back(label ? nlohmann::json(*label) : nlohmann::json(nullptr));
+  return list;
+}
+nlohmann::json answer_list(const QueryScore& s) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const QueryAnswer& a : s.answers) {
+    list.push_back({a.collides, std::isnan(a.toi) ? nlohmann::json(nullptr) : nlohmann::json(a.toi), a.fault});
+  }
+  return list;
+}
+
+}  // namespace
+
 nlohmann::json to_message(const QueryScore& s) {
   return {{"method", s.method}, {"file", s.file}, {"thickness", s.thickness}, {"queries", s.queries},
           {"positives", s.positives}, {"reported", s.reported}, {"false_negatives", s.false_negatives},
           {"false_positives", s.false_positives}, {"unlabeled", s.unlabeled}, {"ns_per_query", s.ns_per_query},
           {"with_toi", s.with_toi}, {"toi_checked", s.toi_checked}, {"toi_late", s.toi_late},
           {"toi_error_max", s.toi_error_max}, {"toi_error_sum", s.toi_error_sum},
-          {"false_negative_lines", s.false_negative_lines}};
+          {"false_negative_lines", s.false_negative_lines}, {"faults", s.faults}, {"fault_queries", fault_list(s)},
+          {"answers", answer_list(s)}, {"exact_toi", number_list(s.exact_toi)}, {"labels", label_list(s)}};
 }
 
 QueryScore from_message(const nlohmann::json& m) {
@@ -263,6 +374,14 @@ QueryScore from_message(const nlohmann::json& m) {
   s.toi_error_max = m.at("toi_error_max");
   s.toi_error_sum = m.at("toi_error_sum");
   s.false_negative_lines = m.at("false_negative_lines").get<std::vector<std::size_t>>();
+  s.faults = m.at("faults");
+  for (const nlohmann::json& f : m.at("fault_queries")) s.fault_queries.push_back({f.at(0), f.at(1), f.at(2)});
+  for (const nlohmann::json& a : m.at("answers")) {
+    s.answers.push_back({a.at(0).get<bool>(), a.at(1).is_null() ? std::numeric_limits<double>::quiet_NaN() : a.at(1).get<double>(),
+                         a.at(2).get<std::string>()});
+  }
+  s.exact_toi = numbers_of(m.at("exact_toi"));
+  for (const nlohmann::json& label : m.at("labels")) s.labels.push_back(label.is_null() ? std::nullopt : std::optional<bool>(label.get<bool>()));
   return s;
 }
 
@@ -274,6 +393,11 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
   Table table({{"method"}, {"file"}, {"queries", Align::right}, {"positives", Align::right}, {"reported", Align::right},
                {"FN", Align::right}, {"FP", Align::right}, {"ns/query", Align::right}});
   const bool with_toi = !scores.empty() && scores.front().with_toi;
+  // An error is its own outcome (a method that gave no answer): a column wherever a method can give one.
+  const bool with_errors = std::any_of(scores.begin(), scores.end(), [](const QueryScore& s) {
+    return s.faults > 0 || plugin::names_plugin(s.method) || names_answers(s.method);
+  });
+  if (with_errors) table.add_column({"errors", Align::right});
   if (with_toi) {
     for (const char* header : {"TOI late", "TOI error max", "TOI error mean"}) table.add_column({header, Align::right});
   }
@@ -281,6 +405,7 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
     std::vector<std::string> row = {markdown ? "`" + s.method + "`" : s.method, s.file, std::to_string(s.queries),
                                     labelled_text(s, s.positives), std::to_string(s.reported), labelled_text(s, s.false_negatives),
                                     labelled_text(s, s.false_positives), fixed(s.ns_per_query, 0)};
+    if (with_errors) row.push_back(std::to_string(s.faults));
     if (with_toi) {
       row.push_back(std::to_string(s.toi_late));
       row.push_back(significant(s.toi_error_max, 3));
@@ -294,6 +419,35 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
 }  // namespace
 
 void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out) { query_table(scores, false).print(out); }
+
+void write_query_answers(const std::filesystem::path& path, const std::vector<QueryScore>& scores) {
+  // Per file, per query, per method, in the order scored; the label and exact TOI once per query and method.
+  std::map<std::string, std::vector<const QueryScore*>> by_file;
+  std::vector<std::string> file_order;
+  for (const QueryScore& score : scores) {
+    if (score.file == "(all)") continue;
+    if (!by_file.count(score.file)) file_order.push_back(score.file);
+    by_file[score.file].push_back(&score);
+  }
+  datasets::AtomicFile file(path, std::ios::out);
+  std::ostream& out = file.stream();
+  out << "file,index,method,hit,toi,label,exact_toi\n";
+  for (const std::string& name : file_order) {
+    const std::vector<const QueryScore*>& of_file = by_file[name];
+    const std::size_t count = of_file.front()->answers.size();
+    for (std::size_t q = 0; q < count; ++q) {
+      for (const QueryScore* score : of_file) {
+        const QueryAnswer& a = score->answers.at(q);
+        const double exact = score->exact_toi.at(q);
+        const std::optional<bool>& label = score->labels.at(q);
+        out << name << ',' << q << ',' << score->method << ',' << (!a.fault.empty() ? "error" : a.collides ? "1" : "0") << ','
+            << (a.collides && !std::isnan(a.toi) ? answer_number(a.toi) : "") << ',' << (label ? (*label ? "1" : "0") : "") << ','
+            << (std::isnan(exact) ? "" : answer_number(exact)) << '\n';
+      }
+    }
+  }
+  file.commit();
+}
 
 std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent) {
   std::size_t left_out = 0;

@@ -11,6 +11,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,9 @@ struct QueryAnswer {
   bool collides = false;
   /// NaN when the method reports no time.
   double toi = std::numeric_limits<double>::quiet_NaN();
+  /// Not empty when the method gave no answer (a plugin's error or undecided answer, an answer ccdbench refused, a
+  /// crash or a hang under isolation, `error` in an answer file): why. `collides` then says how it counts.
+  std::string fault;
 };
 
 /// A way of answering "do these primitives come within δ during the step?" for one query.
@@ -31,18 +35,23 @@ class QueryMethod {
  public:
   virtual ~QueryMethod() = default;
   virtual std::string name() const = 0;
-  /// The answer for `query` at thickness δ (the method decides whether it uses the exact rationals or the
-  /// doubles they round to).
-  virtual QueryAnswer answer(const datasets::Query& query, datasets::QueryKind kind, double thickness) const = 0;
+  /// The answer for query `index` of `file` at thickness δ (the method decides whether it uses the exact rationals
+  /// or the doubles they round to).
+  virtual QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const = 0;
 };
 
 /// The method that is the reference itself (certified filter, then exact root isolation, on the rationals).
 inline constexpr const char* kExactMethod = "exact";
 
-/// Methods by spec: `exact`, a narrow phase of the registry `NAME[:key=value...]` on the rounded doubles, or a
-/// strategy with elementary tests of its own (fcl), by its name.
+/// Methods by spec: `exact`, a narrow phase of the registry `NAME[:key=value...]` on the rounded doubles (a plugin,
+/// `plugin:PATH[:key=value]`, is one), a strategy with elementary tests of its own (fcl), by its name, or an answer
+/// file, `answers:FILE[:method=NAME]` (query_answers.hpp; bind_answer_files first).
 /// @throws std::invalid_argument naming the known methods for an unknown name or parameter.
 std::unique_ptr<QueryMethod> make_query_method(const std::string& spec);
+
+/// Reads every answer file among `methods` and matches its lines to the queries of `files`.
+/// @throws InputError (FILE:line N: REASON) for a malformed file, or one that does not answer exactly these queries.
+void bind_answer_files(const std::vector<std::string>& methods, const std::vector<datasets::QueryFile>& files);
 std::vector<std::string> query_method_names();
 
 /// One method on one file (or on all files: file = "(all)"), fields as DESIGN.md §5.
@@ -70,7 +79,23 @@ struct QueryScore {
   double toi_error_sum = 0.0;
   /// First lines of the missed queries (for the regression library), at most 20.
   std::vector<std::size_t> false_negative_lines;
+  /// Queries the method gave no answer to (QueryAnswer::fault), and the first kKeptQueryFaults of them.
+  std::size_t faults = 0;
+  struct Fault {
+    std::size_t index = 0;
+    std::size_t line = 0;
+    std::string message;
+  };
+  std::vector<Fault> fault_queries;
+  /// With QueryScoringRequest::keep_answers: every query's answer (first pass) and the exact TOI floor at δ (NaN
+  /// where there is none, or where TOIs were not asked for).
+  std::vector<QueryAnswer> answers;
+  std::vector<double> exact_toi;
+  std::vector<std::optional<bool>> labels;
 };
+
+/// Faults a score keeps whole (the count covers every one).
+inline constexpr std::size_t kKeptQueryFaults = 20;
 
 nlohmann::json to_json(const QueryScore& score);
 
@@ -81,7 +106,13 @@ struct QueryScoringRequest {
   /// Compare each reported TOI with the exact earliest contact (computed by the reference for every colliding
   /// query, outside the timed passes).
   bool toi = false;
+  /// Keep every answer in the scores (`--write-answers`).
+  bool keep_answers = false;
 };
+
+/// Writes every per-file score's answers (`--write-answers FILE`, query_answers.hpp): per query and method, the
+/// method's answer and TOI, the file's label and the exact TOI floor. Atomic.
+void write_query_answers(const std::filesystem::path& path, const std::vector<QueryScore>& scores);
 
 /// The files with every query multiplied by 2^exponent (δ is scaled by the caller). Exact on the rationals, so a
 /// labelled query keeps its label; a query whose doubles no longer equal its rationals (subnormal) takes the

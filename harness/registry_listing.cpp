@@ -3,6 +3,7 @@
 #include "harness/table.hpp"
 #include "strategies/narrowphase/registry.hpp"
 #include "strategies/registry.hpp"
+#include "strategies/plugin/library.hpp"
 
 #include <ostream>
 
@@ -56,9 +57,21 @@ std::string joined(const json& list) {
 
 }  // namespace
 
-json registry_listing() {
+json registry_listing(const std::vector<std::string>& plugins) {
   json strategies = json::array();
-  for (const strategies::StrategyEntry& entry : strategies::strategy_entries()) {
+  // A plugin enters as a strategy (its whole step) and as a narrow phase (its queries), where it has each.
+  std::vector<const strategies::StrategyEntry*> strategy_list;
+  std::vector<const narrowphase::NarrowPhaseEntry*> narrow_list;
+  for (const strategies::StrategyEntry& entry : strategies::strategy_entries()) strategy_list.push_back(&entry);
+  for (const narrowphase::NarrowPhaseEntry& entry : narrowphase::narrow_phases()) narrow_list.push_back(&entry);
+  for (const std::string& path : plugins) {
+    const auto library = plugin::load_library(path);
+    const std::string name = std::string(narrowphase::kPluginHead) + ":" + path;
+    if (library->answers_steps()) strategy_list.push_back(&strategies::find_strategy(name));
+    if (library->answers_queries()) narrow_list.push_back(&narrowphase::find_narrow_phase(name));
+  }
+  for (const strategies::StrategyEntry* entry_pointer : strategy_list) {
+    const strategies::StrategyEntry& entry = *entry_pointer;
     strategies.push_back({{"name", entry.name},
                           {"help", entry.help},
                           {"keys", keys_json(entry.keys)},
@@ -70,7 +83,8 @@ json registry_listing() {
                           {"unavailable", entry.unavailable}});
   }
   json narrow_phases = json::array();
-  for (const narrowphase::NarrowPhaseEntry& entry : narrowphase::narrow_phases()) {
+  for (const narrowphase::NarrowPhaseEntry* entry_pointer : narrow_list) {
+    const narrowphase::NarrowPhaseEntry& entry = *entry_pointer;
     narrow_phases.push_back({{"name", entry.name},
                              {"help", entry.help},
                              {"keys", keys_json(entry.keys)},
@@ -81,8 +95,8 @@ json registry_listing() {
   return {{"strategies", strategies}, {"narrow_phases", narrow_phases}};
 }
 
-int run_strategies(bool json_output, std::ostream& out) {
-  const json listing = registry_listing();
+int run_strategies(bool json_output, std::ostream& out, const std::vector<std::string>& plugins) {
+  const json listing = registry_listing(plugins);
   if (json_output) {
     out << listing.dump(2) << '\n';
     return 0;
@@ -104,6 +118,9 @@ int run_strategies(bool json_output, std::ostream& out) {
     print_keys(n["keys"], out);
     out << "\n";
   }
+  out << "Code from outside ccdbench (README \"Audit your CCD\"): plugin:PATH[:key=value] names a plugin (its whole step as a\n"
+         "strategy; NAME+plugin:PATH its queries as a narrow phase; --plugin PATH lists its keys above), answers:DIR a folder of\n"
+         "per-step answer files (run --answers DIR), answers:FILE a file of per-query answers (queries --answers FILE).\n\n";
   out << "--json prints the same for scripts.\n";
   return 0;
 }

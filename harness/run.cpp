@@ -127,10 +127,10 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     const double fraction = (pass + static_cast<double>(step + 1) / static_cast<double>(steps)) / passes;
     const std::string label = data ? data->label : "";
     progress->update(static_cast<double>(cells_finished) + fraction, cell_total,
-                     label + " / " + strategy.substr(0, strategy.find(':')) + ": pass " + std::to_string(pass + 1) + ", step " +
+                     label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + ", step " +
                          std::to_string(step + 1) + "/" + std::to_string(steps));
     if (!progress->terminal() && step + 1 == steps) {
-      say("run: " + label + " / " + strategy.substr(0, strategy.find(':')) + ": pass " + std::to_string(pass + 1) + " of " +
+      say("run: " + label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + " of " +
           std::to_string(options.repeats) + " done");
     }
   };
@@ -271,7 +271,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     rebuild_results_log(options.out, std::cerr);
     ++cells_done;
     ++cells_finished;
-    progress->update(static_cast<double>(cells_finished), cell_total, item.label + " / " + item.key.strategy.substr(0, item.key.strategy.find(':')) + " done");
+    progress->update(static_cast<double>(cells_finished), cell_total, item.label + " / " + strategies::short_label(item.key.strategy) + " done");
     if (rank_info().size > 1) {
       say("run: " + item.label + " / " + item.key.strategy + ": cell " + std::to_string(cells_done) + " of " + std::to_string(cell_count) +
           " done" + on_rank(rank));
@@ -305,6 +305,12 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   const Table table = summary_table(summaries);
   table.print(out);
   out << summary_notes(table) << resolved_names(summaries);
+  for (const json& s : summaries) {
+    if (s.value("errors", 0) == 0) continue;
+    out << "errors: " << s["scene"].get<std::string>() << " / " << s.value("spec", s["strategy"].get<std::string>()) << ": " << s["errors"]
+        << " answers could not be taken (counted apart, and as the plugin's errors= key says); written to "
+        << s.value("errors_written", std::string("(kept from an earlier run)")) << "/FAULTS.txt\n";
+  }
   for (const auto& [spec, refused] : left_out) {
     out << "left out: " << spec << " on " << refused.first.size() << " scene" << (refused.first.size() == 1 ? "" : "s") << " (";
     for (std::size_t i = 0; i < refused.first.size(); ++i) out << (i ? ", " : "") << refused.first[i];

@@ -49,6 +49,11 @@ struct RunOptions {
   bool fresh = false;
   /// Write every cell's missed pairs here as query files, by cause (`--misses`).
   std::optional<std::filesystem::path> misses;
+  /// Where what a step could not answer (a plugin's errors, crashes, hangs) is written to replay (`--faults`);
+  /// default: OUT/faults.
+  std::optional<std::filesystem::path> faults;
+  /// Write every cell's answers here, one file per step (`--write-answers`), as answers:DIR reads them.
+  std::optional<std::filesystem::path> write_answers;
   /// Only the first N steps of each scene (0: all).
   std::size_t max_steps = 0;
   std::string command_line;
@@ -57,7 +62,8 @@ struct RunOptions {
 /// Runs the cells, prints the table and writes the results. Returns the summaries (DESIGN.md §5 fields).
 std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostream& out);
 
-/// The CI gate (`ccdbench check`). The baseline is a JSON array of {scene, strategy, thickness, max_missed}:
+/// The CI gate (`ccdbench check`). The baseline is a JSON array of {scene, strategy, thickness, max_missed}
+/// (strategy: the resolved name, or the spec exactly as `run --strategy` was given it, which a plugin's gate uses):
 /// thickness is "scene" (the scene's own δ) or the number a cell ran at; max_missed an integer >= 0; optional pins
 /// steps and colliding (exactly equal) and max_toi_late (results from a run with --toi). `results` is
 /// a `ccdbench run --json` array (several are taken as one). It passes only when the results are not empty, every result has exactly one

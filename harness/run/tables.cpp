@@ -59,6 +59,9 @@ Table summary_table(const std::vector<json>& summaries) {
   Table table({{"scene"}, {"δ", Align::right}, {"strategy"}, {"ms/step", Align::right}, {"vs full", Align::right},
                {"colliding", Align::right}, {"missed (culled/tested)", Align::right}, {"false alarms", Align::right}});
   const bool with_toi = std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s.contains("toi_late"); });
+  // An error is its own outcome (an answer a plugin or an answer file could not give): a column when any cell has one.
+  const bool with_errors = std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s.value("errors", 0) > 0; });
+  if (with_errors) table.add_column({"errors", Align::right});
   if (with_toi) table.add_column({"TOI late (error max / mean)", Align::right});
   for (const char* header : {"candidates/step", "tests/step", "triangles", "steps"}) table.add_column({header, Align::right});
   table.add_column({"stages (ms)"});
@@ -74,6 +77,7 @@ Table summary_table(const std::vector<json>& summaries) {
         s.value("spec", s["strategy"].get<std::string>()) + (s.value("judged_by", "") == "triangle pairs" ? kTrianglePairMark : ""),
         fixed(s["ms_per_step"].get<double>(), 3), speedup, count("colliding"),
         verified ? count("missed") + " (" + count("missed_culled") + "/" + count("missed_tested") + ")" : "-", count("false_alarms")};
+    if (with_errors) row.push_back(std::to_string(s.value("errors", 0)));
     if (with_toi) {
       row.push_back(s.contains("toi_late") ? std::to_string(s["toi_late"].get<std::size_t>()) + " of " +
                                                  std::to_string(s["toi_checked"].get<std::size_t>()) + " (" +

@@ -1,0 +1,178 @@
+#include "harness/query_answers.hpp"
+
+#include "core/error.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <set>
+
+namespace ccd::harness {
+namespace {
+
+/// One CSV line's fields. Answer files hold no quoted fields: paths and method names with ',' are refused.
+std::vector<std::string> fields_of(const std::string& line) {
+  std::vector<std::string> fields;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', begin);
+    fields.push_back(line.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin));
+    if (comma == std::string::npos) return fields;
+    begin = comma + 1;
+  }
+}
+
+/// Whether `path` ends with the components of `tail` ("vertex-face/x.csv" ends "data/vertex-face/x.csv").
+bool ends_with_components(const std::filesystem::path& path, const std::filesystem::path& tail) {
+  auto p = path.lexically_normal();
+  auto t = tail.lexically_normal();
+  std::vector<std::filesystem::path> a(p.begin(), p.end()), b(t.begin(), t.end());
+  if (b.empty() || b.size() > a.size()) return false;
+  return std::equal(b.rbegin(), b.rend(), a.rbegin());
+}
+
+}  // namespace
+
+std::string answer_number(double value) {
+  char text[64];
+  const auto result = std::to_chars(text, text + sizeof text, value);
+  return std::string(text, result.ptr);
+}
+
+AnswerTable read_answer_table(const std::filesystem::path& path, const std::string& method) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, {}, "cannot be read");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  AnswerTable table;
+  table.path = path;
+  std::map<std::string, std::size_t> column;
+  std::set<std::string> methods;
+  std::size_t line_number = 0;
+  for (std::size_t begin = 0; begin < text.size();) {
+    ++line_number;
+    const std::string where = "line " + std::to_string(line_number);
+    const std::size_t end = text.find('\n', begin);
+    if (end == std::string::npos) throw InputError(path, where, "the file ends inside this line (cut short?): every line ends with a newline");
+    std::string line = text.substr(begin, end - begin);
+    begin = end + 1;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line.front() == '#') continue;
+    const std::vector<std::string> fields = fields_of(line);
+    if (column.empty()) {
+      for (std::size_t k = 0; k < fields.size(); ++k) {
+        if (!column.emplace(fields[k], k).second) throw InputError(path, where, "column '" + fields[k] + "' is named twice");
+      }
+      for (const char* required : {"file", "index", "hit"}) {
+        if (!column.count(required)) {
+          throw InputError(path, where, std::string("the header names no '") + required + "' column (an answer file starts with a header: file,index,hit,toi)");
+        }
+      }
+      continue;
+    }
+    if (fields.size() != column.size()) {
+      throw InputError(path, where, std::to_string(fields.size()) + " fields, but the header names " + std::to_string(column.size()));
+    }
+    AnswerLine answer;
+    answer.line = line_number;
+    answer.file = fields[column.at("file")];
+    if (answer.file.empty()) throw InputError(path, where, "no file");
+    const std::string& index = fields[column.at("index")];
+    const auto [at, error] = std::from_chars(index.data(), index.data() + index.size(), answer.index);
+    if (error != std::errc() || at != index.data() + index.size() || index.empty()) {
+      throw InputError(path, where, "index '" + index + "' is not a whole number");
+    }
+    const std::string& hit = fields[column.at("hit")];
+    if (hit == "1") {
+      answer.hit = 1;
+    } else if (hit == "0") {
+      answer.hit = 0;
+    } else if (hit == "error") {
+      answer.hit = -1;
+    } else {
+      throw InputError(path, where, "hit '" + hit + "' is none of 1, 0, error");
+    }
+    if (column.count("toi") && !fields[column.at("toi")].empty()) {
+      const std::string& toi = fields[column.at("toi")];
+      const auto [end_of, bad] = std::from_chars(toi.data(), toi.data() + toi.size(), answer.toi);
+      if (bad != std::errc() || end_of != toi.data() + toi.size() || !(answer.toi >= 0.0 && answer.toi <= 1.0)) {
+        throw InputError(path, where, "toi '" + toi + "' is not a number in [0, 1]");
+      }
+    }
+    if (column.count("method")) answer.method = fields[column.at("method")];
+    methods.insert(answer.method);
+    table.lines.push_back(std::move(answer));
+  }
+  if (column.empty()) throw InputError(path, {}, "empty: an answer file starts with a header (file,index,hit,toi)");
+  // The method: the one asked for (by its whole name or its head, "cubic64" for "cubic64:eta=1e-06"), or the only one.
+  auto head = [](const std::string& name) { return name.substr(0, name.find(':')); };
+  std::string listed;
+  for (const std::string& m : methods) listed += (listed.empty() ? "" : ", ") + (m.empty() ? std::string("(none)") : m);
+  if (method.empty()) {
+    if (methods.size() > 1) throw InputError(path, {}, "holds the answers of several methods (" + listed + "): pick one with answers:FILE:method=NAME");
+    table.method = methods.empty() ? "" : *methods.begin();
+  } else {
+    std::vector<std::string> matching;
+    for (const std::string& m : methods) {
+      if (m == method) matching = {m};
+    }
+    if (matching.empty()) {
+      for (const std::string& m : methods) {
+        if (head(m) == method) matching.push_back(m);
+      }
+    }
+    if (matching.size() != 1) {
+      throw InputError(path, {}, "method=" + method + " names " + (matching.empty() ? "none" : "several") + " of its methods (" + listed + ")");
+    }
+    table.method = matching.front();
+    std::erase_if(table.lines, [&](const AnswerLine& line) { return line.method != table.method; });
+  }
+  return table;
+}
+
+void bind_answers(AnswerTable& table, const std::vector<datasets::QueryFile>& files) {
+  table.by_file.clear();
+  for (const datasets::QueryFile& file : files) table.by_file[file.path.string()].assign(file.queries.size(), nullptr);
+  std::map<std::string, const datasets::QueryFile*> resolved;  // an answer's file name -> the input it names
+  for (const AnswerLine& line : table.lines) {
+    const std::string where = "line " + std::to_string(line.line);
+    auto it = resolved.find(line.file);
+    if (it == resolved.end()) {
+      const datasets::QueryFile* match = nullptr;
+      for (const datasets::QueryFile& file : files) {
+        if (file.path.string() == line.file) match = &file;
+      }
+      if (match == nullptr) {
+        for (const datasets::QueryFile& file : files) {
+          if (!ends_with_components(file.path, line.file)) continue;
+          if (match != nullptr) throw InputError(table.path, where, "file '" + line.file + "' names several of the query files: give more of its path");
+          match = &file;
+        }
+      }
+      if (match == nullptr) throw InputError(table.path, where, "file '" + line.file + "' is none of the query files scored");
+      it = resolved.emplace(line.file, match).first;
+    }
+    std::vector<const AnswerLine*>& slots = table.by_file.at(it->second->path.string());
+    if (line.index >= slots.size()) {
+      throw InputError(table.path, where, "index " + std::to_string(line.index) + " is past the end of " + it->second->path.string() + " (" +
+                                              std::to_string(slots.size()) + " queries, indices from 0)");
+    }
+    if (slots[line.index] != nullptr) {
+      throw InputError(table.path, where, "query " + std::to_string(line.index) + " of " + it->second->path.string() + " is answered twice (line " +
+                                              std::to_string(slots[line.index]->line) + " too)");
+    }
+    slots[line.index] = &line;
+  }
+  for (const datasets::QueryFile& file : files) {
+    const std::vector<const AnswerLine*>& slots = table.by_file.at(file.path.string());
+    const auto missing = std::find(slots.begin(), slots.end(), nullptr);
+    if (missing != slots.end()) {
+      const std::size_t count = static_cast<std::size_t>(std::count(slots.begin(), slots.end(), nullptr));
+      throw InputError(table.path, {}, "no answer for query " + std::to_string(missing - slots.begin()) + " of " + file.path.string() + " (" +
+                                           std::to_string(count) + " of its " + std::to_string(slots.size()) +
+                                           " queries have none: cut short, or answers to other files?)");
+    }
+  }
+}
+
+}  // namespace ccd::harness
