@@ -121,6 +121,28 @@ TEST_F(Mpi, TwoRanksGiveEveryVerdictAndCountOfOne) {
   EXPECT_EQ(ranks, (std::set<int>{0, 1})) << "the work was not spread over both ranks:\n" << two.output;
 }
 
+TEST_F(Mpi, PluginsGiveTheVerdictsOfOneProcess) {
+  // The template plugin in both forms (its whole step, and its queries behind ccdbench's broad phase), one of them in
+  // a child process: each rank loads the plugin itself, and the verdicts are those of one process.
+  const std::string p = "plugin:" + (std::filesystem::path(CCDBENCH_PLUGIN_DIR) / "libmy_ccd.so").string();
+  if (!std::filesystem::exists(dir_ / "fold")) {
+    const auto generated = run_command(std::string(CCDBENCH_EXECUTABLE) + " generate fold --resolution 6 --frames 8 --out " + quoted(dir_ / "fold"));
+    ASSERT_EQ(generated.exit_code, 0) << generated.output;
+  }
+  auto run = [&](int ranks, const std::string& out) {
+    const std::string arguments = "run --scene " + quoted(dir_ / "fold") + " --thickness 0,scene --toi --strategy " + p + ",full+" + p +
+                                  ":isolate=on --out " + quoted(dir_ / out) + " --json " + quoted(dir_ / (out + ".json"));
+    return ranks == 0 ? run_command(std::string(CCDBENCH_EXECUTABLE) + " --threads 1 " + arguments) : mpirun(ranks, arguments);
+  };
+  const auto plain = run(0, "plain");
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  const auto two = run(2, "two");
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  ASSERT_EQ(summaries("plain").size(), 4u);
+  EXPECT_GT(expect_same_verdicts(summaries("plain"), summaries("two")), 0u);
+  for (const nlohmann::json& cell : summaries("two")) EXPECT_EQ(cell["errors"], 0) << cell["strategy"];
+}
+
 TEST_F(Mpi, TruthAndQueriesOverRanksAreThoseOfOneProcess) {
   CCD_REQUIRE_EXTERNAL_DATA(data_dir);
   const std::filesystem::path data = data_dir / "sample-queries";
