@@ -82,7 +82,7 @@ void ask(const CCD& ccd, const double* r, double thickness, bool vertex_face, cc
 template <class CCD, class V>
 class WholeStep {
  public:
-  explicit WholeStep(const ccdbench_scene& s) : faces_(s.faces, s.faces + 3 * s.face_count), face_object_(s.face_object, s.face_object + s.face_count),
+  explicit WholeStep(const ccdbench_scene& s) : vertex_count_(s.vertex_count), faces_(s.faces, s.faces + 3 * s.face_count), face_object_(s.face_object, s.face_object + s.face_count),
                                                 self_(s.object_self_collision, s.object_self_collision + s.object_count) {
     for (std::size_t k = 0; k < s.collidable_count; ++k) {
       collidable_.insert(key(std::min(s.collidable[2 * k], s.collidable[2 * k + 1]), std::max(s.collidable[2 * k], s.collidable[2 * k + 1])));
@@ -93,6 +93,14 @@ class WholeStep {
 
   int step(const CCD& ccd, const ccdbench_step& st, const ccdbench_contacts& out, char* error) {
     const std::size_t faces = face_object_.size();
+    // Each vertex's swept box, so that a pair whose boxes (one grown by the thickness) do not meet is never asked.
+    vertex_boxes_.resize(vertex_count_);
+    for (std::size_t v = 0; v < vertex_count_; ++v) {
+      for (int c = 0; c < 3; ++c) {
+        vertex_boxes_[v].low[c] = std::min(st.x0[3 * v + static_cast<std::size_t>(c)], st.x1[3 * v + static_cast<std::size_t>(c)]);
+        vertex_boxes_[v].high[c] = std::max(st.x0[3 * v + static_cast<std::size_t>(c)], st.x1[3 * v + static_cast<std::size_t>(c)]);
+      }
+    }
     boxes_.resize(faces);
     for (std::size_t f = 0; f < faces; ++f) {
       Box& b = boxes_[f];
@@ -109,11 +117,7 @@ class WholeStep {
           }
         }
       }
-      for (int c = 0; c < 3; ++c) {
-        // One ulp out after growing by the thickness: the box still holds every point within it.
-        b.low[c] = std::nextafter(b.low[c] - st.thickness, -INFINITY);
-        b.high[c] = std::nextafter(b.high[c] + st.thickness, INFINITY);
-      }
+      b = grown(b, st.thickness);
     }
     // The state across steps: the order of the step before, put right by an insertion sort.
     for (std::size_t i = 1; i < order_.size(); ++i) {
@@ -161,6 +165,22 @@ class WholeStep {
     }
     return true;
   }
+  Box edge_box(std::pair<std::uint32_t, std::uint32_t> e) const {
+    Box b = vertex_boxes_[e.first];
+    for (int c = 0; c < 3; ++c) {
+      b.low[c] = std::min(b.low[c], vertex_boxes_[e.second].low[c]);
+      b.high[c] = std::max(b.high[c], vertex_boxes_[e.second].high[c]);
+    }
+    return b;
+  }
+  // Grown by the thickness, then one ulp out: the box still holds every point within the thickness of it.
+  static Box grown(Box b, double thickness) {
+    for (int c = 0; c < 3; ++c) {
+      b.low[c] = std::nextafter(b.low[c] - thickness, -INFINITY);
+      b.high[c] = std::nextafter(b.high[c] + thickness, INFINITY);
+    }
+    return b;
+  }
   bool may_collide(std::uint32_t a, std::uint32_t b) const {
     return a == b ? self_[a] != 0 : collidable_.count(key(std::min(a, b), std::max(a, b))) > 0;
   }
@@ -177,7 +197,7 @@ class WholeStep {
   void vertex_face(const CCD& ccd, const ccdbench_step& st, std::uint32_t v, std::uint32_t f, std::vector<double>& rows,
                    const ccdbench_contacts& out) {
     const std::uint32_t* c = &faces_[3 * f];
-    if (v == c[0] || v == c[1] || v == c[2] || !vertex_face_.insert(key(v, f)).second) return;
+    if (v == c[0] || v == c[1] || v == c[2] || !overlap(vertex_boxes_[v], boxes_[f]) || !vertex_face_.insert(key(v, f)).second) return;
     copy(st, v, 0, rows);
     for (int k = 0; k < 3; ++k) copy(st, c[k], k + 1, rows);
     ccdbench_answer answer{};
@@ -188,6 +208,7 @@ class WholeStep {
   void edge_edge(const CCD& ccd, const ccdbench_step& st, std::pair<std::uint32_t, std::uint32_t> a, std::pair<std::uint32_t, std::uint32_t> b,
                  std::vector<double>& rows, const ccdbench_contacts& out) {
     if (a.first == b.first || a.first == b.second || a.second == b.first || a.second == b.second) return;
+    if (!overlap(grown(edge_box(a), st.thickness), edge_box(b))) return;
     if (b < a) std::swap(a, b);
     if (!edge_edge_.insert({key(a.first, a.second), key(b.first, b.second)}).second) return;
     copy(st, a.first, 0, rows);
@@ -203,11 +224,12 @@ class WholeStep {
     }
   }
 
+  std::size_t vertex_count_;
   std::vector<std::uint32_t> faces_, face_object_;
   std::vector<std::uint8_t> self_;
   std::unordered_set<std::uint64_t> collidable_;
   std::vector<std::uint32_t> order_;
-  std::vector<Box> boxes_;
+  std::vector<Box> boxes_, vertex_boxes_;
   std::unordered_set<std::uint64_t> vertex_face_;
   std::set<std::pair<std::uint64_t, std::uint64_t>> edge_edge_;
   std::string failure_;
