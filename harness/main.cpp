@@ -141,7 +141,8 @@ int run_command_line(int argc, char** argv) {
       ->capture_default_str();
   queries->add_flag("--toi", queries_options.toi,
                     "also compare each method's time of impact with the exact earliest contact on the queries that\n"
-                    "collide: TOI late (a defect for conservative methods), error max and mean");
+                    "collide: TOI late (a defect for conservative methods), and the error's mean, median, 99th\n"
+                    "percentile (nearest rank) and max, as fractions of the step");
   queries->add_option("--scale-exponent", queries_options.scale_exponent,
                       "multiply every query (and δ) by 2^K first, K in [-1074, 1023]: exact on the rationals; a query\n"
                       "whose doubles are no longer exact is labelled again by the reference, one that overflows left out")

@@ -194,6 +194,8 @@ nlohmann::json to_json(const QueryScore& s) {
     row["toi_late"] = s.toi_late;
     row["toi_error_max"] = s.toi_error_max;
     row["toi_error_mean"] = s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0;
+    row["toi_error_median"] = percentile(s.toi_errors, 50);
+    row["toi_error_p99"] = percentile(s.toi_errors, 99);
   }
   return row;
 }
@@ -243,6 +245,7 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
           score.toi_late += answers[q].toi > exact_toi[q] ? 1 : 0;
           score.toi_error_max = std::max(score.toi_error_max, error);
           score.toi_error_sum += error;
+          score.toi_errors.push_back(error);
         }
         score.queries += 1;
         score.reported += reported ? 1 : 0;
@@ -288,6 +291,7 @@ void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std:
     total.toi_late += score.toi_late;
     total.toi_error_max = std::max(total.toi_error_max, score.toi_error_max);
     total.toi_error_sum += score.toi_error_sum;
+    total.toi_errors.insert(total.toi_errors.end(), score.toi_errors.begin(), score.toi_errors.end());
     total.faults += score.faults;
     total_nanoseconds[score.method] += score.ns_per_query * static_cast<double>(score.queries);
   }
@@ -351,7 +355,7 @@ nlohmann::json to_message(const QueryScore& s) {
           {"positives", s.positives}, {"reported", s.reported}, {"false_negatives", s.false_negatives},
           {"false_positives", s.false_positives}, {"unlabeled", s.unlabeled}, {"ns_per_query", s.ns_per_query},
           {"with_toi", s.with_toi}, {"toi_checked", s.toi_checked}, {"toi_late", s.toi_late},
-          {"toi_error_max", s.toi_error_max}, {"toi_error_sum", s.toi_error_sum},
+          {"toi_error_max", s.toi_error_max}, {"toi_error_sum", s.toi_error_sum}, {"toi_errors", s.toi_errors},
           {"false_negative_lines", s.false_negative_lines}, {"faults", s.faults}, {"fault_queries", fault_list(s)},
           {"answers", answer_list(s)}, {"exact_toi", number_list(s.exact_toi)}, {"labels", label_list(s)}};
 }
@@ -373,6 +377,7 @@ QueryScore from_message(const nlohmann::json& m) {
   s.toi_late = m.at("toi_late");
   s.toi_error_max = m.at("toi_error_max");
   s.toi_error_sum = m.at("toi_error_sum");
+  s.toi_errors = m.at("toi_errors").get<std::vector<double>>();
   s.false_negative_lines = m.at("false_negative_lines").get<std::vector<std::size_t>>();
   s.faults = m.at("faults");
   for (const nlohmann::json& f : m.at("fault_queries")) s.fault_queries.push_back({f.at(0), f.at(1), f.at(2)});
@@ -399,7 +404,7 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
   });
   if (with_errors) table.add_column({"errors", Align::right});
   if (with_toi) {
-    for (const char* header : {"TOI late", "TOI error max", "TOI error mean"}) table.add_column({header, Align::right});
+    for (const char* header : {"TOI late", "TOI error mean", "median", "p99", "max"}) table.add_column({header, Align::right});
   }
   for (const QueryScore& s : scores) {
     std::vector<std::string> row = {markdown ? "`" + s.method + "`" : s.method, s.file, std::to_string(s.queries),
@@ -408,8 +413,10 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
     if (with_errors) row.push_back(std::to_string(s.faults));
     if (with_toi) {
       row.push_back(std::to_string(s.toi_late));
-      row.push_back(significant(s.toi_error_max, 3));
       row.push_back(significant(s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0, 3));
+      row.push_back(significant(percentile(s.toi_errors, 50), 3));
+      row.push_back(significant(percentile(s.toi_errors, 99), 3));
+      row.push_back(significant(s.toi_error_max, 3));
     }
     table.add_row(std::move(row));
   }

@@ -77,6 +77,8 @@ struct QueryScore {
   std::size_t toi_late = 0;
   double toi_error_max = 0.0;
   double toi_error_sum = 0.0;
+  /// Every checked query's error, for the median and the 99th percentile (nearest rank, harness/statistics.hpp).
+  std::vector<double> toi_errors;
   /// First lines of the missed queries (for the regression library), at most 20.
   std::vector<std::size_t> false_negative_lines;
   /// Queries the method gave no answer to (QueryAnswer::fault), and the first kKeptQueryFaults of them.

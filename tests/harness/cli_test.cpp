@@ -10,8 +10,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <map>
 #include <set>
+#include <sstream>
 
 namespace ccd {
 namespace {
@@ -374,6 +378,47 @@ namespace {
 
 // TOI accuracy is part of the verdict: the conservative narrow phase is never late, decided exactly against the
 // reference's earliest contact, while cubic64 (which rounds its roots either way) is; so the count can fire.
+// The TOI error's median and 99th percentile are those of the per-query errors: recomputed here from the answers
+// file that the same run writes (every reported TOI and the exact one), by nearest rank.
+TEST(CliToi, TheErrorsMedianAndP99AreThoseOfThePerQueryErrors) {
+  CCD_REQUIRE_EXTERNAL_DATA(data);
+  testing::TempDir dir;
+  const CommandResult queries = testing::run_ccdbench("queries " + testing::quoted(data / "sample-queries") +
+                                                      " --toi --method conservative,advancement --json " + testing::quoted(dir / "q.json") +
+                                                      " --write-answers " + testing::quoted(dir / "answers.csv"));
+  ASSERT_EQ(queries.exit_code, 0) << queries.output;
+  EXPECT_NE(queries.output.find("p99"), std::string::npos) << queries.output;
+  std::map<std::string, std::vector<double>> errors;
+  std::ifstream answers(dir / "answers.csv");
+  std::string line;
+  std::getline(answers, line);
+  ASSERT_EQ(line, "file,index,method,hit,toi,label,exact_toi");
+  while (std::getline(answers, line)) {
+    std::vector<std::string> field;
+    std::stringstream fields(line);
+    for (std::string f; std::getline(fields, f, ',');) field.push_back(f);
+    if (field.size() < 7 || field[3] != "1" || field[4].empty() || field[6].empty()) continue;
+    errors[field[2]].push_back(std::abs(std::stod(field[4]) - std::stod(field[6])));
+  }
+  const auto nearest_rank = [](std::vector<double> values, double p) {
+    std::sort(values.begin(), values.end());
+    return values[static_cast<std::size_t>(std::ceil(p / 100 * static_cast<double>(values.size()))) - 1];
+  };
+  int checked = 0;
+  for (const auto& row : testing::read_json(dir / "q.json")) {
+    if (row["file"] != "(all)") continue;
+    const std::vector<double>& e = errors[row["method"].get<std::string>()];
+    ASSERT_EQ(row["toi_checked"].get<std::size_t>(), e.size()) << row.dump();
+    ASSERT_GT(e.size(), 100u);
+    EXPECT_DOUBLE_EQ(row["toi_error_median"].get<double>(), nearest_rank(e, 50)) << row.dump();
+    EXPECT_DOUBLE_EQ(row["toi_error_p99"].get<double>(), nearest_rank(e, 99)) << row.dump();
+    EXPECT_DOUBLE_EQ(row["toi_error_max"].get<double>(), nearest_rank(e, 100)) << row.dump();
+    EXPECT_LT(row["toi_error_median"].get<double>(), row["toi_error_p99"].get<double>()) << "a distribution, not one value: " << row.dump();
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2);
+}
+
 TEST(CliToi, QueriesAndRunsCountLateTimesOfImpact) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   testing::TempDir dir;
