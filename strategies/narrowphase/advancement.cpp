@@ -2,8 +2,10 @@
 /// `advancement`: conservative advancement by minimum separation (the distance-based test a user with a
 /// thickness reaches for). From t = 0 it repeatedly measures the distance d between the primitives and advances
 /// by (d - δ)/L, where L bounds how fast that distance can shrink; it reports a contact once d <= δ + η. Over each
-/// advance the distance stays above δ, so it cannot step over a contact: it misses only by the rounding of the
-/// distance computation. Grazing passes take many steps; the cap then answers "collides".
+/// advance the distance stays above δ, so in exact arithmetic it cannot step over a contact. In doubles it is not
+/// conservative: each step is rounded down so that its own arithmetic never passes the contact, but the distance it
+/// advances by is rounded, so it can miss or report a TOI late by that rounding (no bound on it is derived here).
+/// Grazing passes take many steps; the cap then answers "collides".
 
 #include "strategies/narrowphase/primitive_distance.hpp"
 #include "strategies/narrowphase/registry.hpp"
@@ -65,7 +67,10 @@ class Advancement final : public NarrowPhase {
         return result;
       }
       if (t >= 1 || speed == 0) return result;
-      t = std::min(1.0, t + (distance - thickness) / speed);
+      // The advance, then two doubles down: the division and the addition each round by at most one ulp of the
+      // result (the advance is no larger than the sum), so the rounded step never passes the time the exact step
+      // reaches; what is left late is the rounding of the distance itself.
+      t = std::clamp(std::nextafter(std::nextafter(t + (distance - thickness) / speed, 0.0), 0.0), t, 1.0);
     }
     result.collides = true;  // the cap: do not claim a miss that was not shown
     result.toi = t;
@@ -81,7 +86,7 @@ class Advancement final : public NarrowPhase {
 std::vector<NarrowPhaseEntry> advancement_entries() {
   const AdvancementSettings defaults;
   return {{"advancement",
-           "conservative advancement by minimum separation: misses only by the rounding of its distances",
+           "conservative advancement by minimum separation, in plain doubles: not conservative, it can miss or be late by the rounding of its distances",
            {KeySpec::number("eta", defaults.eta, kFractionOfPairRange, "distance at which it stops and reports a contact, a fraction of the pair's box diagonal"),
             KeySpec::integer("max_iterations", defaults.max_iterations, kIterationRange,
                              "advancement steps before giving up (and answering \"collides\")")},

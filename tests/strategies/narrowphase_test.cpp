@@ -196,6 +196,28 @@ TEST(Conservative, AnswersNoOnlyWithProofAndReportsItsCap) {
   EXPECT_FALSE(proven.hit_iteration_cap);
 }
 
+// advancement is not conservative (its distances round), but its steps must not add lateness of their own: on the
+// handcrafted unit tests, where contacts fall between two doubles, rounding each step to nearest once reported 25
+// TOIs one double late.
+TEST(Advancement, ItsStepsNeverPassTheContactOnTheUnitTests) {
+  CCD_REQUIRE_EXTERNAL_DATA(data);
+  const auto advancement = make_narrow_phase("advancement");
+  std::size_t checked = 0;
+  for (const auto& path : datasets::discover_query_files({data / "sample-queries"})) {
+    const datasets::QueryFile file = datasets::read_query_file(path);
+    for (std::size_t q = 0; q < file.queries.size(); ++q) {
+      const PairRows& rows = file.queries[q].rounded;
+      const reference::Decision truth = reference::decide(kind_of(file.kind), rows, 0.0, {true, true, 64});
+      const NarrowPhaseResult answer = run(*advancement, file.kind, rows, 0.0);
+      if (!truth.collides || !answer.collides) continue;
+      ++checked;
+      ASSERT_LE(answer.toi, *truth.toi_floor) << path.string() << " query " << q << " (line " << file.queries[q].first_line << "):\n"
+                                              << testing::rational_rows(rows, 1);
+    }
+  }
+  EXPECT_GT(checked, 100u);
+}
+
 TEST(Cubic, FindsACleanCrossingAndMissesCoplanarMotion) {
   const PairRows crossing = {Vec3(0.25, 0.25, 1), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
                              Vec3(0.25, 0.25, -1), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
