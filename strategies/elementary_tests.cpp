@@ -154,6 +154,9 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     test_all(kept.vertex_face);
     test_all(kept.edge_edge);
   }
+  // The strategy's collision set, assembled from every thread's and put in order: the strategy's own work, timed
+  // as its "output" stage (with the thread lists freed), so that no part of the step is in no stage.
+  ScopedStageTimer output_timer(stages, "output");
   ElementaryOutcome outcome;
   if (audit) outcome.tested.emplace();
   std::vector<std::pair<std::array<std::uint32_t, 5>, Fault>> faults;
@@ -168,6 +171,7 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
       outcome.tested->edge_edge.insert(outcome.tested->edge_edge.end(), local.tested.edge_edge.begin(), local.tested.edge_edge.end());
     }
   }
+  locals.clear();
   outcome.collisions.normalize();
   // The first faults in pair order, whatever thread met them: the same for any thread count.
   std::sort(faults.begin(), faults.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
