@@ -5,21 +5,44 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <iterator>
 
 namespace ccd {
 namespace {
 
-template <class Pair>
-void normalize_contacts(std::vector<Contact<Pair>>& contacts) {
-  // NaN (no TOI) sorts after every reported time, so the first of each run is the earliest reported TOI.
-  std::sort(contacts.begin(), contacts.end(), [](const Contact<Pair>& x, const Contact<Pair>& y) {
+/// The order of a normalized list: by pair, then by TOI, NaN (no TOI) after every reported time, so that the first
+/// of each run of one pair is its earliest reported TOI.
+/// (A function object, not a function: std::sort and std::merge then inline it.)
+struct Before {
+  template <class Pair>
+  bool operator()(const Contact<Pair>& x, const Contact<Pair>& y) const {
     if (x.pair != y.pair) return x.pair < y.pair;
     if (std::isnan(x.toi)) return false;
     return std::isnan(y.toi) || x.toi < y.toi;
-  });
+  }
+};
+
+template <class Pair>
+void keep_first_of_each_pair(std::vector<Contact<Pair>>& contacts) {
   contacts.erase(std::unique(contacts.begin(), contacts.end(),
                              [](const Contact<Pair>& x, const Contact<Pair>& y) { return x.pair == y.pair; }),
                  contacts.end());
+}
+
+template <class Pair>
+void normalize_contacts(std::vector<Contact<Pair>>& contacts) {
+  std::sort(contacts.begin(), contacts.end(), Before{});
+  keep_first_of_each_pair(contacts);
+}
+
+template <class Pair>
+void merge_contacts(std::vector<Contact<Pair>>& into, const std::vector<Contact<Pair>>& other) {
+  if (other.empty()) return;
+  std::vector<Contact<Pair>> merged;
+  merged.reserve(into.size() + other.size());
+  std::merge(into.begin(), into.end(), other.begin(), other.end(), std::back_inserter(merged), Before{});
+  keep_first_of_each_pair(merged);
+  into = std::move(merged);
 }
 
 template <class Pair>
@@ -71,6 +94,12 @@ void CollisionSet::normalize() {
   normalize_contacts(vertex_face_);
   normalize_contacts(edge_edge_);
   normalize_contacts(face_shape_);
+}
+
+void CollisionSet::merge_normalized(const CollisionSet& other) {
+  merge_contacts(vertex_face_, other.vertex_face_);
+  merge_contacts(edge_edge_, other.edge_edge_);
+  merge_contacts(face_shape_, other.face_shape_);
 }
 
 bool CollisionSet::contains(const VertexFacePair& pair) const { return contains_pair(vertex_face_, pair); }

@@ -35,6 +35,9 @@ class CollisionSet {
   void append(const CollisionSet& other);
   /// Sorts by pair and removes duplicates, keeping the earliest TOI of each pair.
   void normalize();
+  /// Both normalized: this becomes the normalized union (a linear merge, the same set as append then normalize).
+  /// Threads that normalize their own sets in parallel are then joined by merges.
+  void merge_normalized(const CollisionSet& other);
 
   const std::vector<VertexFaceContact>& vertex_face() const { return vertex_face_; }
   const std::vector<EdgeEdgeContact>& edge_edge() const { return edge_edge_; }

@@ -160,8 +160,19 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   ElementaryOutcome outcome;
   if (audit) outcome.tested.emplace();
   std::vector<std::pair<std::array<std::uint32_t, 5>, Fault>> faults;
+  // Each thread's set put in order on its own, in parallel, then joined by merges, pairwise in rounds (the same set
+  // as one sort of them all, which took one core: 6.8 ms of a 15 ms step with 121,788 pairs).
+  std::vector<CollisionSet*> sets;
+  for (Local& local : locals) sets.push_back(&local.collisions);
+  tbb::parallel_for(std::size_t{0}, sets.size(), [&](std::size_t i) { sets[i]->normalize(); });
+  for (std::size_t stride = 1; stride < sets.size(); stride *= 2) {
+    tbb::parallel_for(std::size_t{0}, (sets.size() + 2 * stride - 1) / (2 * stride), [&](std::size_t k) {
+      const std::size_t i = 2 * k * stride;
+      if (i + stride < sets.size()) sets[i]->merge_normalized(*sets[i + stride]);
+    });
+  }
+  if (!sets.empty()) outcome.collisions = std::move(*sets.front());
   for (Local& local : locals) {
-    outcome.collisions.append(local.collisions);
     outcome.tests += local.tests;
     outcome.filtered += local.filtered;
     outcome.fault_count += local.fault_count;
@@ -172,7 +183,6 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     }
   }
   locals.clear();
-  outcome.collisions.normalize();
   // The first faults in pair order, whatever thread met them: the same for any thread count.
   std::sort(faults.begin(), faults.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (std::size_t i = 0; i < std::min(faults.size(), kKeptFaults); ++i) outcome.faults.push_back(std::move(faults[i].second));

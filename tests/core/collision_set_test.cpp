@@ -3,6 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
 
 namespace ccd {
 namespace {
@@ -31,6 +35,41 @@ TEST(CollisionSet, NormalizeSortsDeduplicatesAndKeepsEarliestToi) {
   EXPECT_EQ(set.edge_edge()[0].toi, 0.5);
   EXPECT_TRUE(set.contains(VertexFacePair{5, 2}));
   EXPECT_FALSE(set.contains(VertexFacePair{2, 5}));
+}
+
+// Threads normalize their own sets and merge them (strategies/elementary_tests.cpp): the result must be the set that
+// one normalize of everything gives, pair for pair and TOI bit for TOI bit, duplicates across parts included.
+TEST(CollisionSet, MergingNormalizedPartsGivesTheNormalizedWhole) {
+  constexpr unsigned kSeed = 20261125;
+  SCOPED_TRACE("seed " + std::to_string(kSeed));
+  std::mt19937 random(kSeed);
+  std::uniform_int_distribution<std::uint32_t> id(0, 40);
+  std::uniform_int_distribution<int> kind(0, 3);
+  std::uniform_real_distribution<double> time(0.0, 1.0);
+  for (int parts : {1, 2, 3, 5, 16}) {
+    CollisionSet whole;
+    std::vector<CollisionSet> part(static_cast<std::size_t>(parts));
+    for (int n = 0; n < 2000; ++n) {
+      CollisionSet& into = part[static_cast<std::size_t>(n % parts)];
+      // Few ids, so that a pair comes back often, in several parts, with and without a TOI.
+      const double toi = kind(random) == 0 ? kNoToi : time(random);
+      if (kind(random) < 2) {
+        const VertexFacePair pair{id(random), id(random)};
+        into.add(pair, toi);
+        whole.add(pair, toi);
+      } else {
+        const EdgeEdgePair pair = make_edge_edge_pair(make_edge(id(random), id(random) + 41), make_edge(id(random), id(random) + 41));
+        into.add(pair, toi);
+        whole.add(pair, toi);
+      }
+    }
+    whole.normalize();
+    for (CollisionSet& p : part) p.normalize();
+    for (std::size_t i = 1; i < part.size(); ++i) part[0].merge_normalized(part[i]);
+    EXPECT_EQ(answers_digest(part[0]), answers_digest(whole)) << parts << " parts";
+    EXPECT_EQ(part[0].size(), whole.size()) << parts << " parts";
+    EXPECT_LT(whole.size(), 2000u) << "the draw must repeat pairs, or duplicates are not tested";
+  }
 }
 
 TEST(CollisionSet, DifferenceGivesMissesAndFalseAlarms) {
