@@ -524,7 +524,8 @@ void write_query_report(const std::filesystem::path& directory, const std::vecto
       << "get the doubles the query's rationals round to; `exact` is the reference on the rationals. The truth labels are\n"
       << "for zero thickness. Reproduce every number with:\n\n```sh\n" << command << "\n```\n\n";
   query_table(scores, true).print_markdown(out);
-  out << "\nThe trade, per variant over all files (`(all)` rows): `tradeoff.png`, drawn by `scripts/plot_narrowphase.py`.\n";
+  out << "\nThe trade, per variant over all files (`(all)` rows), can be drawn with `/usr/bin/python3 "
+         "scripts/plot_narrowphase.py scores.json tradeoff.png` (`scripts/narrowphase-report.sh` does).\n";
   file.commit();
 }
 

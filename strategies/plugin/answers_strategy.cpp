@@ -7,8 +7,9 @@
 //   ee,A0,A1,B0,B1[,TOI]
 // with the scene's global vertex and face ids (0-based) and an optional TOI in [0, 1]; '#' starts a comment line.
 // An empty file is a step with no contact. Every file of the scene is read and checked in init, before any step:
-// a malformed line, an index out of range, a pair that cannot collide, a pair given twice, a line cut short, or a
-// missing step is refused as FILE:line N: REASON.
+// a malformed line, an index out of range, a pair that cannot collide, a pair given twice or a line cut short is
+// refused as FILE:line N: REASON, a missing scene folder as FOLDER: REASON; a step past the last file is refused
+// (FILE: missing) when the run reaches it.
 #include "core/error.hpp"
 #include "strategies/plugin/contact_check.hpp"
 #include "strategies/plugin/library.hpp"

@@ -20,7 +20,8 @@
  * (`run --strategy plugin:PATH`): each step, the triangles' swept boxes (grown by the thickness) are sorted along x
  * and swept, starting from the order of the step before (an insertion sort: a state kept across steps, which costs
  * little when the mesh moves little), and every vertex-face and edge-edge pair of two overlapping triangles that the
- * scene lets collide is asked of the class once.
+ * scene lets collide is asked of the class once, unless the vertex's and the face's (or the two edges') swept boxes,
+ * one grown by the thickness, do not meet.
  */
 #ifndef CCDBENCH_PLUGIN_HPP
 #define CCDBENCH_PLUGIN_HPP

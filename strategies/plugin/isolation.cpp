@@ -129,7 +129,10 @@ int serve_plugin(int argc, char** argv) {
       std::memcpy(rows, at, sizeof rows);
       at += sizeof rows;
       const double thickness = take<double>(at);
+      // As in-process (plugin_narrow_phase.cpp): no outcome until the plugin writes one, so a plugin that writes
+      // none is caught here too, not taken for "apart".
       ccdbench_answer answer{};
+      answer.outcome = -1;
       answer.toi = std::nan("");
       (vertex_face ? library.table().vertex_face : library.table().edge_edge)(context, rows, thickness, &answer);
       answer.message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';

@@ -244,6 +244,21 @@ TEST_F(Plugins, NaNTimesOfImpactAreErrorsNeverAnswers) {
   EXPECT_EQ(total_of(hit_scores, "plugin:")["errors"], 10);
 }
 
+// An answer the plugin never writes is its error, not "apart": in-process and in the isolated child alike.
+TEST_F(Plugins, AnAnswerLeftUnwrittenIsAnErrorIsolatedOrNot) {
+  CCD_REQUIRE_EXTERNAL_DATA(data);
+  for (const char* isolate : {"", ":isolate=on"}) {
+    const auto [run, scores] = with_json("queries " + quoted(query_file(data, 10)) + " --faults " + quoted(dir_ / "faults") + " --method plugin:" +
+                                         plugin("broken_silent") + isolate);
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    const nlohmann::json total = total_of(scores, "plugin:");
+    EXPECT_EQ(total["errors"], 10) << isolate;
+    EXPECT_EQ(total["reported"], 0) << isolate;
+    ASSERT_GT(total["positives"].get<int>(), 0);
+    EXPECT_EQ(total["false_negatives"], total["positives"]) << isolate << ": an error counts as a miss (errors=miss)";
+  }
+}
+
 TEST_F(Plugins, APluginThatIsNotThreadSafeRunsOnOneThreadSaidInTheRecord) {
   const std::string single = "plugin:" + plugin("broken_one_thread");
   const auto [run, summaries] = with_json("--threads 2 run --scene " + quoted(fold()) + " --strategy full+" + single + " --out " + quoted(dir_ / "out"));

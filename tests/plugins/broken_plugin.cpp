@@ -6,6 +6,7 @@
 //   BROKEN_NAN_TOI      reports its contacts with a TOI that is not a number;
 //   BROKEN_ABI=V        says it was built for plugin ABI version V;
 //   BROKEN_FACE_RANGE   its whole step also reports vertex 0 against a face one past the last;
+//   BROKEN_SILENT       writes no outcome at all into its answers (it returns without a word);
 //   ONE_THREAD          not broken, but not thread-safe (no CCDBENCH_THREAD_SAFE): it answers "error" to a query
 //                       that comes from another thread than the first one did.
 #include <ccdbench/ccdbench_plugin.h>
@@ -50,6 +51,9 @@ void answer(void*, const double*, double, ccdbench_answer* out) {
   if (queries_answered == BROKEN_HANG_ON) {
     while (true) std::this_thread::sleep_for(std::chrono::seconds(1));
   }
+#endif
+#ifdef BROKEN_SILENT
+  return;
 #endif
   out->outcome = CCDBENCH_CONTACT;
 #ifdef BROKEN_NAN_TOI
