@@ -45,6 +45,10 @@ void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::spa
                       std::span<const bvh::TrianglePair> candidates, const StepView& step,
                       const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit, bool separation_filter = false);
 
+/// One normalized set of several threads' sets (each left emptied): each put in order on its own, in parallel, then
+/// merged pairwise in rounds. The same set as appending them all and normalizing once, which takes one core.
+CollisionSet normalize_in_parallel(std::vector<CollisionSet*> sets);
+
 /// Appends every elementary pair of triangles a and b, not only those the masks give: their six vertices against
 /// the other face and their nine edge pairs, skipping pairs that share a vertex (unsorted; may repeat across calls).
 /// What a triangle pair "contains" when a strategy answers with triangle pairs.
