@@ -208,6 +208,17 @@ int serve_plugin(int argc, char** argv) {
   return 0;
 }
 
+PluginInstance::PluginInstance(std::shared_ptr<const Library> library_, const narrowphase::SpecReader& keys)
+    : library(std::move(library_)), values(plugin_values(keys, *library)), host(read_host_settings(keys, *library)) {
+  if (host.isolate) {
+    isolated = std::make_unique<IsolatedPlugin>(*library, values, host.timeout_seconds);
+  } else {
+    context = std::make_unique<Context>(library, values);
+  }
+}
+
+std::string PluginInstance::name() const { return resolved_name(*library, values, host); }
+
 IsolatedPlugin::IsolatedPlugin(const Library& library, std::vector<std::string> values, double timeout_seconds)
     : path_(library.path()), values_(std::move(values)), timeout_seconds_(timeout_seconds) {
   // A broken pipe is an answer here (the child died), never a reason for this process to die.

@@ -11,6 +11,7 @@
 
 #include <sys/types.h>
 
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -62,6 +63,21 @@ class IsolatedPlugin {
   double deadline_ = 0;
   /// The scene of `begin`, as sent (empty: none yet).
   std::vector<char> scene_request_;
+};
+
+/// One plugin as a narrow phase or a strategy holds it: the library, its key values and ccdbench's settings, and
+/// where it runs, in-process (`context`) or, with isolate=on, in a child process (`isolated`); the other is null.
+struct PluginInstance {
+  /// From a spec's keys (the library's, then host_keys).
+  PluginInstance(std::shared_ptr<const Library> library_, const narrowphase::SpecReader& keys);
+  /// The resolved name (resolved_name).
+  std::string name() const;
+
+  std::shared_ptr<const Library> library;
+  std::vector<std::string> values;
+  HostSettings host;
+  std::unique_ptr<Context> context;
+  std::unique_ptr<IsolatedPlugin> isolated;
 };
 
 }  // namespace ccd::plugin

@@ -161,6 +161,12 @@ std::vector<narrowphase::KeySpec> host_keys() {
           KeySpec::number("timeout", defaults.timeout_seconds, kTimeoutRange, "with isolate=on: seconds a query or a step may take")};
 }
 
+std::vector<narrowphase::KeySpec> entry_keys(const Library& library) {
+  std::vector<narrowphase::KeySpec> keys = library.keys();
+  for (narrowphase::KeySpec& key : host_keys()) keys.push_back(std::move(key));
+  return keys;
+}
+
 HostSettings read_host_settings(const narrowphase::SpecReader& keys, const Library& library) {
   HostSettings settings;
   settings.digest = keys.text("digest");

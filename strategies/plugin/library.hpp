@@ -64,6 +64,9 @@ std::shared_ptr<const Library> load_library(const std::string& path);
 /// - timeout: with isolate=on, the seconds a query or a step may take.
 std::vector<narrowphase::KeySpec> host_keys();
 
+/// What a plugin's registry entry declares: its own keys, then ccdbench's (host_keys).
+std::vector<narrowphase::KeySpec> entry_keys(const Library& library);
+
 /// The host's settings of a plugin spec (the keys above).
 struct HostSettings {
   std::string digest;

@@ -17,19 +17,12 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 class PluginNarrowPhase final : public narrowphase::NarrowPhase {
  public:
-  PluginNarrowPhase(std::shared_ptr<const Library> library, std::vector<std::string> values, HostSettings host)
-      : library_(std::move(library)), values_(std::move(values)), host_(std::move(host)) {
-    if (host_.isolate) {
-      isolated_ = std::make_unique<IsolatedPlugin>(*library_, values_, host_.timeout_seconds);
-    } else {
-      context_ = std::make_unique<Context>(library_, values_);
-    }
-  }
+  PluginNarrowPhase(std::shared_ptr<const Library> library, const narrowphase::SpecReader& keys) : plugin_(std::move(library), keys) {}
 
-  std::string name() const override { return resolved_name(*library_, values_, host_); }
-  bool conservative() const override { return library_->conservative(); }
+  std::string name() const override { return plugin_.name(); }
+  bool conservative() const override { return plugin_.library->conservative(); }
   /// Isolated, one child answers one query at a time: the strategy runs on one thread then too.
-  bool thread_safe() const override { return library_->thread_safe() && !host_.isolate; }
+  bool thread_safe() const override { return plugin_.library->thread_safe() && !plugin_.host.isolate; }
 
   narrowphase::NarrowPhaseResult vertex_face(const narrowphase::PairRows& rows, double thickness) const override {
     return answer(true, rows, thickness);
@@ -45,27 +38,23 @@ class PluginNarrowPhase final : public narrowphase::NarrowPhase {
       for (int c = 0; c < 3; ++c) flat[3 * p + c] = rows[static_cast<std::size_t>(p)][c];
     }
     ccdbench_answer answer;
-    if (isolated_) {
-      answer = isolated_->query(vertex_face, flat, thickness);
+    if (plugin_.isolated) {
+      answer = plugin_.isolated->query(vertex_face, flat, thickness);
     } else {
       // Only what the plugin writes into this answer counts: it starts with no outcome, so a plugin that writes
       // none is caught, and nothing from an earlier call can leak into it.
       std::memset(&answer, 0, sizeof answer);
       answer.outcome = -1;
       answer.toi = kNaN;
-      const ccdbench_plugin& table = library_->table();
-      std::unique_lock lock(context_->mutex(), std::defer_lock);
-      if (!library_->thread_safe()) lock.lock();
-      (vertex_face ? table.vertex_face : table.edge_edge)(context_->handle(), flat, thickness, &answer);
+      const ccdbench_plugin& table = plugin_.library->table();
+      std::unique_lock lock(plugin_.context->mutex(), std::defer_lock);
+      if (!plugin_.library->thread_safe()) lock.lock();
+      (vertex_face ? table.vertex_face : table.edge_edge)(plugin_.context->handle(), flat, thickness, &answer);
     }
-    return checked_answer(answer, library_->reports_toi(), host_.errors_count_as_hits);
+    return checked_answer(answer, plugin_.library->reports_toi(), plugin_.host.errors_count_as_hits);
   }
 
-  std::shared_ptr<const Library> library_;
-  std::vector<std::string> values_;
-  HostSettings host_;
-  std::unique_ptr<Context> context_;
-  std::unique_ptr<IsolatedPlugin> isolated_;
+  PluginInstance plugin_;
 };
 
 }  // namespace
@@ -120,11 +109,10 @@ narrowphase::NarrowPhaseEntry narrow_phase_entry(const std::string& name) {
   narrowphase::NarrowPhaseEntry entry;
   entry.name = name;
   entry.help = library->description();
-  entry.keys = library->keys();
-  for (narrowphase::KeySpec& key : host_keys()) entry.keys.push_back(std::move(key));
+  entry.keys = entry_keys(*library);
   entry.conservative = library->conservative();
   entry.make = [library](const narrowphase::SpecReader& keys) -> std::unique_ptr<narrowphase::NarrowPhase> {
-    return std::make_unique<PluginNarrowPhase>(library, plugin_values(keys, *library), read_host_settings(keys, *library));
+    return std::make_unique<PluginNarrowPhase>(library, keys);
   };
   return entry;
 }

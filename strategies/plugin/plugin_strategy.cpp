@@ -46,17 +46,10 @@ struct Reported {
 
 class WholeStepPlugin final : public strategies::Strategy {
  public:
-  WholeStepPlugin(std::shared_ptr<const Library> library, std::vector<std::string> values, HostSettings host)
-      : library_(std::move(library)), values_(std::move(values)), host_(std::move(host)) {
-    if (host_.isolate) {
-      isolated_ = std::make_unique<IsolatedPlugin>(*library_, values_, host_.timeout_seconds);
-    } else {
-      context_ = std::make_unique<Context>(library_, values_);
-    }
-  }
+  WholeStepPlugin(std::shared_ptr<const Library> library, const narrowphase::SpecReader& keys) : plugin_(std::move(library), keys) {}
   ~WholeStepPlugin() override { finish(); }
 
-  std::string name() const override { return resolved_name(*library_, values_, host_); }
+  std::string name() const override { return plugin_.name(); }
 
   void check_scene(const Scene& scene) const override {
     if (!scene.shape_objects().empty()) {
@@ -69,15 +62,15 @@ class WholeStepPlugin final : public strategies::Strategy {
     check_scene(scene);
     finish();
     tables_ = std::make_unique<SceneTables>(scene);
-    check_ = std::make_unique<ContactCheck>(scene, library_->reports_toi() ? ContactCheck::Toi::required : ContactCheck::Toi::ignored);
+    check_ = std::make_unique<ContactCheck>(scene, plugin_.library->reports_toi() ? ContactCheck::Toi::required : ContactCheck::Toi::ignored);
     begin_error_.clear();
     std::string message;
     int status = 0;
-    if (isolated_) {
-      status = isolated_->begin(tables_->scene, message);
-    } else if (library_->table().begin) {
+    if (plugin_.isolated) {
+      status = plugin_.isolated->begin(tables_->scene, message);
+    } else if (plugin_.library->table().begin) {
       char error[CCDBENCH_MESSAGE_SIZE] = {};
-      status = library_->table().begin(context_->handle(), &tables_->scene, error);
+      status = plugin_.library->table().begin(plugin_.context->handle(), &tables_->scene, error);
       message.assign(error, strnlen(error, CCDBENCH_MESSAGE_SIZE));
     }
     // A plugin that refuses the scene answers no step: each step is then its fault (the run goes on).
@@ -105,11 +98,11 @@ class WholeStepPlugin final : public strategies::Strategy {
                                        [](void* host, std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1, double toi) {
                                          static_cast<Reported*>(host)->edge_edge.push_back({a0, a1, b0, b1, toi});
                                        }};
-      if (isolated_) {
-        status = isolated_->step(step, view.x0.size(), contacts, message);
+      if (plugin_.isolated) {
+        status = plugin_.isolated->step(step, view.x0.size(), contacts, message);
       } else {
         char error[CCDBENCH_MESSAGE_SIZE] = {};
-        status = library_->table().step(context_->handle(), &step, &contacts, error);
+        status = plugin_.library->table().step(plugin_.context->handle(), &step, &contacts, error);
         message.assign(error, strnlen(error, CCDBENCH_MESSAGE_SIZE));
       }
     }
@@ -147,10 +140,10 @@ class WholeStepPlugin final : public strategies::Strategy {
   }
 
   std::vector<std::pair<std::string, std::string>> provenance() const override {
-    const ccdbench_plugin& table = library_->table();
+    const ccdbench_plugin& table = plugin_.library->table();
     return {{"plugin", std::string(table.name) + " " + (table.version ? table.version : "")},
-            {"plugin_file_digest", library_->digest()},
-            {"plugin_isolated", host_.isolate ? "yes (a child process)" : "no"}};
+            {"plugin_file_digest", plugin_.library->digest()},
+            {"plugin_isolated", plugin_.host.isolate ? "yes (a child process)" : "no"}};
   }
 
  private:
@@ -163,18 +156,14 @@ class WholeStepPlugin final : public strategies::Strategy {
   void finish() {
     if (!begun_) return;
     begun_ = false;
-    if (isolated_) {
-      isolated_->end();
-    } else if (library_->table().end) {
-      library_->table().end(context_->handle());
+    if (plugin_.isolated) {
+      plugin_.isolated->end();
+    } else if (plugin_.library->table().end) {
+      plugin_.library->table().end(plugin_.context->handle());
     }
   }
 
-  std::shared_ptr<const Library> library_;
-  std::vector<std::string> values_;
-  HostSettings host_;
-  std::unique_ptr<Context> context_;
-  std::unique_ptr<IsolatedPlugin> isolated_;
+  PluginInstance plugin_;
   std::unique_ptr<SceneTables> tables_;
   std::unique_ptr<ContactCheck> check_;
   std::string begin_error_;
@@ -193,13 +182,12 @@ strategies::StrategyEntry whole_step_entry(const std::string& name) {
   strategies::StrategyEntry entry;
   entry.name = name;
   entry.help = library->description();
-  entry.keys = library->keys();
-  for (narrowphase::KeySpec& key : host_keys()) entry.keys.push_back(std::move(key));
+  entry.keys = entry_keys(*library);
   entry.takes_narrow_phase = false;
   // Its misses have one cause ccdbench can tell: the plugin did not report the pair (it tests no pair ccdbench sees).
   entry.explain_miss = [](const narrowphase::PairRows&, bool) { return std::string("unreported"); };
   entry.make = [library](strategies::StrategyRequest request) -> std::unique_ptr<strategies::Strategy> {
-    return std::make_unique<WholeStepPlugin>(library, plugin_values(request.keys, *library), read_host_settings(request.keys, *library));
+    return std::make_unique<WholeStepPlugin>(library, request.keys);
   };
   return entry;
 }
