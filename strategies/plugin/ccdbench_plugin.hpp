@@ -102,23 +102,11 @@ class WholeStep {
         vertex_boxes_[v].high[c] = std::max(st.x0[3 * v + static_cast<std::size_t>(c)], st.x1[3 * v + static_cast<std::size_t>(c)]);
       }
     }
+    // Each triangle's swept box, grown by the thickness: the boxes that are sorted and swept.
     boxes_.resize(faces);
     for (std::size_t f = 0; f < faces; ++f) {
-      Box& b = boxes_[f];
-      for (int c = 0; c < 3; ++c) {
-        b.low[c] = INFINITY;
-        b.high[c] = -INFINITY;
-      }
-      for (int corner = 0; corner < 3; ++corner) {
-        const std::uint32_t v = faces_[3 * f + static_cast<std::size_t>(corner)];
-        for (const double* x : {st.x0, st.x1}) {
-          for (int c = 0; c < 3; ++c) {
-            b.low[c] = std::min(b.low[c], x[3 * v + static_cast<std::size_t>(c)]);
-            b.high[c] = std::max(b.high[c], x[3 * v + static_cast<std::size_t>(c)]);
-          }
-        }
-      }
-      b = grown(b, st.thickness);
+      const std::uint32_t* c = &faces_[3 * f];
+      boxes_[f] = grown(joined(joined(vertex_boxes_[c[0]], vertex_boxes_[c[1]]), vertex_boxes_[c[2]]), st.thickness);
     }
     // The state across steps: the order of the step before, put right by an insertion sort.
     for (std::size_t i = 1; i < order_.size(); ++i) {
@@ -166,14 +154,14 @@ class WholeStep {
     }
     return true;
   }
-  Box edge_box(std::pair<std::uint32_t, std::uint32_t> e) const {
-    Box b = vertex_boxes_[e.first];
+  static Box joined(Box a, const Box& b) {
     for (int c = 0; c < 3; ++c) {
-      b.low[c] = std::min(b.low[c], vertex_boxes_[e.second].low[c]);
-      b.high[c] = std::max(b.high[c], vertex_boxes_[e.second].high[c]);
+      a.low[c] = std::min(a.low[c], b.low[c]);
+      a.high[c] = std::max(a.high[c], b.high[c]);
     }
-    return b;
+    return a;
   }
+  Box edge_box(std::pair<std::uint32_t, std::uint32_t> e) const { return joined(vertex_boxes_[e.first], vertex_boxes_[e.second]); }
   // Grown by the thickness, then one ulp out: the box still holds every point within the thickness of it.
   static Box grown(Box b, double thickness) {
     for (int c = 0; c < 3; ++c) {
