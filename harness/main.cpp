@@ -152,7 +152,8 @@ int run_command_line(int argc, char** argv) {
                     "the total says how many queries had no label (without this flag such a file is an error)");
   queries->add_option("--json", queries_options.json, "also write the scores as a JSON array to this file");
   queries->add_flag("--sweep", queries_options.sweep,
-                    "vary each narrow phase's accuracy: conservative tolerance 1e-2..1e-7, eta 0..1e-2 of the others");
+                    "vary each narrow phase's accuracies, one key at a time, its other keys as given: conservative\n"
+                    "tolerance 1e-2..1e-7 then toi_tolerance 1e-2..1e-10, eta 0..1e-2 of the others");
   queries->add_flag("--extremes", queries_options.extremes,
                     "also score the extremes suite (see `ccdbench stress`), labelled by the reference");
   queries->add_option("--report", queries_options.report,

@@ -501,12 +501,22 @@ std::vector<std::string> sweep_methods(const std::vector<std::string>& methods) 
   std::vector<std::string> swept;
   for (const std::string& method : methods) {
     const std::string name = method.substr(0, method.find(':'));
-    if (!narrowphase::is_narrow_phase(name) || narrowphase::find_narrow_phase(name).sweep_key.empty()) {
+    if (!narrowphase::is_narrow_phase(name) || narrowphase::find_narrow_phase(name).sweeps.empty()) {
       swept.push_back(method);
       continue;
     }
-    const narrowphase::NarrowPhaseEntry& entry = narrowphase::find_narrow_phase(name);
-    for (const std::string& value : entry.sweep_values) swept.push_back(name + ":" + entry.sweep_key + "=" + value);
+    // Each axis in turn, from the method as given (its other keys kept): the swept key's value replaces its own.
+    for (const narrowphase::SweepAxis& axis : narrowphase::find_narrow_phase(name).sweeps) {
+      std::string kept = name;
+      std::size_t at = method.find(':');
+      while (at != std::string::npos) {
+        const std::size_t next = method.find(':', at + 1);
+        const std::string part = method.substr(at + 1, next == std::string::npos ? std::string::npos : next - at - 1);
+        if (part.substr(0, part.find('=')) != axis.key) kept += ":" + part;
+        at = next;
+      }
+      for (const std::string& value : axis.values) swept.push_back(kept + ":" + axis.key + "=" + value);
+    }
   }
   return swept;
 }

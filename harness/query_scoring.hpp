@@ -139,8 +139,9 @@ std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>
                                           const QueryScoringRequest& request,
                                           const std::function<void(std::size_t, std::size_t)>& on_file = {});
 
-/// The methods of a sweep: each narrow-phase variant of `methods` at a range of its accuracy parameter
-/// (conservative: tolerance; cubic32, cubic64, advancement: eta); `exact` is kept as it is.
+/// The methods of a sweep: each narrow-phase variant of `methods` at a range of each of its accuracy parameters in
+/// turn, its other keys as given (conservative: tolerance, then toi_tolerance; cubic32, cubic64, advancement: eta);
+/// `exact` is kept as it is.
 std::vector<std::string> sweep_methods(const std::vector<std::string>& methods);
 
 /// Writes DIR/README.md (the table, with `command` written above it so the numbers can be reproduced) and

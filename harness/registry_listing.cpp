@@ -36,6 +36,12 @@ json keys_json(const std::vector<narrowphase::KeySpec>& keys) {
   return list;
 }
 
+json sweep_json(const std::vector<narrowphase::SweepAxis>& sweeps) {
+  json list = json::array();
+  for (const narrowphase::SweepAxis& axis : sweeps) list.push_back({{"key", axis.key}, {"values", axis.values}});
+  return list;
+}
+
 void print_keys(const json& keys, std::ostream& out) {
   if (keys.empty()) {
     out << "  no keys\n";
@@ -90,7 +96,7 @@ json registry_listing(const std::vector<std::string>& plugins) {
                              {"keys", keys_json(entry.keys)},
                              {"backends", narrowphase::narrow_phase_backends(entry)},
                              {"conservative", entry.conservative},
-                             {"sweep", {{"key", entry.sweep_key}, {"values", entry.sweep_values}}}});
+                             {"sweep", sweep_json(entry.sweeps)}});
   }
   return {{"strategies", strategies}, {"narrow_phases", narrow_phases}};
 }

@@ -13,7 +13,7 @@ namespace ccd::harness {
 
 /// {"strategies": [...], "narrow_phases": [...]}: each entry's name, help, keys (name, kind, allowed values,
 /// default, help) and backends; a strategy's narrow phase, judging, baseline and availability; a narrow phase's
-/// promise (conservative) and the key its sweep varies. Each of `plugins` (paths) is listed too: as a strategy
+/// promise (conservative) and the keys its sweep varies. Each of `plugins` (paths) is listed too: as a strategy
 /// (plugin:PATH) where it answers whole steps, as a narrow phase where it answers queries.
 /// @throws std::invalid_argument when a plugin cannot be loaded.
 nlohmann::json registry_listing(const std::vector<std::string>& plugins = {});

@@ -91,8 +91,7 @@ std::vector<NarrowPhaseEntry> advancement_entries() {
             KeySpec::integer("max_iterations", defaults.max_iterations, kIterationRange,
                              "advancement steps before giving up (and answering \"collides\")")},
            false,
-           "eta",
-           {"0", "1e-8", "1e-6", "1e-4", "1e-2"},
+           {{"eta", {"0", "1e-8", "1e-6", "1e-4", "1e-2"}}},
            [](const SpecReader& keys) -> std::unique_ptr<NarrowPhase> {
              return std::make_unique<Advancement>(AdvancementSettings{keys.number("eta"), keys.integer("max_iterations")});
            }}};

@@ -26,7 +26,7 @@ class Cubic final : public NarrowPhase {
   bool conservative() const override { return false; }
   std::optional<DeviceForm> device_form() const override {
     if constexpr (sizeof(T) == 4) return std::nullopt;  // the kernels are double precision only
-    return DeviceForm{DeviceForm::Kernel::cubic64, settings_.eta, 0};
+    return DeviceForm{DeviceForm::Kernel::cubic64, settings_.eta, 0, 0};
   }
 
   NarrowPhaseResult vertex_face(const PairRows& rows, double thickness) const override { return test(rows, thickness, true); }
@@ -62,8 +62,7 @@ NarrowPhaseEntry cubic_entry(std::string name, std::string help) {
           std::move(help),
           {KeySpec::number("eta", CubicSettings{}.eta, kFractionOfPairRange, "distance tolerance at the candidate times, a fraction of the pair's box diagonal")},
           false,
-          "eta",
-          {"0", "1e-8", "1e-6", "1e-4", "1e-2"},
+          {{"eta", {"0", "1e-8", "1e-6", "1e-4", "1e-2"}}},
           [](const SpecReader& keys) -> std::unique_ptr<NarrowPhase> { return std::make_unique<Cubic<T>>(CubicSettings{keys.number("eta")}); }};
 }
 

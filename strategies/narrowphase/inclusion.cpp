@@ -1,7 +1,9 @@
 /// @file
-/// `conservative`: an inclusion-based bisection over (t, u, v) with a forward error bound, in the spirit of
-/// Tight-Inclusion (Wang et al. 2021). It never misses: every answer "no" is proven; "yes" may be a false alarm
-/// within the tolerance, or because the iteration cap was hit (reported).
+/// `conservative`: certified in every stage (shared/inclusion.h): time windows from the coplanarity cubic with a
+/// forward error bound, a cheap proof of a contact, and an inclusion search over (t, u, v) within the windows. It
+/// never misses: every answer "no" is proven; "yes" may be a false alarm within the distance tolerance, or because
+/// the iteration cap was hit (reported). Its TOI is never later than the exact earliest contact, and no earlier than
+/// a proven contact by more than toi_tolerance.
 
 #include "strategies/narrowphase/round_to_nearest.hpp"
 #include "strategies/narrowphase/registry.hpp"
@@ -15,7 +17,10 @@ namespace {
 struct InclusionSettings {
   /// Distance tolerance as a fraction of the pair's bounding-box diagonal: a sub-box whose every point lies
   /// within δ + tolerance is reported as a contact.
-  double tolerance = 1e-6;
+  double tolerance = 1e-10;
+  /// The TOI's tolerance in time, a fraction of the step: a reported TOI is never later than the earliest contact,
+  /// and for a contact the search proves or holds in an accepted box, no earlier than it by more than this.
+  double toi_tolerance = 1e-6;
   /// Sub-boxes examined before giving up (and answering "collides").
   long max_iterations = 20000;
 };
@@ -29,9 +34,9 @@ struct InclusionSettings {
 __attribute__((target_clones("arch=x86-64-v3", "default"), flatten))
 #endif
 shared::f64::ccd_conservative_outcome conservative_search(const shared::f64::ccd_v3 rows[8], double thickness, bool vertex_face,
-                                                          double tolerance, long max_iterations, shared::f64::ccd_sub_box* storage,
+                                                          double tolerance, double toi_tolerance, long max_iterations, shared::f64::ccd_sub_box* storage,
                                                           int capacity) {
-  return shared::f64::ccd_conservative_test(rows, thickness, vertex_face, tolerance, max_iterations, 0, storage, capacity);
+  return shared::f64::ccd_conservative_test(rows, thickness, vertex_face, tolerance, toi_tolerance, max_iterations, 0, storage, capacity);
 }
 
 /// The search itself, its error budget and its stages are shared/inclusion.h's (the text the OpenCL kernels
@@ -41,11 +46,12 @@ class InclusionTest final : public NarrowPhase {
   explicit InclusionTest(const InclusionSettings& settings) : settings_(settings) {}
 
   std::string name() const override {
-    return "conservative:tolerance=" + format_spec_number(settings_.tolerance) + ":max_iterations=" + std::to_string(settings_.max_iterations);
+    return "conservative:tolerance=" + format_spec_number(settings_.tolerance) + ":toi_tolerance=" + format_spec_number(settings_.toi_tolerance) +
+           ":max_iterations=" + std::to_string(settings_.max_iterations);
   }
   bool conservative() const override { return true; }
   std::optional<DeviceForm> device_form() const override {
-    return DeviceForm{DeviceForm::Kernel::conservative, settings_.tolerance, settings_.max_iterations};
+    return DeviceForm{DeviceForm::Kernel::conservative, settings_.tolerance, settings_.toi_tolerance, settings_.max_iterations};
   }
   NarrowPhaseResult vertex_face(const PairRows& rows, double thickness) const override { return test(rows, thickness, true); }
   NarrowPhaseResult edge_edge(const PairRows& rows, double thickness) const override { return test(rows, thickness, false); }
@@ -62,7 +68,7 @@ class InclusionTest final : public NarrowPhase {
     int capacity = kInlineBoxes;
     while (true) {
       const shared::f64::ccd_conservative_outcome outcome =
-          conservative_search(rows.data(), thickness, vertex_face, settings_.tolerance, settings_.max_iterations, storage, capacity);
+          conservative_search(rows.data(), thickness, vertex_face, settings_.tolerance, settings_.toi_tolerance, settings_.max_iterations, storage, capacity);
       if (!outcome.overflow) return {outcome.collides != 0, outcome.toi, outcome.hit_iteration_cap != 0, outcome.achieved_tolerance, {}};
       capacity *= 4;
       more.resize(static_cast<std::size_t>(capacity));
@@ -79,16 +85,19 @@ class InclusionTest final : public NarrowPhase {
 std::vector<NarrowPhaseEntry> inclusion_entries() {
   const InclusionSettings defaults;
   return {{"conservative",
-           "inclusion search over (t, u, v) with a forward error bound: never misses, at any scale",
+           "certified time windows, a contact proof and an inclusion search over (t, u, v): never misses at any scale; "
+           "its TOI is never late and tight to toi_tolerance",
            {KeySpec::number("tolerance", defaults.tolerance, kFractionOfPairRange,
                             "distance tolerance of an accepted sub-box, a fraction of the pair's box diagonal"),
+            KeySpec::number("toi_tolerance", defaults.toi_tolerance, kFractionOfStepRange,
+                            "TOI tolerance in time, a fraction of the step: never later than the contact, and no earlier "
+                            "than a proven one by more than this"),
             KeySpec::integer("max_iterations", defaults.max_iterations, kIterationRange,
                              "sub-boxes examined before giving up (and answering \"collides\")")},
            true,
-           "tolerance",
-           {"1e-2", "1e-3", "1e-4", "1e-5", "1e-6", "1e-7"},
+           {{"tolerance", {"1e-2", "1e-4", "1e-6", "1e-8", "1e-10", "1e-12"}}, {"toi_tolerance", {"1e-2", "1e-4", "1e-8", "1e-10"}}},
            [](const SpecReader& keys) -> std::unique_ptr<NarrowPhase> {
-             return std::make_unique<InclusionTest>(InclusionSettings{keys.number("tolerance"), keys.integer("max_iterations")});
+             return std::make_unique<InclusionTest>(InclusionSettings{keys.number("tolerance"), keys.number("toi_tolerance"), keys.integer("max_iterations")});
            }}};
 }
 

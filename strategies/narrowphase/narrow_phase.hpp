@@ -38,6 +38,8 @@ struct DeviceForm {
   Kernel kernel = Kernel::cubic64;
   /// cubic64: eta; conservative: tolerance (fractions of the pair's bounding-box diagonal).
   double accuracy = 0;
+  /// conservative: the TOI's tolerance in time (a fraction of the step).
+  double toi_tolerance = 0;
   /// conservative: sub-boxes examined before giving up.
   long max_iterations = 0;
 };

@@ -17,6 +17,12 @@
 
 namespace ccd::narrowphase {
 
+/// One key a `queries --sweep` varies, the others left at their defaults, and the values it takes.
+struct SweepAxis {
+  std::string key;
+  std::vector<std::string> values;
+};
+
 struct NarrowPhaseEntry {
   std::string name;
   /// One line: what it computes and what it guarantees.
@@ -24,9 +30,8 @@ struct NarrowPhaseEntry {
   std::vector<KeySpec> keys;
   /// Promises no false negatives on any input: judged as conservative (0 misses and no late TOI are gated).
   bool conservative = false;
-  /// The key `queries --sweep` varies (its accuracy), and the values it takes.
-  std::string sweep_key;
-  std::vector<std::string> sweep_values;
+  /// The keys `queries --sweep` varies (its accuracies), one at a time.
+  std::vector<SweepAxis> sweeps;
   /// Makes an instance from its keys (`keys` says which the reader holds, already checked).
   std::function<std::unique_ptr<NarrowPhase>(const SpecReader&)> make;
 };

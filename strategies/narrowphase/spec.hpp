@@ -25,6 +25,8 @@ struct SpecRange {
 
 /// A narrow phase's tolerance, a fraction of the pair's bounding-box diagonal: 1 is already the whole pair.
 inline constexpr SpecRange kFractionOfPairRange{0.0, 1.0};
+/// A span of time, a fraction of the step: 1 is already the whole step.
+inline constexpr SpecRange kFractionOfStepRange{0.0, 1.0};
 /// An iteration cap. An iteration (a sub-box, an advancement step) costs about 100 ns: 1e9 caps a single query at
 /// minutes, far beyond any use, and keeps the count exact in a long.
 inline constexpr SpecRange kIterationRange{1.0, 1e9, true};

@@ -310,9 +310,9 @@ std::size_t DevicePipeline::narrow_group(cl_kernel kernel) const {
 void DevicePipeline::launch_conservative(const Buffer& pairs, std::size_t count, long limit, const Buffer& status, const Buffer& toi,
                                          const Buffer& x0, const Buffer& x1, StageEvents& events) {
   cl_kernel kernel = context_->kernel("narrow_conservative");
-  const cl_double tolerance = narrow_phase_.form.accuracy;
+  const cl_double tolerance = narrow_phase_.form.accuracy, toi_tolerance = narrow_phase_.form.toi_tolerance;
   const cl_long max_iterations = narrow_phase_.form.max_iterations, give_up_after = limit;
-  set_arguments(kernel, static_cast<cl_uint>(count), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), tolerance, max_iterations,
+  set_arguments(kernel, static_cast<cl_uint>(count), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), tolerance, toi_tolerance, max_iterations,
                 give_up_after, status.get(), toi.get());
   launch(*context_, kernel, count, narrow_group(kernel), events.add("narrow phase"));
 }

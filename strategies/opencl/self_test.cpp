@@ -14,6 +14,7 @@ namespace {
 
 /// Settings of the pairs' narrow phases: the defaults of conservative and cubic64.
 constexpr double kTolerance = 1e-6;
+constexpr double kToiTolerance = 1e-6;
 constexpr long kMaxIterations = 20000;
 constexpr double kEta = 1e-6;
 constexpr std::size_t kPairs = 512;
@@ -80,9 +81,9 @@ void check_device_arithmetic(Context& context) {
   out_buffer.reserve(context, kPairs * 6 * sizeof(double));
   cl_kernel pairs = context.kernel("self_test_pairs");
   const cl_uint count = static_cast<cl_uint>(kPairs);
-  const cl_double tolerance = kTolerance, eta = kEta;
+  const cl_double tolerance = kTolerance, toi_tolerance = kToiTolerance, eta = kEta;
   const cl_long max_iterations = kMaxIterations;
-  set_arguments(pairs, count, rows_buffer.get(), kinds_buffer.get(), thickness_buffer.get(), tolerance, max_iterations, eta, out_buffer.get());
+  set_arguments(pairs, count, rows_buffer.get(), kinds_buffer.get(), thickness_buffer.get(), tolerance, toi_tolerance, max_iterations, eta, out_buffer.get());
   launch(context, pairs, kPairs, 64, nullptr);
   std::vector<double> device(kPairs * 6);
   download(context, out_buffer, device.data(), device.size());
@@ -95,7 +96,7 @@ void check_device_arithmetic(Context& context) {
       const std::size_t at = 24 * i + 3 * static_cast<std::size_t>(k);
       r[k] = narrowphase::shared::f64::ccd_v3_make(rows[at], rows[at + 1], rows[at + 2]);
     }
-    const auto c = narrowphase::shared::f64::ccd_conservative_test(r, thickness[i], kinds[i], kTolerance, kMaxIterations, 0,
+    const auto c = narrowphase::shared::f64::ccd_conservative_test(r, thickness[i], kinds[i], kTolerance, kToiTolerance, kMaxIterations, 0,
                                                                     storage.data(), static_cast<int>(storage.size()));
     const auto q = narrowphase::shared::f64::ccd_cubic_test(r, thickness[i], kEta, kinds[i]);
     const double host[6] = {static_cast<double>(c.collides), c.toi, c.achieved_tolerance, static_cast<double>(q.collides), q.toi, q.reach};

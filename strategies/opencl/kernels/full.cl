@@ -300,15 +300,15 @@ static inline int ccd_load_rows(uint4 p, global const uint* faces, global const 
 /* status: 0 apart, 1 collides (toi set), 2 the query needs more sub-boxes than a work item holds, or more than
  * give_up_after iterations (the host decides it). */
 kernel void narrow_conservative(uint count, global const uint4* pairs, global const uint* faces, global const double* x0,
-                                global const double* x1, double thickness, double tolerance, long max_iterations,
-                                long give_up_after, global uchar* status, global double* toi) {
+                                global const double* x1, double thickness, double tolerance, double toi_tolerance,
+                                long max_iterations, long give_up_after, global uchar* status, global double* toi) {
   const uint i = get_global_id(0);
   if (i >= count) return;
   ccd_v3 rows[8];
   const int vertex_face = ccd_load_rows(pairs[i], faces, x0, x1, rows);
   ccd_sub_box storage[CCD_DEVICE_SUB_BOXES];
   const ccd_conservative_outcome r =
-      ccd_conservative_test(rows, thickness, vertex_face, tolerance, max_iterations, give_up_after, storage, CCD_DEVICE_SUB_BOXES);
+      ccd_conservative_test(rows, thickness, vertex_face, tolerance, toi_tolerance, max_iterations, give_up_after, storage, CCD_DEVICE_SUB_BOXES);
   status[i] = r.overflow ? (uchar)2 : (uchar)(r.collides ? 1 : 0);
   toi[i] = r.toi;
 }

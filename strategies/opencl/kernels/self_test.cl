@@ -17,14 +17,14 @@ kernel void self_test_arithmetic(global const double* in, global double* out) {
 
 /* Both narrow phases on `count` pairs (rows: 24 doubles per pair; kinds: 1 for vertex-face), as the host runs them. */
 kernel void self_test_pairs(uint count, global const double* rows, global const int* kinds, global const double* thickness,
-                            double tolerance, long max_iterations, double eta, global double* out) {
+                            double tolerance, double toi_tolerance, long max_iterations, double eta, global double* out) {
   const uint i = get_global_id(0);
   if (i >= count) return;
   ccd_v3 r[8];
   for (int k = 0; k < 8; ++k) r[k] = ccd_v3_make(rows[24 * i + 3 * k], rows[24 * i + 3 * k + 1], rows[24 * i + 3 * k + 2]);
   ccd_sub_box storage[CCD_DEVICE_SUB_BOXES];
   const ccd_conservative_outcome c =
-      ccd_conservative_test(r, thickness[i], kinds[i], tolerance, max_iterations, 0, storage, CCD_DEVICE_SUB_BOXES);
+      ccd_conservative_test(r, thickness[i], kinds[i], tolerance, toi_tolerance, max_iterations, 0, storage, CCD_DEVICE_SUB_BOXES);
   const ccd_cubic_outcome q = ccd_cubic_test(r, thickness[i], eta, kinds[i]);
   out[6 * i] = c.overflow ? -1.0 : (double)c.collides;
   out[6 * i + 1] = c.toi;
