@@ -5,6 +5,7 @@
 #include "harness/query_answers.hpp"
 #include "harness/statistics.hpp"
 #include "harness/table.hpp"
+#include "harness/timed_region.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase/registry.hpp"
 #include "strategies/registry.hpp"
@@ -225,12 +226,14 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
     for (int repeat = 0; repeat < std::max(1, request.repeats); ++repeat) {
       std::vector<QueryAnswer> answers(file.queries.size());
       const auto start = std::chrono::steady_clock::now();
-      for (std::size_t q = 0; q < file.queries.size(); ++q) {
-        answers[q] = method->answer(file, q, request.thickness);
+      {
+        const TimedRegion timed;
+        for (std::size_t q = 0; q < file.queries.size(); ++q) answers[q] = method->answer(file, q, request.thickness);
       }
       const std::chrono::duration<double, std::nano> elapsed = std::chrono::steady_clock::now() - start;
       per_query.push_back(file.queries.empty() ? 0.0 : elapsed.count() / static_cast<double>(file.queries.size()));
       if (repeat > 0) continue;  // verdicts from the first pass; later passes only time
+      harness_pass("query scoring");
       for (std::size_t q = 0; q < file.queries.size(); ++q) {
         const datasets::Query& query = file.queries[q];
         const bool reported = answers[q].collides;

@@ -6,12 +6,14 @@
 #include "harness/run/verdict.hpp"
 #include "harness/statistics.hpp"
 #include "harness/table.hpp"
+#include "harness/timed_region.hpp"
 #include "strategies/registry.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <map>
 #include <numeric>
+#include <optional>
 
 namespace ccd::harness {
 
@@ -35,9 +37,14 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
     strategy->init(scene, data.frames[0]);
     for (std::size_t k = 0; k < steps; ++k) {
       const StepView view{&scene, k, data.frames[k], data.frames[k + 1]};
+      std::optional<strategies::StepResult> answered;
       const auto start = std::chrono::steady_clock::now();
-      strategies::StepResult result = strategy->step(view, false);
+      {
+        const TimedRegion timed;
+        answered = strategy->step(view, false);
+      }
       step_ms[k].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+      strategies::StepResult result = std::move(*answered);
       for (const auto& [stage, ms] : result.stages.entries()) stage_ms[stage].push_back(ms);
       if (repeat == 0) first_pass.push_back(std::move(result));
       if (progress) progress(repeat, k, resolved);
@@ -129,7 +136,10 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                    {"reported", reported_count(r, judging)}};
     // The digest of the answers (pairs and TOI bits), to compare two runs step by step; fcl's cells are judged by
     // triangle pairs and carry none.
-    if (judging == strategies::Judging::elementary_pairs) record["answers"] = answers_digest(r.collisions);
+    if (judging == strategies::Judging::elementary_pairs) {
+      harness_pass("answers digest");
+      record["answers"] = answers_digest(r.collisions);
+    }
     if (r.fault_count > 0) {
       record["errors"] = r.fault_count;
       record["error_first"] = r.faults.front().message;

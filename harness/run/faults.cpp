@@ -3,6 +3,7 @@
 #include "datasets/atomic_file.hpp"
 #include "datasets/ply.hpp"
 #include "datasets/query_file.hpp"
+#include "harness/timed_region.hpp"
 
 #include <gmpxx.h>
 
@@ -15,6 +16,7 @@ namespace ccd::harness {
 
 nlohmann::json record_faults(const Scene& scene, const std::vector<std::vector<Vec3>>& frames,
                              const std::vector<strategies::StepResult>& results, const std::filesystem::path& directory) {
+  harness_pass("fault records");
   std::size_t count = 0;
   for (const strategies::StepResult& result : results) count += result.fault_count;
   if (count == 0) return {{"errors", 0}};
@@ -61,6 +63,7 @@ nlohmann::json record_faults(const Scene& scene, const std::vector<std::vector<V
 }
 
 void write_step_answers(const std::vector<strategies::StepResult>& results, const std::filesystem::path& directory) {
+  harness_pass("answer files");
   auto toi = [](double t) {
     if (std::isnan(t)) return std::string();
     char text[64];

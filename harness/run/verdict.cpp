@@ -1,6 +1,7 @@
 #include "harness/run/verdict.hpp"
 
 #include "datasets/query_file.hpp"
+#include "harness/timed_region.hpp"
 #include "strategies/elementary_tests.hpp"
 
 #include <algorithm>
@@ -92,6 +93,7 @@ std::string miss_cause(const Pair& pair, const strategies::StrategyEntry& strate
 
 Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::StepResult& result,
               strategies::Judging judging, const strategies::TestedPairs* tested, bool toi) {
+  harness_pass("verification");
   Verdict verdict;
   const CollisionSet& reported = result.collisions;
   if (toi && judging == strategies::Judging::elementary_pairs) {
@@ -120,6 +122,7 @@ std::size_t reported_count(const strategies::StepResult& result, strategies::Jud
 json record_misses(const Scene& scene, const std::vector<std::vector<Vec3>>& frames, const std::vector<CollisionSet>& truth,
                    const std::vector<strategies::StepResult>& results, const std::vector<strategies::TestedPairs>& tested,
                    const strategies::StrategyEntry& strategy, const std::optional<std::filesystem::path>& directory) {
+  harness_pass("miss records");
   // A regression library needs a few of each cause, not every one of a strategy that misses thousands.
   constexpr std::size_t kMaxPerFile = 100;
   std::map<std::string, std::vector<datasets::Query>> vf, ee;
