@@ -197,6 +197,14 @@ static inline int ccd_clipped_values(const ccd_inclusion* s, const ccd_sub_box* 
   return 2 * count;
 }
 
+/* F's values whose convex hull holds F over the box (its corners', or its part inside the triangle's for a VF box
+ * across the hypotenuse); returns their count. */
+static inline int ccd_box_values(const ccd_inclusion* s, const ccd_sub_box* box, ccd_v3* values) {
+  if (s->vertex_face && box->u1 + box->v1 > 1) return ccd_clipped_values(s, box, values);
+  ccd_corners(s, box, values);
+  return 8;
+}
+
 /* Whether the plane normal to n at distance δ from 0 separates the box's values from the ball of radius δ: every
  * corner has n·F > δ|n| by more than its error. F over the box lies in the convex hull of its corners, so then
  * |F| > δ throughout. This catches what the axis-aligned test above cannot: a long thin hull that runs past the
@@ -254,8 +262,9 @@ static inline void ccd_box_closest(ccd_v3 S, ccd_v3 X, ccd_v3 Y, double u0, doub
  * the box's values at that time exactly (the nearest point of a convex set), so ccd_separated_along then bounds the
  * distance over the whole (u, v) range, losing only F's change over the box's time. Only a direction: any n is
  * sound in ccd_separated_along. */
-static inline ccd_v3 ccd_nearest_value(const ccd_inclusion* s, const ccd_sub_box* box) {
-  const double t = box->t0 + (box->t1 - box->t0) / 2;
+/* The point of the box's (u, v) range (its part inside the triangle for VF) where |F| at time t is least, in
+ * *u, *v; returns F there. */
+static inline ccd_v3 ccd_nearest_point_at(const ccd_inclusion* s, const ccd_sub_box* box, double t, double* nearest_u, double* nearest_v) {
   ccd_v3 S, X, Y;
   ccd_terms_at(s, t, &S, &X, &Y);
   double u = box->u0, v = box->v0;
@@ -268,7 +277,16 @@ static inline ccd_v3 ccd_nearest_value(const ccd_inclusion* s, const ccd_sub_box
     u = length2 > 0 ? ccd_clamp(-ccd_dot(base, along) / length2, lo, hi) : lo;
     v = 1 - u;
   }
+  *nearest_u = u;
+  *nearest_v = v;
   return ccd_f_value(S, u, X, v, Y);
+}
+static inline ccd_v3 ccd_nearest_value_at(const ccd_inclusion* s, const ccd_sub_box* box, double t) {
+  double u, v;
+  return ccd_nearest_point_at(s, box, t, &u, &v);
+}
+static inline ccd_v3 ccd_nearest_value(const ccd_inclusion* s, const ccd_sub_box* box) {
+  return ccd_nearest_value_at(s, box, box->t0 + (box->t1 - box->t0) / 2);
 }
 
 /* Excluded (no contact in the box), accepted (every point within δ + tolerance and the box at most toi_tolerance
@@ -365,16 +383,12 @@ static inline int ccd_point_within_thickness(const ccd_inclusion* s, double t, d
   return distance * (1 + CCD_PROOF_RELATIVE_SLACK) <= s->thickness;
 }
 
-/* Whether the pair is proven within δ at time t, at the closest point of the planes or lines at t (clamped into
- * the domain): the distance there is computed with F's error bound (ccd_point_within_thickness). */
+/* Whether the pair is proven within δ at time t, at the domain's point nearest 0 there (ccd_nearest_point_at, for
+ * the whole domain): the distance there is computed with F's error bound (ccd_point_within_thickness). */
 static inline int ccd_within_thickness_at(const ccd_inclusion* s, double t) {
-  ccd_v3 S, X, Y;
-  ccd_terms_at(s, t, &S, &X, &Y);
-  const double xx = ccd_dot(X, X), xy = ccd_dot(X, Y), yy = ccd_dot(Y, Y);
-  const double normal_determinant = xx * yy - xy * xy;
-  if (!(fabs(normal_determinant) > 0)) return 0;
-  const double b0 = -ccd_dot(X, S), b1 = -ccd_dot(Y, S);
-  const double u = (yy * b0 - xy * b1) / normal_determinant, v = (xx * b1 - xy * b0) / normal_determinant;
+  const ccd_sub_box domain = ccd_sub_box_make(t, t, 0, 1, 0, 1, 0);
+  double u, v;
+  ccd_nearest_point_at(s, &domain, t, &u, &v);
   return isfinite(u) && isfinite(v) && ccd_point_within_thickness(s, t, u, v);
 }
 
@@ -493,7 +507,7 @@ static inline int ccd_certify(const ccd_inclusion* s, const double* times, int c
     double u = (yy * inverse_determinant) * b0 + (-xy * inverse_determinant) * b1;
     double v = (-xy * inverse_determinant) * b0 + (xx * inverse_determinant) * b1;
     /* Resting contacts within δ have no zero of F: try the closest domain point at the candidate time first. */
-    if (s->thickness > 0 && ccd_point_within_thickness(s, t, u, v)) {
+    if (s->thickness > 0 && ccd_within_thickness_at(s, t)) {
       if (!found || t < *earliest) *earliest = t;
       found = 1;
       continue;
@@ -769,6 +783,49 @@ static inline int ccd_time_windows(const ccd_inclusion* s, ccd_window windows[CC
  * point within δ at a box's end (below), no earlier than it by more than toi_tolerance. A box accepted on the
  * distance tolerance may come before the contact by the time the pair takes to close that distance: that is what
  * the tolerance means (and what a false alarm's TOI is: the earliest time the pair may be that close). */
+/* Certified advancement through a window's start (before stage 3 and the search): along n, F's value at the
+ * nearest point of the domain at the window's current start t, the gap n·F at each vertex of the domain (the (u, v)
+ * square's corners, the triangle's for VF) is linear in time, so the time at which the first of them would come
+ * within δ|n| is one division each. The box from t to a little short of that time is then tested as any box is
+ * (ccd_examine's own test along n, with its error bound, on the box's values): when it is separated, the window
+ * starts at its end, and again from there. Near a first touch the nearest direction is the separating one, so each
+ * step closes most of what is left, as conservative advancement does, but every step is proven. Returns 0 when the
+ * whole window is passed (no contact in it), 1 otherwise (window->t0 moved forward, or not). */
+#define CCD_ADVANCE_STEPS 24
+/* Of the way to the first vertex's crossing each step goes: short of it, so that the proof at the box's end holds. */
+#define CCD_ADVANCE_FRACTION 0.9
+static inline int ccd_advance(ccd_inclusion* s, ccd_window* window) {
+  const int vertices = s->vertex_face ? 3 : 4;
+  const double cu[4] = {0, 1, 0, 1}, cv[4] = {0, 0, 1, 1};
+  for (int step = 0; step < CCD_ADVANCE_STEPS; ++step) {
+    const double t = window->t0;
+    ccd_sub_box box = ccd_sub_box_make(t, window->t1, 0, 1, 0, 1, 0);
+    const ccd_v3 n = ccd_nearest_value_at(s, &box, t);
+    const double length = ccd_norm(n);
+    if (!(length > 0)) return 1;
+    ccd_v3 S0, X0, Y0, S1, X1, Y1;
+    ccd_terms_at(s, t, &S0, &X0, &Y0);
+    ccd_terms_at(s, window->t1, &S1, &X1, &Y1);
+    const double reach = s->thickness * length;
+    double end = window->t1;
+    for (int i = 0; i < vertices; ++i) {
+      const double start_gap = ccd_dot(n, ccd_f_value(S0, cu[i], X0, cv[i], Y0)) - reach;
+      const double end_gap = ccd_dot(n, ccd_f_value(S1, cu[i], X1, cv[i], Y1)) - reach;
+      if (!(start_gap > 0)) return 1; /* no room along n at t */
+      if (end_gap < 0) end = ccd_min(end, t + (window->t1 - t) * (start_gap / (start_gap - end_gap)));
+    }
+    if (end < window->t1) end = t + (end - t) * CCD_ADVANCE_FRACTION;
+    if (!(end > t)) return 1;
+    box.t1 = end;
+    ccd_v3 values[2 * CCD_CLIPPED_VERTICES];
+    const int count = ccd_box_values(s, &box, values);
+    if (ccd_over_budget(s) || !ccd_separated_along(s, values, count, n)) return 1;
+    if (end >= window->t1) return 0;
+    window->t0 = end;
+  }
+  return 1;
+}
+
 static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const ccd_window* windows, int count, double upper,
                                                          ccd_sub_box* storage, int capacity) {
   ccd_conservative_outcome result = ccd_outcome_make(0, NAN, 0);
@@ -858,14 +915,28 @@ static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 origin
   ccd_over_budget(&search);
   if (ccd_examine(&search, &root, &low, &high, &achieved) == CCD_EXCLUDED) return ccd_outcome_make(0, NAN, 0);
   ccd_window windows[CCD_MAX_WINDOWS];
-  const int count = ccd_time_windows(&search, windows);
+  int count = ccd_time_windows(&search, windows);
+  /* Certified advancement through each window's start; a window passed whole holds no contact. */
+  int kept = 0;
+  for (int i = 0; i < count; ++i) {
+    /* (a window already within toi_tolerance has nothing to gain) */
+    if (windows[i].t1 - windows[i].t0 <= toi_tolerance || ccd_advance(&search, &windows[i])) windows[kept++] = windows[i];
+  }
+  count = kept;
+  if (search.gave_up) {
+    result = ccd_outcome_make(0, NAN, 0);
+    result.overflow = 1;
+    return result;
+  }
   if (count == 0) return ccd_outcome_make(0, NAN, 0);
-  /* Newton's starting times: each window's middle, and its start too when it is long enough to matter. */
-  double seeds[2 * CCD_MAX_WINDOWS];
+  /* Newton's starting times: each window's middle, and its start too when it is long enough to matter; at δ > 0
+   * also toi_tolerance past its start, where advancement has usually brought a first touch within reach. */
+  double seeds[3 * CCD_MAX_WINDOWS];
   int seed_count = 0;
   for (int i = 0; i < count; ++i) {
     const double length = windows[i].t1 - windows[i].t0;
     if (length > CCD_MIRANDA_HALF_WIDTH) seeds[seed_count++] = windows[i].t0;
+    if (thickness > 0 && toi_tolerance < length / 2) seeds[seed_count++] = windows[i].t0 + toi_tolerance;
     seeds[seed_count++] = windows[i].t0 + length / 2;
   }
   double upper = INFINITY;

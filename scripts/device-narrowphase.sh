@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# The narrow phase's step tables on the GPU machine (reports/narrowphase/device/, issue 35), before and after, from
+# one invocation: builds nothing; uses what `CARRY_VARIANTS="before=PATH after=PATH" scripts/device-carry.sh` put
+# into device-carry/ (bin/ccdbench-before, bin/ccdbench-after and the libraries they need). Registers the machine's
+# NVIDIA OpenCL driver (installed, not registered), then for each variant, one after the other on the same warm
+# machine, `full` (conservative) and `full+cubic64` on the CPU (every core) and on the GPU (backend=opencl):
+#   public: rod-twist 3036 -> 3037 and cloth-funnel 227 -> 228, median of $REPEATS passes;
+#   paper:  the paper suite's first $PAPER_STEPS steps at the scenes' δ;
+#   large:  a spinning ball at resolution $LARGE_RESOLUTION (2 × R² triangles: about 1M at 708), generated here
+#           ($LARGE_FRAMES frames), every step, median of 3 passes.
+# Every run is --verify none: the times are the point here; the answers are held by the tests (the parity of the two
+# backends, the recorded answers and the CI gate), and each step's digest is kept to compare them.
+# PARTS chooses among "public paper large" (default: all). Writes every table and JSON summary to a work folder and,
+# when $OUT is set (the device's return folder), packs it into $OUT/narrowphase-device.tgz after every part.
+# Usage (from the repository root): scripts/device-narrowphase.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/device-env.sh
+out=/tmp/ccdbench-narrowphase
+mkdir -p "$out" /tmp/icd
+pack() { if [ -n "${OUT:-}" ]; then tar czf "$OUT/narrowphase-device.tgz" -C "$out" --exclude='./scene-*' .; fi; }
+trap pack EXIT
+echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd
+export OCL_ICD_VENDORS=/tmp/icd
+export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-cache}
+export CCDBENCH_DATA_DIR=${CCDBENCH_DATA_DIR:-$PWD/device-carry/data}
+PARTS=${PARTS:-public paper large}
+VARIANTS=${VARIANTS:-before after}
+REPEATS=${REPEATS:-5}
+PAPER_STEPS=${PAPER_STEPS:-10}
+LARGE_RESOLUTION=${LARGE_RESOLUTION:-708}
+LARGE_FRAMES=${LARGE_FRAMES:-3}
+threads=$(nproc)
+bin=device-carry/bin
+strategies="full,full+cubic64,full:backend=opencl,full+cubic64:backend=opencl"
+{ nproc; lscpu | grep -E 'Model name|^CPU\(s\)' || true; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true; } > "$out/machine.txt" 2>&1
+for v in $VARIANTS; do echo "$v: $("$bin/ccdbench-$v" --version | head -1)"; done >> "$out/machine.txt"
+cat "$out/machine.txt"
+part() { [[ " $PARTS " == *" $1 "* ]]; }
+frames() { echo "$CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$2.ply $CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$3.ply"; }
+# run VARIANT NAME ARGS...: one ccdbench run on every core, its table and JSON kept as NAME-VARIANT.
+run() {
+  local variant=$1 name=$2
+  shift 2
+  local start=$SECONDS
+  if ! "$bin/ccdbench-$variant" --threads "$threads" run "$@" --strategy "$strategies" --verify none \
+       --out "$out/runs-$name-$variant" --json "$out/$name-$variant.json" --fresh 2> "$out/$name-$variant.err" > "$out/$name-$variant.txt"; then
+    echo "$name-$variant failed:"; tail -n 5 "$out/$name-$variant.err"; exit 1
+  fi
+  gzip -c "$out/runs-$name-$variant/results.jsonl" > "$out/$name-$variant.jsonl.gz"
+  rm -rf "$out/runs-$name-$variant"
+  echo "$name-$variant: $((SECONDS - start)) s"
+  cat "$out/$name-$variant.txt"
+}
+
+if part public; then
+  echo "== public steps"
+  for v in $VARIANTS; do
+    run "$v" rod-twist --frames $(frames rod-twist 3036 3037) --repeat "$REPEATS"
+    run "$v" cloth-funnel --frames $(frames cloth-funnel 227 228) --repeat "$REPEATS"
+  done
+  pack
+fi
+if part paper; then
+  echo "== paper suite, first $PAPER_STEPS steps"
+  for v in $VARIANTS; do run "$v" paper --suite paper --max-steps "$PAPER_STEPS"; done
+  pack
+fi
+if part large; then
+  echo "== spinning ball at resolution $LARGE_RESOLUTION"
+  scene="$out/scene-large"
+  if [ ! -e "$scene/scene.json" ]; then
+    start=$SECONDS
+    "$bin/ccdbench-${VARIANTS##* }" --threads "$threads" generate spinning-ball --resolution "$LARGE_RESOLUTION" \
+      --frames "$LARGE_FRAMES" --out "$scene" > "$out/generate-large.txt"
+    echo "generated in $((SECONDS - start)) s"
+  fi
+  for v in $VARIANTS; do run "$v" large --scene "$scene" --repeat 3; done
+  pack
+fi
