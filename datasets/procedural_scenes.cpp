@@ -73,6 +73,7 @@ SceneParameters resolve_parameters(const ProceduralSceneInfo& info, const SceneP
   require_integer("frames", 2, 100000);
   require_integer("seed", 0, 9007199254740992.0);
   require_integer("steps_per_frame", 1, 64);
+  require_integer("first_frame", 0, resolved.at("frames") - 2);
   for (const SceneParameter& parameter : info.parameters) {
     if (!parameter.choices.empty()) require_integer(parameter.name.c_str(), 0, static_cast<double>(parameter.choices.size() - 1));
   }
@@ -129,6 +130,7 @@ std::string cache_key(const std::string& name, const SceneParameters& parameters
   for (const auto& [parameter, value] : parameters) {
     // steps_per_frame=1 (the default) is left out, so that the scenes generated before it existed keep their key.
     if (parameter == "steps_per_frame" && value == 1) continue;
+    if (parameter == "first_frame" && value == 0) continue;  // likewise first_frame=0
     if (parameter == "obstacles" && value == 0) continue;  // likewise obstacles=mesh
     key << ' ' << parameter << '=' << value;
   }
@@ -230,6 +232,9 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
   // those times.
   const std::size_t parts = common.steps_per_frame;
   const std::size_t emitted = (common.frames - 1) * parts + 1;
+  // Frames before first_frame are simulated but not written; the written ones are numbered from 0.
+  const std::size_t first_written = static_cast<std::size_t>(parameters.at("first_frame")) * parts;
+  const std::size_t written = emitted - first_written;
   const double frame_seconds = SimulatorSettings{}.frame_seconds;
   auto time_of = [&](std::size_t frame) { return static_cast<double>(frame) * frame_seconds / static_cast<double>(parts); };
   // One process generates a folder at a time; another one waits, then finds it complete.
@@ -238,14 +243,14 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
 
   GenerateResult result;
   result.scene_file = request.out / "scene.json";
-  result.frames = emitted;
+  result.frames = written;
   result.thickness = setup.thickness;
   result.cloth_triangles = 0;
   for (const OutputObject& object : setup.objects) {
     result.triangles += object.faces.size();
     if (object.kind == ObjectKind::deformable) result.cloth_triangles += object.faces.size();
   }
-  result.from_cache = complete_in(request.out, setup, key, emitted);
+  result.from_cache = complete_in(request.out, setup, key, written);
 
   std::vector<std::unique_ptr<FrameSource>> caches;
   if (!result.from_cache) {
@@ -269,9 +274,9 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
                                         ": a parameter is outside the range where the simulator is stable");
           }
         }
-        if (frame < frames_of(setup.objects[k], emitted)) writers[k]->append(positions.back());
+        if (frame >= first_written && frame - first_written < frames_of(setup.objects[k], written)) writers[k]->append(positions.back());
       }
-      if (request.report) request.report({frame, setup.report(frame, time, positions)});
+      if (request.report && frame >= first_written) request.report({frame - first_written, setup.report(frame - first_written, time, positions)});
       if (request.progress) request.progress(frame + 1, emitted);
     }
     for (auto& writer : writers) writer->finish();
@@ -280,10 +285,10 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
     caches.push_back(open_frame_cache(request.out / "cache" / (object.name + ".frames")));
   }
   if (result.from_cache && request.report) {
-    for (std::size_t frame = 0; frame < emitted; ++frame) {
+    for (std::size_t frame = 0; frame < written; ++frame) {
       std::vector<std::vector<Vec3>> positions;
       for (const auto& cache : caches) positions.push_back(cache->frame(std::min(frame, cache->num_frames() - 1)));
-      request.report({frame, setup.report(frame, time_of(frame), positions)});
+      request.report({frame, setup.report(frame, time_of(frame + first_written), positions)});
     }
   }
   if (!result.from_cache) {

@@ -466,6 +466,7 @@ int run_generate(const GenerateOptions& options, std::ostream& out) {
   if (options.resolution) parameters["resolution"] = *options.resolution;
   if (options.frames) parameters["frames"] = *options.frames;
   if (options.seed) parameters["seed"] = *options.seed;
+  if (options.first_frame) parameters["first_frame"] = *options.first_frame;
   for (const std::string& setting : options.settings) {
     const auto equals = setting.find('=');
     if (equals == std::string::npos) throw std::invalid_argument("--set takes NAME=VALUE, got '" + setting + "'");

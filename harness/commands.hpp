@@ -82,7 +82,7 @@ int run_devices(bool json, std::ostream& out);
 
 struct GenerateOptions {
   std::string name;
-  std::optional<double> resolution, frames, seed;
+  std::optional<double> resolution, frames, seed, first_frame;
   /// Any scene parameter as NAME=VALUE.
   std::vector<std::string> settings;
   std::filesystem::path out;

@@ -211,7 +211,8 @@ int run_command_line(int argc, char** argv) {
       "NAME is " + strategy_names() + "; NARROW is " + ccd::narrowphase::narrow_phase_list() + " (default conservative).\n"
       "`ccdbench strategies` lists what each is, its keys with their values and defaults, and its backends.\n"
       "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
-  run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper");
+  run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper, large (the spinning\n"
+                  "ball at about 1M triangles, 3 steps of heavy contact)");
   run->add_option("--scene", run_scenes, "scene files (or folders with scene.json); repeat or list several");
   run->add_option("--frames", run_frames, "mesh files: one deformable self-colliding object, one step per pair")
       ->expected(2, 100000);
@@ -299,6 +300,9 @@ int run_command_line(int argc, char** argv) {
   generate->add_option("--resolution", generate_options.resolution, "cloth grid side N (N x N vertices)");
   generate->add_option("--frames", generate_options.frames, "number of frames");
   generate->add_option("--seed", generate_options.seed, "random seed");
+  generate->add_option("--first-frame", generate_options.first_frame,
+                       "first frame written (the earlier ones are simulated, not written): a scene's late, contact-rich\n"
+                       "stretch without its fall, e.g. --frames 30 --first-frame 26 writes 4 frames (3 steps)");
   generate->add_option("--set", generate_options.settings, "any scene parameter, NAME=VALUE (repeatable)");
   generate->add_option("--out", generate_options.out, "output folder")->required();
   generate->add_flag("--report", generate_options.report, "print the scene's measurements for every frame");

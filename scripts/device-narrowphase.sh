@@ -6,8 +6,9 @@
 # machine, `full` (conservative) and `full+cubic64` on the CPU (every core) and on the GPU (backend=opencl):
 #   public: rod-twist 3036 -> 3037 and cloth-funnel 227 -> 228, median of $REPEATS passes;
 #   paper:  the paper suite's first $PAPER_STEPS steps at the scenes' δ;
-#   large:  a spinning ball at resolution $LARGE_RESOLUTION (2 × R² triangles: about 1M at 708), generated here
-#           ($LARGE_FRAMES frames), every step, median of 3 passes.
+#   large:  the `large` suite's scene (the spinning ball at resolution 708, about 1M triangles, frames 26-29 of 30:
+#           3 steps of heavy contact), generated here by the newest variant so that older builds run it too, every
+#           step, median of 3 passes.
 # Every run is --verify none: the times are the point here; the answers are held by the tests (the parity of the two
 # backends, the recorded answers and the CI gate), and each step's digest is kept to compare them.
 # PARTS chooses among "public paper large" (default: all). Writes every table and JSON summary to a work folder and,
@@ -28,8 +29,6 @@ PARTS=${PARTS:-public paper large}
 VARIANTS=${VARIANTS:-before after}
 REPEATS=${REPEATS:-5}
 PAPER_STEPS=${PAPER_STEPS:-10}
-LARGE_RESOLUTION=${LARGE_RESOLUTION:-708}
-LARGE_FRAMES=${LARGE_FRAMES:-3}
 threads=$(nproc)
 bin=device-carry/bin
 strategies="full,full+cubic64,full:backend=opencl,full+cubic64:backend=opencl"
@@ -63,16 +62,16 @@ if part public; then
 fi
 if part paper; then
   echo "== paper suite, first $PAPER_STEPS steps"
-  for v in $VARIANTS; do run "$v" paper --suite paper --max-steps "$PAPER_STEPS"; done
+  for v in $VARIANTS; do run "$v" paper --suite paper --max-steps "$PAPER_STEPS" --repeat 3; done
   pack
 fi
 if part large; then
-  echo "== spinning ball at resolution $LARGE_RESOLUTION"
+  echo "== the large suite's spinning ball"
   scene="$out/scene-large"
   if [ ! -e "$scene/scene.json" ]; then
     start=$SECONDS
-    "$bin/ccdbench-${VARIANTS##* }" --threads "$threads" generate spinning-ball --resolution "$LARGE_RESOLUTION" \
-      --frames "$LARGE_FRAMES" --out "$scene" > "$out/generate-large.txt"
+    "$bin/ccdbench-${VARIANTS##* }" --threads "$threads" generate spinning-ball --resolution 708 --frames 30 --first-frame 26 \
+      --out "$scene" > "$out/generate-large.txt"
     echo "generated in $((SECONDS - start)) s"
   fi
   for v in $VARIANTS; do run "$v" large --scene "$scene" --repeat 3; done

@@ -12,7 +12,10 @@ std::vector<SceneParameter> with_common(std::vector<SceneParameter> own) {
                                      {"steps_per_frame", 1,
                                       "CCD steps per simulated frame: the simulator's substeps emitted as steps, simulated time "
                                       "and motion unchanged ((frames - 1) x this + 1 frames are written; 1, 2 and 4 keep the "
-                                      "simulator's 4 substeps per frame bit for bit, others the next multiple)"}};
+                                      "simulator's 4 substeps per frame bit for bit, others the next multiple)"},
+                                     {"first_frame", 0,
+                                      "first simulated frame written: the frames before it are simulated, not written, so a late "
+                                      "stretch of a scene (its contact) costs little disk and no CCD of the fall"}};
   all.insert(all.end(), own.begin(), own.end());
   return all;
 }
