@@ -212,7 +212,7 @@ int run_command_line(int argc, char** argv) {
       "`ccdbench strategies` lists what each is, its keys with their values and defaults, and its backends.\n"
       "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
   run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper, large (the spinning\n"
-                  "ball at about 1M triangles, 3 steps of heavy contact)");
+                  "ball at about 1M triangles, 3 steps of contact)");
   run->add_option("--scene", run_scenes, "scene files (or folders with scene.json); repeat or list several");
   run->add_option("--frames", run_frames, "mesh files: one deformable self-colliding object, one step per pair")
       ->expected(2, 100000);
