@@ -20,8 +20,14 @@ namespace ccd::strategies {
 struct StepCounters {
   std::size_t candidate_triangle_pairs = 0;
   std::size_t elementary_tests = 0;
-  /// Memory kept from step to step (history, hash tables, hierarchies), in bytes.
+  /// Host memory the strategy keeps from step to step (hierarchies, trees, hash tables, apccd's pending pairs and
+  /// history), in bytes.
+  std::size_t kept_bytes = 0;
+  /// apccd's history tables alone (part of kept_bytes; 0 for every other strategy), in bytes.
   std::size_t history_bytes = 0;
+  /// Device buffers the strategy holds after the step (OpenCL; its lists grow, never shrink, so this is their peak
+  /// so far), in bytes.
+  std::size_t device_bytes = 0;
   /// Strategy-specific counts, e.g. apccd's dangling vertices.
   std::vector<std::pair<std::string, double>> extra;
 };

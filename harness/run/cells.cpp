@@ -11,6 +11,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <fstream>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -18,6 +20,28 @@
 namespace ccd::harness {
 
 using nlohmann::json;
+
+namespace {
+
+/// Resets the process's peak resident memory to its current size (Linux: 5 into /proc/self/clear_refs); false
+/// where that is not possible, and the peak read after is then the process's since it started.
+bool reset_peak_resident() {
+  std::ofstream clear("/proc/self/clear_refs");
+  clear << "5";
+  clear.flush();
+  return static_cast<bool>(clear);
+}
+
+/// The process's peak resident memory (VmHWM of /proc/self/status), in bytes; 0 where it cannot be read.
+std::size_t peak_resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmHWM:", 0) == 0) return static_cast<std::size_t>(std::strtoull(line.c_str() + 6, nullptr, 10)) * 1024;
+  }
+  return 0;
+}
+
+}  // namespace
 
 json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps,
              const std::string& cell_name, const CellProgress& progress) {
@@ -29,6 +53,9 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   const strategies::StrategyEntry& strategy_entry = strategies::strategy_entry_of(spec);
   const strategies::Judging judging = strategy_entry.judging;
   json environment_of_cell = environment();
+  // The host's peak over the cell's timed passes: the strategy's memory and the frames it is given (the truth and
+  // verification come after).
+  const bool peak_of_cell = reset_peak_resident();
   for (int repeat = 0; repeat < std::max(1, options.repeats); ++repeat) {
     auto strategy = strategies::make_strategy(spec);
     resolved = strategy->name();
@@ -50,6 +77,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
       if (progress) progress(repeat, k, resolved);
     }
   }
+  const double host_peak = static_cast<double>(peak_resident_bytes());
   std::vector<Verdict> verdicts(steps);
   std::vector<strategies::TestedPairs> audited;
   json miss_causes = json::object();
@@ -113,7 +141,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   std::size_t colliding = 0, reported = 0, missed = 0, culled = 0, tested = 0, false_alarms = 0;
   std::size_t colliding_face_shape = 0, missed_face_shape = 0;
   ToiVerdict toi_total;
-  double candidates = 0, tests = 0, history = 0;
+  double candidates = 0, tests = 0, kept = 0, history = 0, device = 0;
   // Each strategy counter (apccd's session_start, nf, pending_pairs, ...) over the steps: mean and max, since the
   // paper reports averages and peaks, in the order the strategy reports them.
   std::vector<std::pair<std::string, std::pair<double, double>>> counter_totals;
@@ -132,7 +160,9 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                    {"stages", stages},
                    {"candidate_pairs", r.counters.candidate_triangle_pairs},
                    {"elementary_tests", r.counters.elementary_tests},
+                   {"kept_bytes", r.counters.kept_bytes},
                    {"history_bytes", r.counters.history_bytes},
+                   {"device_bytes", r.counters.device_bytes},
                    {"reported", reported_count(r, judging)}};
     // The digest of the answers (pairs and TOI bits), to compare two runs step by step; fcl's cells are judged by
     // triangle pairs and carry none.
@@ -178,7 +208,9 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
     false_alarms += verdicts[k].false_alarms;
     candidates += static_cast<double>(r.counters.candidate_triangle_pairs);
     tests += static_cast<double>(r.counters.elementary_tests);
+    kept = std::max(kept, static_cast<double>(r.counters.kept_bytes));
     history = std::max(history, static_cast<double>(r.counters.history_bytes));
+    device = std::max(device, static_cast<double>(r.counters.device_bytes));
     record.update(environment_of_cell);
     step_records.push_back(record);
   }
@@ -213,7 +245,11 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                   {"counters", counter_summary},
                   {"candidate_pairs", candidates / static_cast<double>(std::max<std::size_t>(steps, 1))},
                   {"elementary_tests", tests / static_cast<double>(std::max<std::size_t>(steps, 1))},
+                  {"kept_bytes", kept},
                   {"history_bytes", history},
+                  {"device_bytes", device},
+                  {"host_peak_bytes", host_peak},
+                  {"host_peak_of", peak_of_cell ? "cell" : "process"},
                   {"reported", reported},
                   {"judged_by", judging == strategies::Judging::triangle_pairs ? "triangle pairs" : "elementary pairs"},
                   {"thickness_from", data.thickness_from},

@@ -64,6 +64,7 @@ Table summary_table(const std::vector<json>& summaries) {
   if (with_errors) table.add_column({"errors", Align::right});
   if (with_toi) table.add_column({"TOI late (error max / mean)", Align::right});
   for (const char* header : {"candidates/step", "tests/step", "triangles", "steps"}) table.add_column({header, Align::right});
+  table.add_column({"MiB kept/device/host peak", Align::right});
   table.add_column({"stages (ms)"});
   for (const json& s : summaries) {
     const std::string speedup = s.contains("speedup") && s["speedup"].is_number() ? fixed(s["speedup"].get<double>(), 2) + "x" : "-";
@@ -85,8 +86,11 @@ Table summary_table(const std::vector<json>& summaries) {
                                                  significant(s["toi_error_mean"].get<double>(), 3) + ")"
                                            : "-");
     }
+    // Memory by kind (a cell kept from before these fields existed shows "-").
+    auto mib = [&](const char* field) { return s.contains(field) ? fixed(s[field].get<double>() / (1024.0 * 1024.0), 0) : std::string("-"); };
+    const std::string memory = mib("kept_bytes") + "/" + mib("device_bytes") + "/" + mib("host_peak_bytes");
     for (const std::string& cell : {fixed(s["candidate_pairs"].get<double>(), 0), fixed(s["elementary_tests"].get<double>(), 0),
-                                    std::to_string(s["triangles"].get<std::size_t>()), std::to_string(s["steps"].get<std::size_t>()), stages}) {
+                                    std::to_string(s["triangles"].get<std::size_t>()), std::to_string(s["steps"].get<std::size_t>()), memory, stages}) {
       row.push_back(cell);
     }
     table.add_row(std::move(row));

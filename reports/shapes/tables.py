@@ -42,7 +42,7 @@ for scene in ("spinning-ball", "drape", "pile"):
         scene_bytes = 24 * s["vertices"] + 12 * s["triangles"]
         pairs, faces = obstacle_counts(s, OBSTACLE[scene])
         contact[(scene, obstacles)] = (pairs, faces, s["steps"])
-        print(f"| {scene} | {obstacles} | {strategy} | {s['ms_per_step']:.2f} | {mib(scene_bytes)} | {mib(s['history_bytes'])} | "
+        print(f"| {scene} | {obstacles} | {strategy} | {s['ms_per_step']:.2f} | {mib(scene_bytes)} | {mib(s.get('kept_bytes', s['history_bytes']))} | "
               f"{pairs} | {faces} | {s['colliding']} | {s['missed']} |")
 print()
 print("| scene | obstacle | faces in contact, mesh | faces in contact, shape | shape − mesh | steps |")

@@ -256,7 +256,7 @@ class FclContinuous final : public Strategy {
     }
     result.counters.candidate_triangle_pairs = leaf_tests;
     result.counters.elementary_tests = tests;
-    result.counters.history_bytes = models_.bytes();
+    result.counters.kept_bytes = models_.bytes();
     return result;
   }
 
@@ -317,7 +317,7 @@ class FclBroadPhase final : public Strategy {
       sort_unique(candidates);
     }
     run_narrow_phase(result, scene_->topology(), masks_, candidates, step, *narrow_phase_, 0.0, audit);
-    result.counters.history_bytes = models_.bytes();
+    result.counters.kept_bytes = models_.bytes();
     return result;
   }
 

@@ -49,7 +49,7 @@ class FullTraversal final : public Strategy {
     }
     run_narrow_phase(result, scene_->topology(), masks_, candidates, step, *narrow_phase_, scene_->thickness(), audit, separation_filter_);
     run_face_shape_stage(result, *scene_, step, *narrow_phase_, audit);
-    result.counters.history_bytes = hierarchies_.bytes();
+    result.counters.kept_bytes = hierarchies_.bytes();
     return result;
   }
 

@@ -70,7 +70,7 @@ class FullOpenCl final : public Strategy {
     run_face_shape_stage(result, pipeline_.scene(), step, *pipeline_.narrow_phase().host, audit);
     result.counters.candidate_triangle_pairs = candidates;
     result.counters.elementary_tests = tests;
-    result.counters.history_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() +
+    result.counters.device_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() +
                                     candidates_.buffer.bytes() + elementary_.buffer.bytes() + kept_.buffer.bytes();
     return result;
   }

@@ -174,7 +174,8 @@ class Apccd final : public Strategy {
     // Memory by part (the paper's 48 MB for 142k pending pairs): the pending list, the trees, history's tables.
     const std::size_t pending_bytes = pending_.capacity() * sizeof(bvh::TrianglePair);
     const std::size_t tree_bytes = hierarchies_.bytes() + fresh_.bytes();
-    result.counters.history_bytes = history_.bytes() + pending_bytes + tree_bytes;
+    result.counters.history_bytes = history_.bytes();
+    result.counters.kept_bytes = history_.bytes() + pending_bytes + tree_bytes;
     result.counters.extra = {{"session_start", session_start ? 1.0 : 0.0},
                              {"nf", static_cast<double>(session_.nf())},
                              {"pending_pairs", static_cast<double>(pending_.size())},

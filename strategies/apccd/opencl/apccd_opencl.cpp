@@ -173,7 +173,9 @@ class ApccdOpenCl final : public Strategy {
     result.counters.candidate_triangle_pairs = admissible;
     result.counters.elementary_tests = tests;
     const std::size_t device = device_bytes();
-    result.counters.history_bytes = device + history_.bytes();
+    result.counters.device_bytes = device;
+    result.counters.history_bytes = history_.bytes();
+    result.counters.kept_bytes = history_.bytes();
     std::vector<std::pair<std::string, double>> extra = {{"session_start", session_start ? 1.0 : 0.0},
                                                          {"nf", static_cast<double>(session_.nf())},
                                                          {"pending_pairs", static_cast<double>(pending_.count)},
