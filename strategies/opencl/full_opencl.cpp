@@ -9,6 +9,7 @@
 #endif
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -45,6 +46,7 @@ class FullOpenCl final : public Strategy {
   }
 
   StepResult step(const StepView& step, bool audit) override {
+    const auto started = std::chrono::steady_clock::now();
     StepResult result;
     opencl::StageEvents events;
     opencl::Context& context = pipeline_.context();
@@ -72,6 +74,7 @@ class FullOpenCl final : public Strategy {
     result.counters.elementary_tests = tests;
     result.counters.device_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() +
                                     candidates_.buffer.bytes() + elementary_.buffer.bytes() + kept_.buffer.bytes();
+    opencl::add_launch_and_wait(result, started);
     return result;
   }
 

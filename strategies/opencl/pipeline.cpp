@@ -460,4 +460,12 @@ std::size_t DevicePipeline::bytes() const {
   return total;
 }
 
+void add_launch_and_wait(strategies::StepResult& result, std::chrono::steady_clock::time_point started) {
+  const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+  const double named = result.stages.total_milliseconds();
+  // Device stages are the device's own times; where they overlap the host's, the sum can pass the wall: nothing
+  // is left to name then.
+  if (wall > named) result.stages.add("launch and wait", wall - named);
+}
+
 }  // namespace ccd::opencl

@@ -16,6 +16,7 @@
 #include "strategies/opencl/runtime.hpp"
 #include "strategies/strategy.hpp"
 
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -215,5 +216,10 @@ std::size_t DevicePipeline::fill_list(const char* kernel_name, std::size_t items
     list.capacity = total[0] + total[0] / 4;
   }
 }
+
+/// The host's time between the device's profiled stages (kernel launches, blocking reads of counts, waits for
+/// events): the step's wall time since `started` less its named stages, added as the stage "launch and wait", so
+/// that every millisecond of an OpenCL step is named (issue 36). Call last in a step.
+void add_launch_and_wait(strategies::StepResult& result, std::chrono::steady_clock::time_point started);
 
 }  // namespace ccd::opencl

@@ -7,6 +7,7 @@
 #include "strategies/opencl/pipeline.hpp"
 #endif
 
+#include <chrono>
 #include <stdexcept>
 
 namespace ccd::strategies {
@@ -85,6 +86,7 @@ class ApccdOpenCl final : public Strategy {
   }
 
   StepResult step(const StepView& step, bool audit) override {
+    const auto started = std::chrono::steady_clock::now();
     StepResult result;
     opencl::StageEvents events;
     opencl::Context& context = pipeline_.context();
@@ -195,6 +197,7 @@ class ApccdOpenCl final : public Strategy {
     // Face-shape pairs on the host, with the host's narrow phase (face_shape.hpp), as the CPU backend does.
     run_face_shape_stage(result, *scene_, step, *pipeline_.narrow_phase().host, audit);
     session_.advance(dangling_vertices, admissible, pending_.count);
+    opencl::add_launch_and_wait(result, started);
     return result;
   }
 
