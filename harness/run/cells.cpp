@@ -56,6 +56,10 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   // The host's peak over the cell's timed passes: the strategy's memory and the frames it is given (the truth and
   // verification come after).
   const bool peak_of_cell = reset_peak_resident();
+  // Each timed step's ms less the sum of its own stages, over every pass: the time no stage names (the summary's
+  // ms_per_step_mean and stage_ms_mean are of medians and of means, and their difference is not this).
+  double unattributed_sum = 0;
+  std::size_t unattributed_count = 0;
   for (int repeat = 0; repeat < std::max(1, options.repeats); ++repeat) {
     auto strategy = strategies::make_strategy(spec);
     resolved = strategy->name();
@@ -72,6 +76,8 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
       }
       step_ms[k].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
       strategies::StepResult result = std::move(*answered);
+      unattributed_sum += step_ms[k].back() - result.stages.total_milliseconds();
+      ++unattributed_count;
       for (const auto& [stage, ms] : result.stages.entries()) stage_ms[stage].push_back(ms);
       if (repeat == 0) first_pass.push_back(std::move(result));
       if (progress) progress(repeat, k, resolved);
@@ -242,6 +248,7 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                   {"ms_per_step_mean", ms_sum / static_cast<double>(std::max<std::size_t>(steps, 1))},
                   {"stage_ms", stage_summary},
                   {"stage_ms_mean", stage_mean},
+                  {"unattributed_ms_mean", unattributed_count ? unattributed_sum / static_cast<double>(unattributed_count) : 0.0},
                   {"counters", counter_summary},
                   {"candidate_pairs", candidates / static_cast<double>(std::max<std::size_t>(steps, 1))},
                   {"elementary_tests", tests / static_cast<double>(std::max<std::size_t>(steps, 1))},

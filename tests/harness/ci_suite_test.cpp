@@ -106,6 +106,15 @@ TEST(RunSummary, StrategyCountersHaveTheirMeanAndMaxOverTheSteps) {
   }
   EXPECT_GT(stages, 0.0);
   EXPECT_LE(stages, summary["ms_per_step_mean"].get<double>());
+  // The time no stage names: each step's ms less its own stages, averaged (one pass here, so the step records hold
+  // every timed step).
+  double unattributed = 0;
+  for (const nlohmann::json& step : steps) {
+    double named = 0;
+    for (const auto& [stage, value] : step["stages"].items()) named += value.get<double>();
+    unattributed += step["ms"].get<double>() - named;
+  }
+  EXPECT_NEAR(summary["unattributed_ms_mean"].get<double>(), unattributed / static_cast<double>(steps.size()), 1e-9 * ms);
 }
 
 }  // namespace
