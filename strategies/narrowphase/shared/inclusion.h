@@ -783,6 +783,26 @@ static inline int ccd_time_windows(const ccd_inclusion* s, ccd_window windows[CC
  * point within δ at a box's end (below), no earlier than it by more than toi_tolerance. A box accepted on the
  * distance tolerance may come before the contact by the time the pair takes to close that distance: that is what
  * the tolerance means (and what a false alarm's TOI is: the earliest time the pair may be that close). */
+/* A shortcut to acceptance for a box already short in time (the search would otherwise halve u and v some 30
+ * times each down to the contact): the box of the same times around the domain's nearest point at its middle
+ * time, small enough in u and v that their share of its extent is a quarter of the distance tolerance, is examined
+ * as any box is. Accepted, it holds a point within δ + tolerance throughout, and the outer box's t0 is the TOI the
+ * search would report (the outer box is on top: nothing earlier is left). Returns 1 (and *achieved) then. */
+static inline int ccd_accept_nearest(ccd_inclusion* s, const ccd_sub_box* box, double* achieved) {
+  double u, v;
+  const ccd_v3 nearest = ccd_nearest_point_at(s, box, box->t0 + (box->t1 - box->t0) / 2, &u, &v);
+  if (!(ccd_norm(nearest) <= s->thickness + s->tolerance / 2)) return 0;
+  ccd_v3 S, X, Y;
+  ccd_terms_at(s, box->t0, &S, &X, &Y);
+  const double spread = ccd_norm(X) + ccd_norm(Y);
+  if (!(spread > 0)) return 0;
+  const double h = s->tolerance / (4 * spread);
+  ccd_sub_box tiny = ccd_sub_box_make(box->t0, box->t1, ccd_max(box->u0, u - h), ccd_min(box->u1, u + h), ccd_max(box->v0, v - h),
+                                      ccd_min(box->v1, v + h), 0);
+  ccd_sub_box low, high;
+  return ccd_examine(s, &tiny, &low, &high, achieved) == CCD_ACCEPTED;
+}
+
 /* Certified advancement through a window's start (before stage 3 and the search): along n, F's value at the
  * nearest point of the domain at the window's current start t, the gap n·F at each vertex of the domain (the (u, v)
  * square's corners, the triangle's for VF) is linear in time, so the time at which the first of them would come
@@ -849,7 +869,7 @@ static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const
     double achieved = 0;
     const int verdict = ccd_examine(s, &box, &low, &high, &achieved);
     if (verdict == CCD_EXCLUDED) continue;
-    if (verdict == CCD_ACCEPTED) {
+    if (verdict == CCD_ACCEPTED || (box.t1 - box.t0 <= s->toi_tolerance && ccd_accept_nearest(s, &box, &achieved))) {
       result.collides = 1;
       result.toi = box.t0;
       result.achieved_tolerance = achieved;
