@@ -240,6 +240,32 @@ TEST(Conservative, AnswersNoOnlyWithProofAndReportsItsCap) {
   EXPECT_FALSE(proven.hit_iteration_cap);
 }
 
+// Two misses an independent review found in the time windows (stage 2), each checked against the reference. A
+// coordinate crossing a large range (1/2 -> 2^-54) made the end rows recomputed as x0 + (x1 - x0) differ from the
+// given ones by about u·M, more than the coefficients' error bound allows when the triple products are tiny; and a
+// 2^-540 edge's norm squared to 0, so the band |V| <= δ|X||Y| collapsed while V did not.
+TEST(Conservative, TheTimeWindowsKeepTinyAndFarCarriedContacts) {
+  const double a = 0x1p-53, b = 0x1p-54, c = 0x1p-60, d = 0x1p-59;
+  const PairRows vertex_face = {Vec3(0, 0, 0.5 + a), Vec3(-0.25, -0.25, 0.5), Vec3(0.5, -0.25, 0.5), Vec3(-0.25, 0.5, 0.5),
+                                Vec3(0, 0, b + c), Vec3(-0.25, -0.25, b + d), Vec3(0.5, -0.25, b + d), Vec3(-0.25, 0.5, b + d)};
+  const double tiny = 0x1p-540;
+  const PairRows edge_edge = {Vec3(0, 0, 1), Vec3(tiny, 0, 1), Vec3(0, -0.5, 0), Vec3(0, 0.5, 0),
+                              Vec3(0, 0, 1.0 / 16), Vec3(tiny, 0, 1.0 / 16), Vec3(0, -0.5, 0), Vec3(0, 0.5, 0)};
+  const auto conservative = make_narrow_phase("conservative");
+  const struct {
+    datasets::QueryKind kind;
+    const PairRows& rows;
+    double thickness;
+  } cases[] = {{datasets::QueryKind::vertex_face, vertex_face, 0.0}, {datasets::QueryKind::edge_edge, edge_edge, 0.1}};
+  for (const auto& pair : cases) {
+    const reference::Decision truth = reference::decide(kind_of(pair.kind), pair.rows, pair.thickness, {true, true, 64});
+    ASSERT_TRUE(truth.collides) << testing::rational_rows(pair.rows, 1);
+    const NarrowPhaseResult answer = run(*conservative, pair.kind, pair.rows, pair.thickness);
+    ASSERT_TRUE(answer.collides) << "missed:\n" << testing::rational_rows(pair.rows, 1);
+    EXPECT_LE(answer.toi, *truth.toi_floor);
+  }
+}
+
 // advancement is not conservative (its distances round), but its steps must not add lateness of their own: on the
 // handcrafted unit tests, where contacts fall between two doubles, rounding each step to nearest once reported 25
 // TOIs one double late.

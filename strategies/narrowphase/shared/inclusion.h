@@ -52,6 +52,8 @@
 
 typedef struct {
   ccd_v3 x0[4], dx[4];
+  /* The rows at t = 1 as given (x0 + dx rounds: stage 2's error bound is for the given rows). */
+  ccd_v3 x1[4];
   int vertex_face;
   double thickness;
   double tolerance_fraction;
@@ -83,6 +85,7 @@ static inline void ccd_inclusion_init(ccd_inclusion* s, const ccd_v3 rows[8], do
   for (int k = 0; k < 4; ++k) {
     s->x0[k] = rows[k];
     s->dx[k] = ccd_sub(rows[k + 4], rows[k]);
+    s->x1[k] = rows[k + 4];
   }
   s->vertex_face = vertex_face;
   s->thickness = thickness;
@@ -205,6 +208,19 @@ static inline int ccd_box_values(const ccd_inclusion* s, const ccd_sub_box* box,
   return 8;
 }
 
+/* |v|, never below it: v is first scaled exactly by a power of two to a largest component in [1/2, 1), so that no
+ * square underflows (a component of 2^-540 squares to 0, and |v| came out 0 for an edge that short), then the
+ * rounded norm (a few u) is raised by 2^-50 and scaled back. 0 for v = 0, and NaN for a NaN component. */
+static inline double ccd_norm_above(ccd_v3 v) {
+  const double largest = ccd_max_coeff(ccd_cwise_abs(v));
+  if (largest == 0) return 0.0;
+  if (!(largest > 0)) return largest; /* NaN */
+  int exponent = 0;
+  frexp(largest, &exponent);
+  const ccd_v3 w = ccd_v3_make(ldexp(v.c[0], -exponent), ldexp(v.c[1], -exponent), ldexp(v.c[2], -exponent));
+  return ldexp(ccd_norm(w) * (1 + 0x1p-50), exponent);
+}
+
 /* Whether the plane normal to n at distance δ from 0 separates the box's values from the ball of radius δ: every
  * corner has n·F > δ|n| by more than its error. F over the box lies in the convex hull of its corners, so then
  * |F| > δ throughout. This catches what the axis-aligned test above cannot: a long thin hull that runs past the
@@ -215,7 +231,7 @@ static inline int ccd_box_values(const ccd_inclusion* s, const ccd_sub_box* box,
  * CCD_SEPARATION_RELATIVE_SLACK. */
 #define CCD_SEPARATION_RELATIVE_SLACK 0x1p-40
 static inline int ccd_separated_along(const ccd_inclusion* s, const ccd_v3* F, int count, ccd_v3 n) {
-  const double length = ccd_norm(n);
+  const double length = ccd_norm_above(n);
   if (!(length > 0)) return 0;
   const ccd_v3 magnitude = ccd_cwise_abs(n);
   const double carried = ccd_dot(magnitude, s->error) + 4 * CCD_DENORM_MIN;
@@ -705,10 +721,9 @@ static inline int ccd_monotone_window(const ccd_band_node* node, double band, do
 
 /* The windows, earliest first (at most CCD_MAX_WINDOWS); returns their count, 0 when the pair cannot touch. */
 static inline int ccd_time_windows(const ccd_inclusion* s, ccd_window windows[CCD_MAX_WINDOWS]) {
-  ccd_v3 x1[4], S[2], X[2], Y[2];
-  for (int k = 0; k < 4; ++k) x1[k] = ccd_add(s->x0[k], s->dx[k]);
+  ccd_v3 S[2], X[2], Y[2];
   ccd_split_terms(s, s->x0, &S[0], &X[0], &Y[0]);
-  ccd_split_terms(s, x1, &S[1], &X[1], &Y[1]);
+  ccd_split_terms(s, s->x1, &S[1], &X[1], &Y[1]);
   double blossom[8], magnitude = 0; /* index = s·4 + x·2 + y: which end each argument is taken at */
   for (int i = 0; i < 8; ++i) {
     const ccd_v3 si = S[i >> 2], xi = X[(i >> 1) & 1], yi = Y[i & 1];
@@ -729,8 +744,8 @@ static inline int ccd_time_windows(const ccd_inclusion* s, ccd_window windows[CC
                    64 * CCD_DENORM_MIN;
   stack[0].depth = 0;
   const double step_error = CCD_WINDOW_HALVING_UNITS * (CCD_UNIT_ROUNDOFF * (largest + stack[0].error) + CCD_DENORM_MIN);
-  const double x_most = ccd_norm(ccd_cwise_max(ccd_cwise_abs(X[0]), ccd_cwise_abs(X[1])));
-  const double y_most = ccd_norm(ccd_cwise_max(ccd_cwise_abs(Y[0]), ccd_cwise_abs(Y[1])));
+  const double x_most = ccd_norm_above(ccd_cwise_max(ccd_cwise_abs(X[0]), ccd_cwise_abs(X[1])));
+  const double y_most = ccd_norm_above(ccd_cwise_max(ccd_cwise_abs(Y[0]), ccd_cwise_abs(Y[1])));
   const double band = s->thickness > 0 ? s->thickness * x_most * y_most * (1 + CCD_WINDOW_BAND_RELATIVE_SLACK) + 4 * CCD_DENORM_MIN : 0.0;
   int count = 0, halvings = 0;
   while (size > 0) {
