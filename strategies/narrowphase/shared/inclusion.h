@@ -215,6 +215,9 @@ static inline double ccd_norm_above(ccd_v3 v) {
   const double largest = ccd_max_coeff(ccd_cwise_abs(v));
   if (largest == 0) return 0.0;
   if (!(largest > 0)) return largest; /* NaN */
+  /* Where no square can underflow harmfully or overflow (the rest of the range), the scaling is exact and changes
+   * nothing: the same value without its library calls (this is on the search's every box). */
+  if (largest >= 0x1p-500 && largest <= 0x1p500) return ccd_norm(v) * (1 + 0x1p-50);
   int exponent = 0;
   frexp(largest, &exponent);
   const ccd_v3 w = ccd_v3_make(ldexp(v.c[0], -exponent), ldexp(v.c[1], -exponent), ldexp(v.c[2], -exponent));
