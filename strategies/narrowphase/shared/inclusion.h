@@ -43,8 +43,6 @@
  * the closest-point distance is computed in a few dozen roundings (<< 1e-10); a mistake here would only be a false
  * alarm with TOI 0, never a miss. */
 #define CCD_START_DISTANCE_MARGIN 1e-10
-/* Boxes spent bounding the TOI below once a contact is proven. */
-#define CCD_TOI_BUDGET 48
 /* Half-width of the box around a Newton point in which Miranda's theorem proves a zero: about 1e-7 per parameter. */
 #define CCD_MIRANDA_HALF_WIDTH 0x1p-24
 
@@ -200,10 +198,14 @@ static inline int ccd_clipped_values(const ccd_inclusion* s, const ccd_sub_box* 
   return 2 * count;
 }
 
+/* Whether a VF box reaches past the hypotenuse u + v = 1, and is tested on its part inside the triangle (rounding up
+ * counts a corner in, which only enlarges the part). */
+static inline int ccd_clips(const ccd_inclusion* s, const ccd_sub_box* box) { return s->vertex_face && box->u1 + box->v1 > 1; }
+
 /* F's values whose convex hull holds F over the box (its corners', or its part inside the triangle's for a VF box
  * across the hypotenuse); returns their count. */
 static inline int ccd_box_values(const ccd_inclusion* s, const ccd_sub_box* box, ccd_v3* values) {
-  if (s->vertex_face && box->u1 + box->v1 > 1) return ccd_clipped_values(s, box, values);
+  if (ccd_clips(s, box)) return ccd_clipped_values(s, box, values);
   ccd_corners(s, box, values);
   return 8;
 }
@@ -277,10 +279,6 @@ static inline void ccd_box_closest(ccd_v3 S, ccd_v3 X, ccd_v3 Y, double u0, doub
   }
 }
 
-/* F at the box's middle time and the point of its (u, v) range nearest 0 there: the plane normal to it supports
- * the box's values at that time exactly (the nearest point of a convex set), so ccd_separated_along then bounds the
- * distance over the whole (u, v) range, losing only F's change over the box's time. Only a direction: any n is
- * sound in ccd_separated_along. */
 /* The point of the box's (u, v) range (its part inside the triangle for VF) where |F| at time t is least, in
  * *u, *v; returns F there. */
 static inline ccd_v3 ccd_nearest_point_at(const ccd_inclusion* s, const ccd_sub_box* box, double t, double* nearest_u, double* nearest_v) {
@@ -300,12 +298,13 @@ static inline ccd_v3 ccd_nearest_point_at(const ccd_inclusion* s, const ccd_sub_
   *nearest_v = v;
   return ccd_f_value(S, u, X, v, Y);
 }
-static inline ccd_v3 ccd_nearest_value_at(const ccd_inclusion* s, const ccd_sub_box* box, double t) {
-  double u, v;
-  return ccd_nearest_point_at(s, box, t, &u, &v);
-}
+/* F at the box's middle time and the point of its (u, v) range nearest 0 there: the plane normal to it supports
+ * the box's values at that time exactly (the nearest point of a convex set), so ccd_separated_along then bounds the
+ * distance over the whole (u, v) range, losing only F's change over the box's time. Only a direction: any n is
+ * sound in ccd_separated_along. */
 static inline ccd_v3 ccd_nearest_value(const ccd_inclusion* s, const ccd_sub_box* box) {
-  return ccd_nearest_value_at(s, box, box->t0 + (box->t1 - box->t0) / 2);
+  double u, v;
+  return ccd_nearest_point_at(s, box, box->t0 + (box->t1 - box->t0) / 2, &u, &v);
 }
 
 /* Excluded (no contact in the box), accepted (every point within δ + tolerance and the box at most toi_tolerance
@@ -315,12 +314,11 @@ static inline int ccd_examine(ccd_inclusion* s, const ccd_sub_box* box, ccd_sub_
   if (s->vertex_face && box->u0 + box->v0 > 1) return CCD_EXCLUDED; /* exact: 1 is representable */
   ccd_v3 F[8];
   ccd_corners(s, box, F);
-  /* VF: a box across the hypotenuse u + v = 1 is tested on its part inside the triangle (rounding up counts a
-   * corner in, which only enlarges the part). */
+  /* The corners serve the split below; a VF box across the hypotenuse is tested on its triangle part. */
   ccd_v3 clipped[2 * CCD_CLIPPED_VERTICES];
   const ccd_v3* values = F;
   int count = 8;
-  if (s->vertex_face && box->u1 + box->v1 > 1) {
+  if (ccd_clips(s, box)) {
     count = ccd_clipped_values(s, box, clipped);
     values = clipped;
   }
@@ -838,7 +836,8 @@ static inline int ccd_advance(ccd_inclusion* s, ccd_window* window) {
   for (int step = 0; step < CCD_ADVANCE_STEPS; ++step) {
     const double t = window->t0;
     ccd_sub_box box = ccd_sub_box_make(t, window->t1, 0, 1, 0, 1, 0);
-    const ccd_v3 n = ccd_nearest_value_at(s, &box, t);
+    double nearest_u, nearest_v;
+    const ccd_v3 n = ccd_nearest_point_at(s, &box, t, &nearest_u, &nearest_v);
     const double length = ccd_norm(n);
     if (!(length > 0)) return 1;
     ccd_v3 S0, X0, Y0, S1, X1, Y1;

@@ -60,8 +60,5 @@ static inline ccd_sub_box ccd_heap_pop(ccd_sub_box* heap, int* size) {
   ccd_heap_sift_down(heap, *size, 0);
   return top;
 }
-static inline void ccd_heapify(ccd_sub_box* heap, int size) {
-  for (int i = size / 2 - 1; i >= 0; --i) ccd_heap_sift_down(heap, size, i);
-}
 
 #endif
