@@ -281,6 +281,8 @@ cl_event* StageEvents::add(const char* stage) {
 
 std::vector<std::pair<std::string, double>> StageEvents::collect() {
   std::vector<std::pair<std::string, double>> stages;
+  cl_ulong first = ~cl_ulong{0}, last = 0;
+  double busy = 0;
   for (auto& [stage, event] : events_) {
     if (event == nullptr) continue;
     cl_ulong start = 0, end = 0;
@@ -288,7 +290,10 @@ std::vector<std::pair<std::string, double>> StageEvents::collect() {
     check(clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr), "clGetEventProfilingInfo");
     clReleaseEvent(event);
     event = nullptr;
+    first = std::min(first, start);
+    last = std::max(last, end);
     const double milliseconds = static_cast<double>(end - start) * 1e-6;
+    busy += milliseconds;
     const auto known = std::find_if(stages.begin(), stages.end(), [&](const auto& entry) { return entry.first == stage; });
     if (known != stages.end()) {
       known->second += milliseconds;
@@ -297,6 +302,9 @@ std::vector<std::pair<std::string, double>> StageEvents::collect() {
     }
   }
   events_.clear();
+  // An in-order queue runs one command at a time: the span less their sum is the time between them.
+  span_ = last > first ? static_cast<double>(last - first) * 1e-6 : 0;
+  idle_ = std::max(0.0, span_ - busy);
   return stages;
 }
 

@@ -113,9 +113,15 @@ class StageEvents {
   cl_event* add(const char* stage);
   /// Milliseconds per stage (in first-use order), from CL_PROFILING_COMMAND_START to _END; releases the events.
   std::vector<std::pair<std::string, double>> collect();
+  /// Of the commands collected last: milliseconds from the first one's start to the last one's end, and the part of
+  /// that span in no command (the device waiting on the host between commands: launches, blocking reads). A
+  /// profile of where a step's "launch and wait" goes (issue 36).
+  double span_milliseconds() const { return span_; }
+  double idle_milliseconds() const { return idle_; }
 
  private:
   std::vector<std::pair<const char*, cl_event>> events_;
+  double span_ = 0, idle_ = 0;
 };
 
 /// Throws OpenClError "CALL failed: NAME (CODE)" unless `status` is CL_SUCCESS.
