@@ -69,6 +69,7 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void partial_
     global const double* node_boxes, global const int2* children, global const uint* node_face, uint capacity,
     volatile global uint* total, global uint2* pairs) {
   local uint scratch[CCD_GROUP_SIZE + 1];
+  uint kept[CCD_TRAVERSAL_KEEP];
   const uint i = get_global_id(0);
   uint found = 0;
   uint f = 0;
@@ -78,10 +79,16 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void partial_
     f = dangling[i];
     root = face_root[f];
     query = ccd_box_load(fresh_boxes, i);
-    if (root >= 0) found = ccd_traverse(f, query, root, 4, /* no offset */ node_boxes, node_boxes, children, node_face, pairs, 0, 0, 0);
+    if (root >= 0) found = ccd_traverse(f, query, root, 4, /* no offset */ node_boxes, node_boxes, children, node_face, pairs, 0, 0, 0, kept);
   }
   const uint first = ccd_group_reserve(scratch, found, total);
-  if (found > 0 && first < capacity) ccd_traverse(f, query, root, 4, node_boxes, node_boxes, children, node_face, pairs, first, capacity, 1);
+  if (found > 0 && first < capacity) {
+    if (found <= CCD_TRAVERSAL_KEEP) {
+      ccd_write_kept(f, kept, found, pairs, first, capacity);
+    } else {
+      ccd_traverse(f, query, root, 4, node_boxes, node_boxes, children, node_face, pairs, first, capacity, 1, kept);
+    }
+  }
 }
 
 #ifdef cl_khr_int64_base_atomics /* a device without it still runs full.cl; apccd refuses it on the host */

@@ -159,8 +159,11 @@ kernel void refit_level(uint count, uint first, global const uint* level, global
  * frames (apccd's object_pairs=session), whose translation box offsets[6 q_offset[q]] sweeps the query's box (2)
  * or every box of the tree (3), as bvh.cpp's shifted(): (lo + offset lo, hi + offset hi). Pairs are written as
  * (smaller, larger). Exactly the face pairs whose leaf boxes overlap (after the sweep): an internal box holds its
- * leaves' boxes, and a swept one its leaves' swept boxes (rounding is monotone), so pruning loses none. The tree
- * is walked twice, to count and then to write, so no per-item buffer is needed. */
+ * leaves' boxes, and a swept one its leaves' swept boxes (rounding is monotone), so pruning loses none. The walk
+ * that counts keeps the first CCD_TRAVERSAL_KEEP faces it finds in the work item's own memory; a query that found
+ * no more writes them from there, and only one that found more walks its tree again to write (issue 36: the second
+ * walk was about half of the traversal's time). Either way the pairs are written in the order of the walk. */
+#define CCD_TRAVERSAL_KEEP 32
 static inline ccd_box ccd_box_shift(ccd_box b, global const double* offset) {
   for (int k = 0; k < 3; ++k) {
     b.lo[k] = b.lo[k] + offset[k];
@@ -170,7 +173,7 @@ static inline ccd_box ccd_box_shift(ccd_box b, global const double* offset) {
 }
 static inline uint ccd_traverse(uint f, ccd_box query, int root, int mode, global const double* offset, global const double* node_boxes,
                                 global const int2* children, global const uint* node_face, global uint2* pairs, uint first,
-                                uint capacity, int write) {
+                                uint capacity, int write, uint* kept) {
   int stack[CCD_TRAVERSAL_STACK];
   int size = 0;
   uint found = 0;
@@ -188,10 +191,17 @@ static inline uint ccd_traverse(uint f, ccd_box query, int root, int mode, globa
     const uint g = node_face[node];
     if (mode == 1 ? g > f : (mode == 4 ? g != f : 1)) {
       if (write && first + found < capacity) pairs[first + found] = (uint2)(min(f, g), max(f, g));
+      if (!write && found < CCD_TRAVERSAL_KEEP) kept[found] = g;
       ++found;
     }
   }
   return found;
+}
+
+/* The pairs of face f with the `found` (at most CCD_TRAVERSAL_KEEP) faces a counting walk kept, as the writing walk
+ * writes them. */
+static inline void ccd_write_kept(uint f, const uint* kept, uint found, global uint2* pairs, uint first, uint capacity) {
+  for (uint j = 0; j < found && first + j < capacity; ++j) pairs[first + j] = (uint2)(min(f, kept[j]), max(f, kept[j]));
 }
 
 kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void traverse(
@@ -199,6 +209,7 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void traverse
     global const int* q_offset, global const double* offsets, global const double* node_boxes, global const int2* children,
     global const uint* node_face, uint capacity, volatile global uint* total, global uint2* pairs) {
   local uint scratch[CCD_GROUP_SIZE + 1];
+  uint kept[CCD_TRAVERSAL_KEEP];
   const uint q = get_global_id(0);
   uint found = 0;
   ccd_box query;
@@ -209,11 +220,15 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void traverse
     if (mode >= 2) offset = offsets + 6 * (size_t)q_offset[q];
     query = ccd_box_load(node_boxes, q_leaf[q]);
     if (mode == 2) query = ccd_box_shift(query, offset);
-    found = ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, pairs, 0, 0, 0);
+    found = ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, pairs, 0, 0, 0, kept);
   }
   const uint first = ccd_group_reserve(scratch, found, total);
   if (q < count && found > 0 && first < capacity) {
-    ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, pairs, first, capacity, 1);
+    if (found <= CCD_TRAVERSAL_KEEP) {
+      ccd_write_kept(q_face[q], kept, found, pairs, first, capacity);
+    } else {
+      ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, pairs, first, capacity, 1, kept);
+    }
   }
 }
 
@@ -226,10 +241,10 @@ static inline ccd_box ccd_vertex_box(global const double* vertex_boxes, uint v) 
 
 /* The elementary pairs of candidate (a, b), as elementary_tests.cpp generates them: the vertices each face owns
  * against the other face, then the edges a owns against those b owns; skipping pairs that share a vertex and pairs
- * whose swept, widened primitive boxes are apart. Counted (write = 0) or written from `first`. */
+ * whose swept, widened primitive boxes are apart. Into `pairs` (at most 15: 6 vertex-face, 9 edge-edge, all of them
+ * kept in the work item's own memory, so that the pairs are found once and written after the group's reservation). */
 static inline uint ccd_expand(uint a, uint b, global const uchar* masks, global const uint* faces, global const uint* face_edges,
-                              global const uint2* edges, global const double* vertex_boxes, global uint4* out, uint first,
-                              uint capacity, int write) {
+                              global const uint2* edges, global const double* vertex_boxes, uint4* pairs) {
   uint found = 0;
   for (int side = 0; side < 2; ++side) {
     const uint owner = side == 0 ? a : b, other = side == 0 ? b : a;
@@ -241,8 +256,7 @@ static inline uint ccd_expand(uint a, uint b, global const uchar* masks, global 
       if (!(masks[owner] & (1u << k))) continue;
       const uint v = ccd_face_corner(owner_face, k);
       if (ccd_corner_of(v, other_face) || !ccd_box_intersects(ccd_vertex_box(vertex_boxes, v), face_box)) continue;
-      if (write && first + found < capacity) out[first + found] = (uint4)(v, other, CCD_VERTEX_FACE, 0u);
-      ++found;
+      pairs[found++] = (uint4)(v, other, CCD_VERTEX_FACE, 0u);
     }
   }
   for (int i = 0; i < 3; ++i) {
@@ -257,8 +271,7 @@ static inline uint ccd_expand(uint a, uint b, global const uchar* masks, global 
       if (!ccd_box_intersects(box_a, box_b)) continue;
       /* make_edge_edge_pair: the smaller edge (by v0, then v1) first */
       const int a_first = ea.x < eb.x || (ea.x == eb.x && ea.y < eb.y);
-      if (write && first + found < capacity) out[first + found] = a_first ? (uint4)(ea.x, ea.y, eb.x, eb.y) : (uint4)(eb.x, eb.y, ea.x, ea.y);
-      ++found;
+      pairs[found++] = a_first ? (uint4)(ea.x, ea.y, eb.x, eb.y) : (uint4)(eb.x, eb.y, ea.x, ea.y);
     }
   }
   return found;
@@ -268,18 +281,16 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void expand(
     uint count, global const uint* count_at, global const uint2* candidates, global const uchar* masks, global const uint* faces, global const uint* face_edges,
     global const uint2* edges, global const double* vertex_boxes, uint capacity, volatile global uint* total, global uint4* out) {
   local uint scratch[CCD_GROUP_SIZE + 1];
+  uint4 pairs[15];
   count = ccd_item_count(count, count_at);
   const uint i = get_global_id(0);
   uint found = 0;
-  uint2 pair = (uint2)(0u, 0u);
   if (i < count) {
-    pair = candidates[i];
-    found = ccd_expand(pair.x, pair.y, masks, faces, face_edges, edges, vertex_boxes, out, 0, 0, 0);
+    const uint2 pair = candidates[i];
+    found = ccd_expand(pair.x, pair.y, masks, faces, face_edges, edges, vertex_boxes, pairs);
   }
   const uint first = ccd_group_reserve(scratch, found, total);
-  if (i < count && found > 0 && first < capacity) {
-    ccd_expand(pair.x, pair.y, masks, faces, face_edges, edges, vertex_boxes, out, first, capacity, 1);
-  }
+  for (uint j = 0; j < found && first + j < capacity; ++j) out[first + j] = pairs[j];
 }
 
 /* The pair's eight rows (step.hpp's pair_rows). */
