@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# Where each millisecond and each byte of an OpenCL step goes (reports/opencl/step/, issue 36), for several builds
+# side by side in one invocation: builds nothing; uses what `CARRY_VARIANTS="before=PATH after=PATH ..."
+# scripts/device-carry.sh` put into device-carry/ (bin/ccdbench-NAME and the libraries they need). Registers the
+# machine's NVIDIA OpenCL driver (installed, not registered). For each part, each variant in turn (same warm
+# machine), each of `full:backend=opencl` (conservative) and `full+cubic64:backend=opencl` runs as its own process
+# while `nvidia-smi` samples that process's device memory every $SAMPLE_MS ms: the driver's figure beside the
+# harness's own count of its buffers (device_bytes). Parts (PARTS, default "tiny public paper large"):
+#   tiny:   the ci suite's first 2 steps (scenes of a few hundred triangles): the driver's memory for a context, its
+#           kernels and their reservations, which no buffer of ours accounts for;
+#   public: rod-twist 3036 -> 3037 and cloth-funnel 227 -> 228, median of $REPEATS passes;
+#   paper:  the paper suite's first $PAPER_STEPS steps at the scenes' δ, and the ci and default suites whole;
+#   large:  the `large` suite's scene (the spinning ball at resolution 708, about 1M triangles, frames 6-9),
+#           generated here by the last variant, $LARGE_REPEATS passes.
+# Every run is --verify none (the times are the point; the answers are held by the parity tests, the recorded
+# answers and the CI gate), and keeps each step's digest: digests equal across variants show the same answers.
+# Writes NAME-VARIANT-NARROW.{json,txt,err,smi} into a work folder and, when $OUT is set (the device's return
+# folder), packs it into $OUT/opencl-step.tgz after every part. Table: reports/opencl/step/table.py FOLDER.
+# Usage (from the repository root, on the GPU machine): PARTS="tiny public" VARIANTS="before after" scripts/device-opencl-step.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/device-env.sh
+out=/tmp/ccdbench-opencl-step
+mkdir -p "$out" /tmp/icd
+pack() { if [ -n "${OUT:-}" ]; then tar czf "$OUT/opencl-step.tgz" -C "$out" --exclude='./scene-*' --exclude='./runs-*' .; fi; }
+trap pack EXIT
+if command -v nvidia-smi > /dev/null; then  # (elsewhere, e.g. trying the script with PoCL: the registered devices)
+  echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd
+  export OCL_ICD_VENDORS=/tmp/icd
+fi
+export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-cache}
+export CCDBENCH_DATA_DIR=${CCDBENCH_DATA_DIR:-$PWD/device-carry/data}
+PARTS=${PARTS:-tiny public paper large}
+VARIANTS=${VARIANTS:-before after}
+REPEATS=${REPEATS:-5}
+PAPER_STEPS=${PAPER_STEPS:-10}
+LARGE_REPEATS=${LARGE_REPEATS:-3}
+SAMPLE_MS=${SAMPLE_MS:-20}
+threads=$(nproc)
+bin=device-carry/bin
+{ nproc; lscpu | grep -E 'Model name|^CPU\(s\)' || true; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true; } > "$out/machine.txt" 2>&1
+for v in $VARIANTS; do echo "$v: $("$bin/ccdbench-$v" --version | head -1)"; done >> "$out/machine.txt"
+cat "$out/machine.txt"
+part() { [[ " $PARTS " == *" $1 "* ]]; }
+frames() { echo "$CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$2.ply $CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$3.ply"; }
+# run VARIANT NAME ARGS...: each GPU strategy in its own process, sampled by nvidia-smi; kept as NAME-VARIANT-NARROW.
+run() {
+  local variant=$1 name=$2
+  shift 2
+  for narrow in conservative cubic64; do
+    local strategy="full:backend=opencl" stem="$out/$name-$variant-$narrow" start=$SECONDS
+    [ "$narrow" = cubic64 ] && strategy="full+cubic64:backend=opencl"
+    "$bin/ccdbench-$variant" --threads "$threads" run "$@" --strategy "$strategy" --verify none --out "$out/runs-$name-$variant-$narrow" \
+      --json "$stem.json" --fresh 2> "$stem.err" > "$stem.txt" &
+    local pid=$!
+    nvidia-smi --query-compute-apps=pid,used_memory --format=csv,noheader,nounits -lms "$SAMPLE_MS" 2> /dev/null |
+      awk -F', *' -v pid="$pid" '$1 == pid && $2 + 0 > peak {peak = $2 + 0} END {print peak + 0}' > "$stem.smi" &
+    local sampler=$!
+    if ! wait "$pid"; then
+      kill "$sampler" 2> /dev/null || true
+      echo "$name-$variant-$narrow failed:"; tail -n 5 "$stem.err"; exit 1
+    fi
+    pkill -f "nvidia-smi --query-compute-apps" 2> /dev/null || true
+    wait "$sampler" 2> /dev/null || true
+    gzip -c "$out/runs-$name-$variant-$narrow/results.jsonl" > "$stem.jsonl.gz"
+    rm -rf "$out/runs-$name-$variant-$narrow"
+    echo "$name-$variant-$narrow: $((SECONDS - start)) s, driver peak $(cat "$stem.smi") MiB"
+    grep -E "backend=opencl " "$stem.txt" | head -n 20 || true
+  done
+}
+
+if part tiny; then
+  echo "== tiny: the ci suite's first 2 steps"
+  for v in $VARIANTS; do run "$v" tiny --suite ci --max-steps 2; done
+  pack
+fi
+if part public; then
+  echo "== public steps"
+  for v in $VARIANTS; do
+    run "$v" rod-twist --frames $(frames rod-twist 3036 3037) --repeat "$REPEATS"
+    run "$v" cloth-funnel --frames $(frames cloth-funnel 227 228) --repeat "$REPEATS"
+  done
+  pack
+fi
+if part paper; then
+  echo "== ci and default suites, paper suite's first $PAPER_STEPS steps"
+  for v in $VARIANTS; do
+    run "$v" ci --suite ci
+    run "$v" default --suite default
+    run "$v" paper --suite paper --max-steps "$PAPER_STEPS"
+  done
+  pack
+fi
+if part large; then
+  echo "== the large suite's spinning ball"
+  scene="$out/scene-large"
+  if [ ! -e "$scene/scene.json" ]; then
+    start=$SECONDS
+    last=${VARIANTS##* }
+    "$bin/ccdbench-$last" --threads "$threads" generate spinning-ball --resolution 708 --frames 10 --first-frame 6 --out "$scene" > "$out/generate-large.txt"
+    echo "generated in $((SECONDS - start)) s"
+  fi
+  for v in $VARIANTS; do run "$v" large --scene "$scene" --repeat "$LARGE_REPEATS"; done
+  pack
+fi
