@@ -37,6 +37,7 @@ class FullOpenCl final : public Strategy {
 
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
     pipeline_.init(scene, first_frame);
+    lists_sized_ = false;
     pipeline_.make_queries(queries_, true, true, false);
     opencl::Context& context = pipeline_.context();
     // Static objects are fitted once, here, over frame 0 (as the CPU does): every leaf and every level now.
@@ -58,8 +59,9 @@ class FullOpenCl final : public Strategy {
     pipeline_.refit(pipeline_.moving_nodes(), x0, x1, pipeline_.scene().thickness() / 2, nullptr, node_boxes_, &events);
     // The stages from traversal to the compaction of what collides run as one chain: each kernel reads the count of
     // the list before it on the device, and the host waits once, for every count (read_counts). A list that did not
-    // fit is grown and the stages from it run again (the first steps only: lists keep their room); when only the
-    // compaction's list overflowed, the compaction alone.
+    // fit is grown and the stages from it run again (lists keep their room); when only the compaction's list
+    // overflowed, the compaction alone. The first step of a run waits for each count instead: its lists start
+    // with room from the scene, not from a step, and a chain run on a list that overflowed is work thrown away.
     opencl::DeviceList& kept = pipeline_.kept();
     opencl::DeviceList& tested = separation_filter_ ? kept_ : elementary_;
     std::vector<opencl::DeviceList*> lists = {&candidates_, &elementary_};
@@ -70,7 +72,7 @@ class FullOpenCl final : public Strategy {
     }
     lists.push_back(&kept);
     stages.push_back("narrow phase");
-    const auto enqueued = opencl::Fill::enqueue;
+    const auto enqueued = lists_sized_ ? opencl::Fill::enqueue : opencl::Fill::wait;
     for (std::size_t from = 0; from < lists.size();) {
       if (from == 0) pipeline_.traverse(queries_, node_boxes_, nullptr, candidates_, events, "traversal", enqueued);
       if (from <= 1) pipeline_.expand(candidates_.buffer, candidates_.items(), elementary_, events, enqueued);
@@ -80,6 +82,7 @@ class FullOpenCl final : public Strategy {
       from = pipeline_.read_counts(lists, stages);
       pipeline_.check_candidate_count(candidates_.total[0]);
     }
+    lists_sized_ = true;
     const std::size_t candidates = candidates_.count, elementary = elementary_.count, tests = tested.count;
     pipeline_.collect(step, x0, x1, result, events);
     for (const auto& [stage, milliseconds] : events.collect()) result.stages.add(stage, milliseconds);
@@ -105,6 +108,8 @@ class FullOpenCl final : public Strategy {
   opencl::DevicePositions positions_;
   Buffer node_boxes_;
   opencl::DeviceList candidates_, elementary_, kept_;
+  /// Whether a step has sized the lists (init leaves room from the scene only).
+  bool lists_sized_ = false;
 };
 
 }  // namespace
