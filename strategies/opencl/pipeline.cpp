@@ -32,6 +32,9 @@ constexpr std::size_t kHostQueriesPerThread = 2;
 /// The second device pass gives up after this many iterations: the queries that cloth-funnel hands back finish
 /// within it, side by side; what is left runs to the cap.
 constexpr long kSecondPassIterations = 4000;
+/// Fewest kept pairs per chunk of the collision set's assembly: one sort of rod-twist's 4,944 pairs took 0.6 ms of
+/// the H100 machine's step (as one chunk: 4,096 per chunk before); 512 sort in well under 0.1 ms.
+constexpr std::size_t kOutputChunk = 512;
 /// Depth the traversal kernel's stack holds (CCD_TRAVERSAL_STACK): the hierarchies split at the median, so a tree
 /// of n faces is ceil(log2 n) + 1 deep; init refuses a deeper tree before any launch.
 constexpr std::size_t kTraversalStack = 64;
@@ -148,6 +151,13 @@ void DevicePipeline::build_hierarchies(const Scene& scene, std::span<const Vec3>
     }
   }
   node_count_ = children.size();
+  // The largest face of each subtree, for self queries' pruning (kernels/full.cl): children follow their parent.
+  std::vector<cl_uint> max_face(node_face);
+  for (std::size_t n = node_count_; n-- > 0;) {
+    if (children[n].s[0] >= 0) {
+      max_face[n] = std::max(max_face[static_cast<std::size_t>(children[n].s[0])], max_face[static_cast<std::size_t>(children[n].s[1])]);
+    }
+  }
   // Leaves, and internal nodes grouped by depth, deepest first (children before parents).
   cl_uint max_depth = 0;
   for (cl_uint d : depth) max_depth = std::max(max_depth, d);
@@ -175,6 +185,7 @@ void DevicePipeline::build_hierarchies(const Scene& scene, std::span<const Vec3>
   Context& context = *context_;
   upload(context, children_, children.data(), children.size());
   upload(context, node_face_, node_face.data(), node_face.size());
+  upload(context, max_face_, max_face.data(), max_face.size());
   upload(context, leaf_node_buffer_, leaf_node_.data(), leaf_node_.size());
   all_.leaf_count = leaves_all.size();
   moving_.leaf_count = leaves_moving.size();
@@ -277,8 +288,8 @@ std::size_t DevicePipeline::traverse(const Queries& queries, const Buffer& node_
   const cl_mem offset_memory = offsets != nullptr ? offsets->get() : nullptr;
   const std::size_t candidates = fill_list("traverse", queries.count, out, sizeof(cl_uint2), events, stage, [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
     set_arguments(kernel, static_cast<cl_uint>(queries.count), queries.leaf.get(), queries.face.get(), queries.root.get(), queries.mode.get(),
-                  queries.offset_index.get(), offset_memory, node_boxes.get(), children_.get(), node_face_.get(), capacity, counter.get(),
-                  out.buffer.get());
+                  queries.offset_index.get(), offset_memory, node_boxes.get(), children_.get(), node_face_.get(), max_face_.get(), capacity,
+                  counter.get(), out.buffer.get());
   }, fill);
   return candidates;
 }
@@ -450,7 +461,8 @@ void DevicePipeline::collect(const StepView& step, const Buffer& x0, const Buffe
     // The collision set from what the device kept, in chunks put in order in parallel and merged: the strategy's
     // own work, timed as its "output" stage (it was in no stage).
     ScopedStageTimer timer(result.stages, "output");
-    const std::size_t chunks = std::max<std::size_t>(1, std::min(host_threads, kept / 4096));
+    // Chunks of at least kOutputChunk pairs: sorted side by side and merged in a tree (normalize_in_parallel).
+    const std::size_t chunks = std::max<std::size_t>(1, std::min(host_threads, kept / kOutputChunk));
     std::vector<CollisionSet> parts(chunks);
     auto assemble = [&](std::size_t c) {
       for (std::size_t i = c * kept / chunks; i < (c + 1) * kept / chunks; ++i) {
@@ -464,8 +476,7 @@ void DevicePipeline::collect(const StepView& step, const Buffer& x0, const Buffe
       }
     };
     if (chunks == 1) {
-      // A small set on this thread: waking the pool's threads for one chunk cost more than the chunk (0.67 ms for
-      // rod-twist's 4,944 pairs on the H100 machine's 16 threads).
+      // A small set on this thread: no pool threads woken for one chunk.
       assemble(0);
       parts[0].normalize();
       result.collisions = std::move(parts[0]);
@@ -500,7 +511,7 @@ strategies::TestedPairs DevicePipeline::tested_pairs(const Buffer& elementary, s
 
 std::size_t DevicePipeline::bytes() const {
   std::size_t total = 0;
-  for (const Buffer* b : {&keep_, &faces_, &face_edges_, &edges_, &masks_, &children_, &node_face_, &leaf_node_buffer_, &all_.leaves, &moving_.leaves,
+  for (const Buffer* b : {&keep_, &faces_, &face_edges_, &edges_, &masks_, &children_, &node_face_, &max_face_, &leaf_node_buffer_, &all_.leaves, &moving_.leaves,
                           &all_.levels, &moving_.levels, &vertex_boxes_, &status_, &toi_, &out_.buffer, &out_.counter, &out_status_, &out_toi_,
                           &retry_pairs_, &retry_status_, &retry_toi_}) {
     total += b->bytes();

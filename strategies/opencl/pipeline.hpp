@@ -229,7 +229,7 @@ class DevicePipeline {
   std::size_t initial_elementary_capacity_ = 0;
   DeviceList out_;
   Buffer keep_;
-  Buffer faces_, face_edges_, edges_, masks_, children_, node_face_, leaf_node_buffer_, vertex_boxes_, status_, toi_,
+  Buffer faces_, face_edges_, edges_, masks_, children_, node_face_, max_face_, leaf_node_buffer_, vertex_boxes_, status_, toi_,
       out_status_, out_toi_, retry_pairs_, retry_status_, retry_toi_;
 };
 

@@ -79,14 +79,15 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void partial_
     f = dangling[i];
     root = face_root[f];
     query = ccd_box_load(fresh_boxes, i);
-    if (root >= 0) found = ccd_traverse(f, query, root, 4, /* no offset */ node_boxes, node_boxes, children, node_face, pairs, 0, 0, 0, kept);
+    if (root >= 0) found = ccd_traverse(f, query, root, 4, /* no offset */ node_boxes, node_boxes, children, node_face, /* mode 4: unused */ 0, pairs, 0,
+                                        0, 0, kept);
   }
   const uint first = ccd_group_reserve(scratch, found, total);
   if (found > 0 && first < capacity) {
     if (found <= CCD_TRAVERSAL_KEEP) {
       ccd_write_kept(f, kept, found, pairs, first, capacity);
     } else {
-      ccd_traverse(f, query, root, 4, node_boxes, node_boxes, children, node_face, pairs, first, capacity, 1, kept);
+      ccd_traverse(f, query, root, 4, node_boxes, node_boxes, children, node_face, 0, pairs, first, capacity, 1, kept);
     }
   }
 }

@@ -162,7 +162,9 @@ kernel void refit_level(uint count, uint first, global const uint* level, global
  * leaves' boxes, and a swept one its leaves' swept boxes (rounding is monotone), so pruning loses none. The walk
  * that counts keeps the first CCD_TRAVERSAL_KEEP faces it finds in the work item's own memory; a query that found
  * no more writes them from there, and only one that found more walks its tree again to write (issue 36: the second
- * walk was about half of the traversal's time). Either way the pairs are written in the order of the walk. */
+ * walk was about half of the traversal's time). Either way the pairs are written in the order of the walk. A self
+ * query skips, before loading its box, a subtree whose faces are all at most f (max_face: the largest face of each
+ * node's subtree): it would keep none of them, and each pair is found once, from its smaller face. */
 #define CCD_TRAVERSAL_KEEP 32
 static inline ccd_box ccd_box_shift(ccd_box b, global const double* offset) {
   for (int k = 0; k < 3; ++k) {
@@ -172,14 +174,15 @@ static inline ccd_box ccd_box_shift(ccd_box b, global const double* offset) {
   return b;
 }
 static inline uint ccd_traverse(uint f, ccd_box query, int root, int mode, global const double* offset, global const double* node_boxes,
-                                global const int2* children, global const uint* node_face, global uint2* pairs, uint first,
-                                uint capacity, int write, uint* kept) {
+                                global const int2* children, global const uint* node_face, global const uint* max_face,
+                                global uint2* pairs, uint first, uint capacity, int write, uint* kept) {
   int stack[CCD_TRAVERSAL_STACK];
   int size = 0;
   uint found = 0;
   stack[size++] = root;
   while (size > 0) {
     const int node = stack[--size];
+    if (mode == 1 && max_face[node] <= f) continue;
     const ccd_box box = mode == 3 ? ccd_box_shift(ccd_box_load(node_boxes, (uint)node), offset) : ccd_box_load(node_boxes, (uint)node);
     if (!ccd_box_intersects(query, box)) continue;
     const int2 c = children[node];
@@ -207,7 +210,7 @@ static inline void ccd_write_kept(uint f, const uint* kept, uint found, global u
 kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void traverse(
     uint count, global const uint* q_leaf, global const uint* q_face, global const int* q_root, global const uchar* q_mode,
     global const int* q_offset, global const double* offsets, global const double* node_boxes, global const int2* children,
-    global const uint* node_face, uint capacity, volatile global uint* total, global uint2* pairs) {
+    global const uint* node_face, global const uint* max_face, uint capacity, volatile global uint* total, global uint2* pairs) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   uint kept[CCD_TRAVERSAL_KEEP];
   const uint q = get_global_id(0);
@@ -220,14 +223,14 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void traverse
     if (mode >= 2) offset = offsets + 6 * (size_t)q_offset[q];
     query = ccd_box_load(node_boxes, q_leaf[q]);
     if (mode == 2) query = ccd_box_shift(query, offset);
-    found = ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, pairs, 0, 0, 0, kept);
+    found = ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, max_face, pairs, 0, 0, 0, kept);
   }
   const uint first = ccd_group_reserve(scratch, found, total);
   if (q < count && found > 0 && first < capacity) {
     if (found <= CCD_TRAVERSAL_KEEP) {
       ccd_write_kept(q_face[q], kept, found, pairs, first, capacity);
     } else {
-      ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, pairs, first, capacity, 1, kept);
+      ccd_traverse(q_face[q], query, q_root[q], mode, offset, node_boxes, children, node_face, max_face, pairs, first, capacity, 1, kept);
     }
   }
 }
