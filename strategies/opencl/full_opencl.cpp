@@ -12,7 +12,6 @@
 #include <chrono>
 #include <cstdlib>
 #include <stdexcept>
-#include <vector>
 
 namespace ccd::strategies {
 
@@ -37,7 +36,6 @@ class FullOpenCl final : public Strategy {
 
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
     pipeline_.init(scene, first_frame);
-    lists_sized_ = false;
     pipeline_.make_queries(queries_, true, true, false);
     opencl::Context& context = pipeline_.context();
     // Static objects are fitted once, here, over frame 0 (as the CPU does): every leaf and every level now.
@@ -57,46 +55,27 @@ class FullOpenCl final : public Strategy {
     const Buffer& x1 = positions_.x1();
     pipeline_.vertex_boxes(x0, x1, events);
     pipeline_.refit(pipeline_.moving_nodes(), x0, x1, pipeline_.scene().thickness() / 2, nullptr, node_boxes_, &events);
-    // The stages from traversal to the compaction of what collides run as one chain: each kernel reads the count of
-    // the list before it on the device, and the host waits once, for every count (read_counts). A list that did not
-    // fit is grown and the stages from it run again (lists keep their room); when only the compaction's list
-    // overflowed, the compaction alone. The first step of a run waits for each count instead: its lists start
-    // with room from the scene, not from a step, and a chain run on a list that overflowed is work thrown away.
-    opencl::DeviceList& kept = pipeline_.kept();
-    opencl::DeviceList& tested = separation_filter_ ? kept_ : elementary_;
-    std::vector<opencl::DeviceList*> lists = {&candidates_, &elementary_};
-    std::vector<const char*> stages = {"traversal", "expansion"};
+    const std::size_t candidates = pipeline_.traverse(queries_, node_boxes_, nullptr, candidates_, events, "traversal");
+    const std::size_t elementary = pipeline_.expand(candidates_.buffer, candidates, elementary_, events);
+    const opencl::DeviceList* tested = &elementary_;
     if (separation_filter_) {
-      lists.push_back(&kept_);
-      stages.push_back("distance heuristic");
+      pipeline_.filter(elementary_.buffer, elementary, x0, x1, kept_, events);
+      tested = &kept_;
     }
-    lists.push_back(&kept);
-    stages.push_back("narrow phase");
-    const auto enqueued = lists_sized_ ? opencl::Fill::enqueue : opencl::Fill::wait;
-    for (std::size_t from = 0; from < lists.size();) {
-      if (from == 0) pipeline_.traverse(queries_, node_boxes_, nullptr, candidates_, events, "traversal", enqueued);
-      if (from <= 1) pipeline_.expand(candidates_.buffer, candidates_.items(), elementary_, events, enqueued);
-      if (separation_filter_ && from <= 2) pipeline_.filter(elementary_.buffer, elementary_.items(), x0, x1, kept_, events, enqueued);
-      if (from + 1 < lists.size()) pipeline_.narrow(tested.buffer, tested.items(), x0, x1, events);
-      pipeline_.compact(tested.buffer, tested.items(), events, enqueued);
-      from = pipeline_.read_counts(lists, stages);
-      pipeline_.check_candidate_count(candidates_.total[0]);
-    }
-    lists_sized_ = true;
-    const std::size_t candidates = candidates_.count, elementary = elementary_.count, tests = tested.count;
-    pipeline_.collect(step, x0, x1, result, events);
+    const std::size_t tests = separation_filter_ ? kept_.count : elementary;
+    pipeline_.back_end(tested->buffer, tests, step, x0, x1, result, events);
     for (const auto& [stage, milliseconds] : events.collect()) result.stages.add(stage, milliseconds);
     result.counters.extra.emplace_back("device_span_ms", events.span_milliseconds());
     result.counters.extra.emplace_back("device_idle_ms", events.idle_milliseconds());
-    if (audit) result.tested = pipeline_.tested_pairs(tested.buffer, tests);
+    if (audit) result.tested = pipeline_.tested_pairs(tested->buffer, tests);
     if (separation_filter_) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(elementary - tests));
     positions_.finish(step);
     // Face-shape pairs on the host, with the host's narrow phase (face_shape.hpp), as the CPU backend does.
     run_face_shape_stage(result, pipeline_.scene(), step, *pipeline_.narrow_phase().host, audit);
     result.counters.candidate_triangle_pairs = candidates;
     result.counters.elementary_tests = tests;
-    result.counters.device_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() + candidates_.bytes() +
-                                    elementary_.bytes() + kept_.bytes();
+    result.counters.device_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() +
+                                    candidates_.buffer.bytes() + elementary_.buffer.bytes() + kept_.buffer.bytes();
     opencl::add_launch_and_wait(result, started);
     return result;
   }
@@ -108,8 +87,6 @@ class FullOpenCl final : public Strategy {
   opencl::DevicePositions positions_;
   Buffer node_boxes_;
   opencl::DeviceList candidates_, elementary_, kept_;
-  /// Whether a step has sized the lists (init leaves room from the scene only).
-  bool lists_sized_ = false;
 };
 
 }  // namespace

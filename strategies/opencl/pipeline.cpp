@@ -32,8 +32,8 @@ constexpr std::size_t kHostQueriesPerThread = 2;
 /// The second device pass gives up after this many iterations: the queries that cloth-funnel hands back finish
 /// within it, side by side; what is left runs to the cap.
 constexpr long kSecondPassIterations = 4000;
-/// Fewest kept pairs per chunk of the collision set's assembly: one sort of rod-twist's 4,944 pairs took 0.6 ms of
-/// the H100 machine's step (as one chunk: 4,096 per chunk before); 512 sort in well under 0.1 ms.
+/// Fewest kept pairs per chunk of the collision set's assembly (4,096 before issue 36; on the H100 machine 512
+/// took the large suite's step from 0.76 to 0.56 ms in this stage, and made no difference on rod-twist's 4,944).
 constexpr std::size_t kOutputChunk = 512;
 /// Depth the traversal kernel's stack holds (CCD_TRAVERSAL_STACK): the hierarchies split at the median, so a tree
 /// of n faces is ceil(log2 n) + 1 deep; init refuses a deeper tree before any launch.
@@ -111,6 +111,7 @@ void DevicePipeline::init(const Scene& scene, std::span<const Vec3> first_frame)
   upload(*context_, face_edges_, face_edges.data(), face_edges.size());
   upload(*context_, edges_, edges.data(), edges.size());
   upload(*context_, masks_, masks.data(), masks.size());
+  counter_.reserve(*context_, 2 * sizeof(cl_uint));
   initial_elementary_capacity_ = list_start(16 * std::max<std::size_t>(faces, 256));
   out_.capacity = list_start(1024);
   context_->finish();
@@ -262,35 +263,15 @@ void DevicePipeline::refit_levels(const RefitPlan& plan, const Buffer& node_boxe
   }
 }
 
-std::size_t DevicePipeline::read_counts(const std::vector<DeviceList*>& lists, const std::vector<const char*>& stages) {
-  Context& context = *context_;
-  // In-order queue: the reads run after every enqueued fill, and waiting on the last waits on them all.
-  for (std::size_t i = 0; i < lists.size(); ++i) {
-    check(clEnqueueReadBuffer(context.queue(), lists[i]->counter.get(), i + 1 == lists.size() ? CL_TRUE : CL_FALSE, 0, sizeof(lists[i]->total),
-                              lists[i]->total, 0, nullptr, nullptr),
-          "clEnqueueReadBuffer");
-  }
-  for (std::size_t i = 0; i < lists.size(); ++i) {
-    DeviceList& list = *lists[i];
-    if (list.total[1] != 0) throw std::runtime_error(label_ + ": the " + stages[i] + " list of one step passed 2^32 entries");
-    if (list.total[0] > list.capacity) {
-      list.capacity = list.total[0] + list.total[0] / 4;
-      return i;
-    }
-    list.count = list.total[0];
-  }
-  return lists.size();
-}
-
 std::size_t DevicePipeline::traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out,
-                                     StageEvents& events, const char* stage, Fill fill) {
+                                     StageEvents& events, const char* stage) {
   if (out.capacity == 0) out.capacity = list_start(std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024));
   const cl_mem offset_memory = offsets != nullptr ? offsets->get() : nullptr;
   const std::size_t candidates = fill_list("traverse", queries.count, out, sizeof(cl_uint2), events, stage, [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
     set_arguments(kernel, static_cast<cl_uint>(queries.count), queries.leaf.get(), queries.face.get(), queries.root.get(), queries.mode.get(),
                   queries.offset_index.get(), offset_memory, node_boxes.get(), children_.get(), node_face_.get(), max_face_.get(), capacity,
                   counter.get(), out.buffer.get());
-  }, fill);
+  });
   return candidates;
 }
 
@@ -302,35 +283,29 @@ void DevicePipeline::vertex_boxes(const Buffer& x0, const Buffer& x1, StageEvent
   launch(*context_, kernel, vertices, group_, events.add("boxes"));
 }
 
-void DevicePipeline::check_candidate_count(std::size_t candidates) const {
-  if (candidates > kMaxCandidatesPerStep) {
-    throw std::runtime_error(label_ + ": " + std::to_string(candidates) + " candidate triangle pairs in one step; at most " +
+std::size_t DevicePipeline::expand(const Buffer& candidates, std::size_t count, DeviceList& out, StageEvents& events) {
+  if (count > kMaxCandidatesPerStep) {
+    throw std::runtime_error(label_ + ": " + std::to_string(count) + " candidate triangle pairs in one step; at most " +
                              std::to_string(kMaxCandidatesPerStep) + " keep the elementary count within 32-bit indices");
   }
-}
-
-std::size_t DevicePipeline::expand(const Buffer& candidates, Items count, DeviceList& out, StageEvents& events, Fill fill) {
-  if (count.at == nullptr) check_candidate_count(count.items);
   if (out.capacity == 0) out.capacity = initial_elementary_capacity_;
   return fill_list("expand", count, out, sizeof(cl_uint4), events, "expansion", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
-    set_arguments(kernel, static_cast<cl_uint>(count.items), count.at_memory(), candidates.get(), masks_.get(), faces_.get(), face_edges_.get(),
-                  edges_.get(), vertex_boxes_.get(), capacity, counter.get(), out.buffer.get());
-  }, fill);
+    set_arguments(kernel, static_cast<cl_uint>(count), candidates.get(), masks_.get(), faces_.get(), face_edges_.get(), edges_.get(),
+                  vertex_boxes_.get(), capacity, counter.get(), out.buffer.get());
+  });
 }
 
-std::size_t DevicePipeline::filter(const Buffer& elementary, Items count, const Buffer& x0, const Buffer& x1, DeviceList& out,
-                                   StageEvents& events, Fill fill) {
+std::size_t DevicePipeline::filter(const Buffer& elementary, std::size_t count, const Buffer& x0, const Buffer& x1, DeviceList& out,
+                                   StageEvents& events) {
   Context& context = *context_;
-  keep_.reserve(context, std::max<std::size_t>(count.items, 1));
+  keep_.reserve(context, std::max<std::size_t>(count, 1));
   cl_kernel kernel = context.kernel("separation");
-  set_arguments(kernel, static_cast<cl_uint>(count.items), count.at_memory(), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(),
-                keep_.get());
-  launch(context, kernel, count.items, narrow_group(kernel), events.add("distance heuristic"));
+  set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), keep_.get());
+  launch(context, kernel, count, narrow_group(kernel), events.add("distance heuristic"));
   if (out.capacity == 0) out.capacity = initial_elementary_capacity_;
   return fill_list("compact_kept", count, out, sizeof(cl_uint4), events, "distance heuristic", [&](cl_kernel compact, cl_uint capacity, const Buffer& counter) {
-    set_arguments(compact, static_cast<cl_uint>(count.items), count.at_memory(), elementary.get(), keep_.get(), capacity, counter.get(),
-                  out.buffer.get());
-  }, fill);
+    set_arguments(compact, static_cast<cl_uint>(count), elementary.get(), keep_.get(), capacity, counter.get(), out.buffer.get());
+  });
 }
 
 std::size_t DevicePipeline::narrow_group(cl_kernel kernel) const {
@@ -343,14 +318,14 @@ std::size_t DevicePipeline::narrow_group(cl_kernel kernel) const {
   return group;
 }
 
-void DevicePipeline::launch_conservative(const Buffer& pairs, Items count, long limit, const Buffer& status, const Buffer& toi,
+void DevicePipeline::launch_conservative(const Buffer& pairs, std::size_t count, long limit, const Buffer& status, const Buffer& toi,
                                          const Buffer& x0, const Buffer& x1, StageEvents& events) {
   cl_kernel kernel = context_->kernel("narrow_conservative");
   const cl_double tolerance = narrow_phase_.form.accuracy, toi_tolerance = narrow_phase_.form.toi_tolerance;
   const cl_long max_iterations = narrow_phase_.form.max_iterations, give_up_after = limit;
-  set_arguments(kernel, static_cast<cl_uint>(count.items), count.at_memory(), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(),
-                tolerance, toi_tolerance, max_iterations, give_up_after, status.get(), toi.get());
-  launch(*context_, kernel, count.items, narrow_group(kernel), events.add("narrow phase"));
+  set_arguments(kernel, static_cast<cl_uint>(count), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), tolerance, toi_tolerance, max_iterations,
+                give_up_after, status.get(), toi.get());
+  launch(*context_, kernel, count, narrow_group(kernel), events.add("narrow phase"));
 }
 
 void DevicePipeline::device_pass(StageEvents& events, const std::vector<std::size_t>& which, long limit, const std::vector<cl_uint4>& pairs,
@@ -374,40 +349,26 @@ void DevicePipeline::device_pass(StageEvents& events, const std::vector<std::siz
 
 void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const StepView& step, const Buffer& x0, const Buffer& x1,
                               strategies::StepResult& result, StageEvents& events) {
-  narrow(elementary, count, x0, x1, events);
-  compact(elementary, count, events);
-  collect(step, x0, x1, result, events);
-}
-
-void DevicePipeline::narrow(const Buffer& elementary, Items count, const Buffer& x0, const Buffer& x1, StageEvents& events) {
   Context& context = *context_;
-  status_.reserve(context, std::max<std::size_t>(count.items, 1));
-  toi_.reserve(context, std::max<std::size_t>(count.items, 1) * sizeof(double));
-  if (narrow_phase_.conservative()) {
+  status_.reserve(context, std::max<std::size_t>(count, 1));
+  toi_.reserve(context, std::max<std::size_t>(count, 1) * sizeof(double));
+  const bool conservative = narrow_phase_.conservative();
+  if (conservative) {
     launch_conservative(elementary, count, backend_.device_iterations, status_, toi_, x0, x1, events);
   } else {
     cl_kernel kernel = context.kernel("narrow_cubic");
     const cl_double eta = narrow_phase_.form.accuracy;
-    set_arguments(kernel, static_cast<cl_uint>(count.items), count.at_memory(), elementary.get(), faces_.get(), x0.get(), x1.get(),
-                  scene_->thickness(), eta, status_.get(), toi_.get());
-    launch(context, kernel, count.items, narrow_group(kernel), events.add("narrow phase"));
+    set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), eta,
+                  status_.get(), toi_.get());
+    launch(context, kernel, count, narrow_group(kernel), events.add("narrow phase"));
   }
-}
-
-void DevicePipeline::compact(const Buffer& elementary, Items count, StageEvents& events, Fill fill) {
-  Context& context = *context_;
-  fill_list("compact", count, out_, sizeof(cl_uint4), events, "narrow phase", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+  // The compaction of what collides (or needs another pass).
+  const std::size_t kept = fill_list("compact", count, out_, sizeof(cl_uint4), events, "narrow phase", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
     out_status_.reserve(context, std::max<std::size_t>(out_.capacity, 1));
     out_toi_.reserve(context, std::max<std::size_t>(out_.capacity, 1) * sizeof(double));
-    set_arguments(kernel, static_cast<cl_uint>(count.items), count.at_memory(), elementary.get(), status_.get(), toi_.get(), capacity,
-                  counter.get(), out_.buffer.get(), out_status_.get(), out_toi_.get());
-  }, fill);
-}
-
-void DevicePipeline::collect(const StepView& step, const Buffer& x0, const Buffer& x1, strategies::StepResult& result, StageEvents& events) {
-  Context& context = *context_;
-  const bool conservative = narrow_phase_.conservative();
-  const std::size_t kept = out_.count;
+    set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), status_.get(), toi_.get(), capacity, counter.get(), out_.buffer.get(),
+                  out_status_.get(), out_toi_.get());
+  });
   std::vector<cl_uint4> pairs(kept);
   std::vector<cl_uchar> status(kept);
   std::vector<double> toi(kept);
@@ -512,7 +473,7 @@ strategies::TestedPairs DevicePipeline::tested_pairs(const Buffer& elementary, s
 std::size_t DevicePipeline::bytes() const {
   std::size_t total = 0;
   for (const Buffer* b : {&keep_, &faces_, &face_edges_, &edges_, &masks_, &children_, &node_face_, &max_face_, &leaf_node_buffer_, &all_.leaves, &moving_.leaves,
-                          &all_.levels, &moving_.levels, &vertex_boxes_, &status_, &toi_, &out_.buffer, &out_.counter, &out_status_, &out_toi_,
+                          &all_.levels, &moving_.levels, &vertex_boxes_, &counter_, &status_, &toi_, &out_.buffer, &out_status_, &out_toi_,
                           &retry_pairs_, &retry_status_, &retry_toi_}) {
     total += b->bytes();
   }

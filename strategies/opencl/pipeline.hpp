@@ -42,33 +42,11 @@ inline constexpr cl_ulong kEmptyPendingKey = ~cl_ulong{0};
 /// the host (the kernel files refuse to build without them), and the sizes chosen for this device and run.
 std::string kernel_defines(std::size_t group_size, long sub_boxes);
 
-/// How many work items a stage runs: `items`, known on the host, or, with `at` (the counter of the list the stage
-/// reads), the entries that list holds, at most `items` (its room), read by the kernel itself (ccd_item_count in
-/// kernels/full.cl): the host then enqueues the stage without waiting to read the count (issue 36).
-struct Items {
-  Items(std::size_t count) : items(count) {}  // NOLINT(google-explicit-constructor): a host count is the common case
-  Items(std::size_t room, const Buffer* counter) : items(room), at(counter) {}
-  std::size_t items = 0;
-  const Buffer* at = nullptr;
-  cl_mem at_memory() const { return at != nullptr ? at->get() : nullptr; }
-};
-
-/// Whether a list-filling stage waits for its count (and grows and runs again until the list holds it), or is only
-/// enqueued: the caller reads the counts of a chain of stages at once (DevicePipeline::read_counts).
-enum class Fill { wait, enqueue };
-
-/// A list the device fills: its buffer, its room (entries), its counter on the device (total[0] entries asked for,
-/// total[1] set when that passed 2^32) and, after a fill that fit, its length.
+/// A list the device fills: its buffer, its room (entries) and, after a fill, its length.
 struct DeviceList {
   Buffer buffer;
   std::size_t capacity = 0;
   std::size_t count = 0;
-  Buffer counter;
-  /// The counter as last read.
-  cl_uint total[2] = {0, 0};
-  /// The items of a stage that reads this list, counted on the device.
-  Items items() const { return {capacity, &counter}; }
-  std::size_t bytes() const { return buffer.bytes() + counter.bytes(); }
 };
 
 /// Traversal queries: face q_face[i] (its leaf q_leaf[i], whose box is the query) against the tree rooted at
@@ -161,40 +139,24 @@ class DevicePipeline {
   /// The levels of the plan only (after leaves changed).
   void refit_levels(const RefitPlan& plan, const Buffer& node_boxes, StageEvents* events);
 
-  /// Runs a list-filling kernel: resets the list's counter, launches over `items` with the list's room; with
-  /// Fill::wait reads the total and, when the list did not fit, grows it to the total and runs again, returning
-  /// the total (also in list.count); with Fill::enqueue returns 0 at once (read_counts reads it later).
+  /// Runs a list-filling kernel: resets the counter, launches over `items` with the list's room, reads the total;
+  /// when the list did not fit, grows it to the total and runs again. Returns the total (also in list.count).
   template <class SetArguments>
-  std::size_t fill_list(const char* kernel_name, Items items, DeviceList& list, std::size_t entry_bytes, StageEvents& events,
-                        const char* stage, SetArguments set, Fill fill = Fill::wait);
-  /// Reads the counters of a chain of enqueued fills (in stage order) with one wait. Returns the index of the first
-  /// list that did not fit, grown to hold its total (the stages from there on must run again), or lists.size() when
-  /// every list fit (their counts set). `stages` name them in the error thrown when one passed 2^32 entries.
-  std::size_t read_counts(const std::vector<DeviceList*>& lists, const std::vector<const char*>& stages);
+  std::size_t fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes, StageEvents& events,
+                        const char* stage, SetArguments set);
 
   /// Candidate triangle pairs of `queries` against `node_boxes` (offsets: 6 doubles per collidable pair, or none).
   std::size_t traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out, StageEvents& events,
-                       const char* stage, Fill fill = Fill::wait);
+                       const char* stage);
   /// Swept vertex boxes x0 ∪ x1 widened by δ/2 (the expansion's primitive-level box test).
   void vertex_boxes(const Buffer& x0, const Buffer& x1, StageEvents& events);
-  /// Elementary pairs of the `count` candidates in `candidates` that pass the primitive-level box test.
-  std::size_t expand(const Buffer& candidates, Items count, DeviceList& out, StageEvents& events, Fill fill = Fill::wait);
-  /// Throws unless `candidates` candidate pairs keep the elementary count within 32-bit indices.
-  void check_candidate_count(std::size_t candidates) const;
+  /// Elementary pairs of `count` candidates in `candidates` that pass the primitive-level box test.
+  std::size_t expand(const Buffer& candidates, std::size_t count, DeviceList& out, StageEvents& events);
   /// The separation filter (narrowphase/shared/separation.h) over `count` elementary pairs: those it cannot prove
-  /// apart go to `out` (in any order). Returns their count (Fill::wait).
-  std::size_t filter(const Buffer& elementary, Items count, const Buffer& x0, const Buffer& x1, DeviceList& out, StageEvents& events,
-                     Fill fill = Fill::wait);
-  /// The narrow phase's kernel over `count` elementary pairs.
-  void narrow(const Buffer& elementary, Items count, const Buffer& x0, const Buffer& x1, StageEvents& events);
-  /// After narrow(): what collides (or needs another tier) into kept(); with Fill::wait, until kept() holds it all.
-  void compact(const Buffer& elementary, Items count, StageEvents& events, Fill fill = Fill::wait);
-  /// The list compact() fills (its count set once it fit).
-  DeviceList& kept() { return out_; }
-  /// After compact(): the tiers for given-up queries and the collision set, into result.collisions (normalised) and
-  /// the device_* / host_decided_pairs counters.
-  void collect(const StepView& step, const Buffer& x0, const Buffer& x1, strategies::StepResult& result, StageEvents& events);
-  /// narrow(), compact() and collect() over `count` elementary pairs.
+  /// apart go to `out` (in any order). Returns their count.
+  std::size_t filter(const Buffer& elementary, std::size_t count, const Buffer& x0, const Buffer& x1, DeviceList& out, StageEvents& events);
+  /// The narrow phase over `count` elementary pairs, then the tiers for given-up queries, into result.collisions
+  /// (normalised) and the device_* / host_decided_pairs counters.
   void back_end(const Buffer& elementary, std::size_t count, const StepView& step, const Buffer& x0, const Buffer& x1, strategies::StepResult& result,
                 StageEvents& events);
   /// The first `count` elementary pairs of `elementary`, sorted (audit mode).
@@ -210,7 +172,7 @@ class DevicePipeline {
 
  private:
   void build_hierarchies(const Scene& scene, std::span<const Vec3> first_frame);
-  void launch_conservative(const Buffer& pairs, Items count, long limit, const Buffer& status, const Buffer& toi, const Buffer& x0,
+  void launch_conservative(const Buffer& pairs, std::size_t count, long limit, const Buffer& status, const Buffer& toi, const Buffer& x0,
                            const Buffer& x1, StageEvents& events);
   void device_pass(StageEvents& events, const std::vector<std::size_t>& which, long limit, const std::vector<cl_uint4>& pairs,
                    std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1);
@@ -229,25 +191,29 @@ class DevicePipeline {
   std::size_t initial_elementary_capacity_ = 0;
   DeviceList out_;
   Buffer keep_;
-  Buffer faces_, face_edges_, edges_, masks_, children_, node_face_, max_face_, leaf_node_buffer_, vertex_boxes_, status_, toi_,
+  Buffer faces_, face_edges_, edges_, masks_, children_, node_face_, max_face_, leaf_node_buffer_, vertex_boxes_, counter_, status_, toi_,
       out_status_, out_toi_, retry_pairs_, retry_status_, retry_toi_;
 };
 
 template <class SetArguments>
-std::size_t DevicePipeline::fill_list(const char* kernel_name, Items items, DeviceList& list, std::size_t entry_bytes,
-                                      StageEvents& events, const char* stage, SetArguments set, Fill fill) {
+std::size_t DevicePipeline::fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes,
+                                      StageEvents& events, const char* stage, SetArguments set) {
   Context& context = *context_;
   cl_kernel kernel = context.kernel(kernel_name);
   while (true) {
     list.buffer.reserve(context, std::max<std::size_t>(list.capacity, 1) * entry_bytes);
-    list.counter.reserve(context, sizeof(list.total));
-    const cl_uint zero = 0;
-    check(clEnqueueFillBuffer(context.queue(), list.counter.get(), &zero, sizeof(zero), 0, sizeof(list.total), 0, nullptr, nullptr),
-          "clEnqueueFillBuffer");
-    set(kernel, static_cast<cl_uint>(std::min<std::size_t>(list.capacity, 0xFFFFFFFFu)), list.counter);
-    launch(context, kernel, items.items, group_, events.add(stage));
-    if (fill == Fill::enqueue) return 0;
-    if (read_counts({&list}, {stage}) == 1) return list.count;
+    const cl_uint zero[2] = {0, 0};
+    check(clEnqueueWriteBuffer(context.queue(), counter_.get(), CL_FALSE, 0, sizeof(zero), zero, 0, nullptr, nullptr), "clEnqueueWriteBuffer");
+    set(kernel, static_cast<cl_uint>(std::min<std::size_t>(list.capacity, 0xFFFFFFFFu)), counter_);
+    launch(context, kernel, items, group_, events.add(stage));
+    cl_uint total[2] = {0, 0};
+    download(context, counter_, total, 2);
+    if (total[1] != 0) throw std::runtime_error(label_ + ": the " + stage + " list of one step passed 2^32 entries");
+    if (total[0] <= list.capacity) {
+      list.count = total[0];
+      return total[0];
+    }
+    list.capacity = total[0] + total[0] / 4;
   }
 }
 

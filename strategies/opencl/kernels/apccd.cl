@@ -143,10 +143,10 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void admit(
 }
 
 /* The distance heuristic: keep[i] = 0 when the separation filter proves the pair farther apart than δ. */
-kernel void separation(uint count, global const uint* count_at, global const uint4* pairs, global const uint* faces,
-                       global const double* x0, global const double* x1, double thickness, global uchar* keep) {
+kernel void separation(uint count, global const uint4* pairs, global const uint* faces, global const double* x0, global const double* x1,
+                       double thickness, global uchar* keep) {
   const uint i = get_global_id(0);
-  if (i >= ccd_item_count(count, count_at)) return;
+  if (i >= count) return;
   ccd_v3 rows[8];
   const int vertex_face = ccd_load_rows(pairs[i], faces, x0, x1, rows);
   keep[i] = ccd_provably_apart(rows, vertex_face, thickness) ? (uchar)0 : (uchar)1;
@@ -154,10 +154,8 @@ kernel void separation(uint count, global const uint* count_at, global const uin
 
 /* The pairs with keep != 0, in any order. */
 kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void compact_kept(
-    uint count, global const uint* count_at, global const uint4* pairs, global const uchar* keep, uint capacity,
-    volatile global uint* total, global uint4* out) {
+    uint count, global const uint4* pairs, global const uchar* keep, uint capacity, volatile global uint* total, global uint4* out) {
   local uint scratch[CCD_GROUP_SIZE + 1];
-  count = ccd_item_count(count, count_at);
   const uint i = get_global_id(0);
   const uint k = i < count && keep[i] != 0 ? 1u : 0u;
   const uint slot = ccd_group_reserve(scratch, k, total);

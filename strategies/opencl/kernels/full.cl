@@ -98,12 +98,6 @@ static inline uint ccd_group_reserve(local uint* scratch, uint count, volatile g
   return scratch[CCD_GROUP_SIZE] + scratch[lid] - count;
 }
 
-/* The items of a stage that follows a list-filling one: `count` (the room of its input list) or, with count_at (that
- * list's counter, total[0]), the entries the list holds, so that the host launches the stage without waiting to read
- * the count (issue 36). Entries past the room were not written: the host reads the counters after the step's
- * stages, grows what overflowed and runs the stages from there again. */
-static inline uint ccd_item_count(uint count, global const uint* count_at) { return count_at != 0 ? min(count, count_at[0]) : count; }
-
 /* Face f's corners at t = 0 and 1 (bvh.cpp's swept_face_box before its widening). */
 static inline ccd_box ccd_swept_face_box(global const uint* faces, uint f, global const double* x0, global const double* x1) {
   ccd_box b = ccd_box_empty();
@@ -281,11 +275,10 @@ static inline uint ccd_expand(uint a, uint b, global const uchar* masks, global 
 }
 
 kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void expand(
-    uint count, global const uint* count_at, global const uint2* candidates, global const uchar* masks, global const uint* faces, global const uint* face_edges,
+    uint count, global const uint2* candidates, global const uchar* masks, global const uint* faces, global const uint* face_edges,
     global const uint2* edges, global const double* vertex_boxes, uint capacity, volatile global uint* total, global uint4* out) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   uint4 pairs[15];
-  count = ccd_item_count(count, count_at);
   const uint i = get_global_id(0);
   uint found = 0;
   if (i < count) {
@@ -320,11 +313,11 @@ static inline int ccd_load_rows(uint4 p, global const uint* faces, global const 
 
 /* status: 0 apart, 1 collides (toi set), 2 the query needs more sub-boxes than a work item holds, or more than
  * give_up_after iterations (the host decides it). */
-kernel void narrow_conservative(uint count, global const uint* count_at, global const uint4* pairs, global const uint* faces, global const double* x0,
+kernel void narrow_conservative(uint count, global const uint4* pairs, global const uint* faces, global const double* x0,
                                 global const double* x1, double thickness, double tolerance, double toi_tolerance,
                                 long max_iterations, long give_up_after, global uchar* status, global double* toi) {
   const uint i = get_global_id(0);
-  if (i >= ccd_item_count(count, count_at)) return;
+  if (i >= count) return;
   ccd_v3 rows[8];
   const int vertex_face = ccd_load_rows(pairs[i], faces, x0, x1, rows);
   ccd_sub_box storage[CCD_DEVICE_SUB_BOXES];
@@ -334,11 +327,10 @@ kernel void narrow_conservative(uint count, global const uint* count_at, global 
   toi[i] = r.toi;
 }
 
-kernel void narrow_cubic(uint count, global const uint* count_at, global const uint4* pairs, global const uint* faces,
-                         global const double* x0, global const double* x1, double thickness, double eta, global uchar* status,
-                         global double* toi) {
+kernel void narrow_cubic(uint count, global const uint4* pairs, global const uint* faces, global const double* x0,
+                         global const double* x1, double thickness, double eta, global uchar* status, global double* toi) {
   const uint i = get_global_id(0);
-  if (i >= ccd_item_count(count, count_at)) return;
+  if (i >= count) return;
   ccd_v3 rows[8];
   const int vertex_face = ccd_load_rows(pairs[i], faces, x0, x1, rows);
   const ccd_cubic_outcome r = ccd_cubic_test(rows, thickness, eta, vertex_face);
@@ -348,10 +340,9 @@ kernel void narrow_cubic(uint count, global const uint* count_at, global const u
 
 /* The pairs whose status is not 0, with their status and TOI (in any order: the host sorts). */
 kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void compact(
-    uint count, global const uint* count_at, global const uint4* pairs, global const uchar* status, global const double* toi,
-    uint capacity, volatile global uint* total, global uint4* out_pairs, global uchar* out_status, global double* out_toi) {
+    uint count, global const uint4* pairs, global const uchar* status, global const double* toi, uint capacity,
+    volatile global uint* total, global uint4* out_pairs, global uchar* out_status, global double* out_toi) {
   local uint scratch[CCD_GROUP_SIZE + 1];
-  count = ccd_item_count(count, count_at);
   const uint i = get_global_id(0);
   const uint keep = i < count && status[i] != 0 ? 1u : 0u;
   const uint slot = ccd_group_reserve(scratch, keep, total);
