@@ -35,6 +35,10 @@ constexpr long kSecondPassIterations = 4000;
 /// Fewest kept pairs per chunk of the collision set's assembly (4,096 before issue 36; on the H100 machine 512
 /// took the large suite's step from 0.76 to 0.56 ms in this stage, and made no difference on rod-twist's 4,944).
 constexpr std::size_t kOutputChunk = 512;
+/// Largest level that the refit leaves to one work group with the levels around it (a few nodes per work item):
+/// the device finishes such a level in less time than it waits between two launches (issue 36: rod-twist's tree
+/// has 18 levels, 13 of them of at most 1,024 nodes, each a launch before).
+constexpr std::size_t kLevelsInGroupNodes = 1024;
 /// Depth the traversal kernel's stack holds (CCD_TRAVERSAL_STACK): the hierarchies split at the median, so a tree
 /// of n faces is ceil(log2 n) + 1 deep; init refuses a deeper tree before any launch.
 constexpr std::size_t kTraversalStack = 64;
@@ -194,6 +198,11 @@ void DevicePipeline::build_hierarchies(const Scene& scene, std::span<const Vec3>
   upload(context, moving_.leaves, leaves_moving.data(), leaves_moving.size());
   upload(context, all_.levels, levels_all.data(), levels_all.size());
   upload(context, moving_.levels, levels_moving.data(), levels_moving.size());
+  // (Uploads don't wait: what they read lives until the finish below.)
+  const std::vector<cl_uint> all_offsets(all_.level_offsets.begin(), all_.level_offsets.end()),
+      moving_offsets(moving_.level_offsets.begin(), moving_.level_offsets.end());
+  upload(context, all_.offsets, all_offsets.data(), all_offsets.size());
+  upload(context, moving_.offsets, moving_offsets.data(), moving_offsets.size());
   context.finish();
 }
 
@@ -255,12 +264,26 @@ void DevicePipeline::refit(const RefitPlan& plan, const Buffer& x0, const Buffer
 void DevicePipeline::refit_levels(const RefitPlan& plan, const Buffer& node_boxes, StageEvents* events) {
   Context& context = *context_;
   cl_kernel level = context.kernel("refit_level");
+  cl_kernel in_group = context.kernel("refit_levels_in_group");
   const std::vector<std::size_t>& offsets = plan.level_offsets;
+  // A level of more than kLevelsInGroupNodes nodes is a launch of its own; each run of smaller levels between them
+  // is one launch of one work group, which refits them in order with a barrier between levels.
+  std::size_t run = 0;  // first level of the run of small levels not yet launched
+  auto launch_run = [&](std::size_t end) {
+    if (end == run) return;
+    set_arguments(in_group, static_cast<cl_uint>(run), static_cast<cl_uint>(end), plan.offsets.get(), plan.levels.get(), children_.get(),
+                  node_boxes.get());
+    launch(context, in_group, group_, group_, events != nullptr ? events->add("refit") : nullptr);
+  };
   for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
     const std::size_t count = offsets[i + 1] - offsets[i];
+    if (count <= kLevelsInGroupNodes) continue;
+    launch_run(i);
+    run = i + 1;
     set_arguments(level, static_cast<cl_uint>(count), static_cast<cl_uint>(offsets[i]), plan.levels.get(), children_.get(), node_boxes.get());
     launch(context, level, count, group_, events != nullptr ? events->add("refit") : nullptr);
   }
+  launch_run(offsets.size() - 1);
 }
 
 std::size_t DevicePipeline::traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out,
@@ -473,7 +496,7 @@ strategies::TestedPairs DevicePipeline::tested_pairs(const Buffer& elementary, s
 std::size_t DevicePipeline::bytes() const {
   std::size_t total = 0;
   for (const Buffer* b : {&keep_, &faces_, &face_edges_, &edges_, &masks_, &children_, &node_face_, &max_face_, &leaf_node_buffer_, &all_.leaves, &moving_.leaves,
-                          &all_.levels, &moving_.levels, &vertex_boxes_, &counter_, &status_, &toi_, &out_.buffer, &out_status_, &out_toi_,
+                          &all_.levels, &moving_.levels, &all_.offsets, &moving_.offsets, &vertex_boxes_, &counter_, &status_, &toi_, &out_.buffer, &out_status_, &out_toi_,
                           &retry_pairs_, &retry_status_, &retry_toi_}) {
     total += b->bytes();
   }

@@ -82,9 +82,11 @@ class DevicePositions {
 struct RefitPlan {
   Buffer leaves;
   std::size_t leaf_count = 0;
-  /// Internal nodes, deepest level first; level i is [level_offsets[i], level_offsets[i + 1]).
+  /// Internal nodes, deepest level first; level i is [level_offsets[i], level_offsets[i + 1]) (also on the device,
+  /// as offsets, for the levels refitted by one work group).
   Buffer levels;
   std::vector<std::size_t> level_offsets;
+  Buffer offsets;
 };
 
 class DevicePipeline {

@@ -147,6 +147,22 @@ kernel void refit_level(uint count, uint first, global const uint* level, global
   ccd_box_store(node_boxes, node, ccd_box_merge(ccd_box_load(node_boxes, (uint)c.x), ccd_box_load(node_boxes, (uint)c.y)));
 }
 
+/* Levels [first, end) of a refit in one work group, in order (deepest first): level l is the nodes
+ * level[offsets[l] .. offsets[l + 1]), each the union of its children; the barrier makes a level's boxes visible to
+ * the whole group before the level above reads them. The same unions as refit_level, launched once for the levels
+ * too small to fill the device. */
+kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void refit_levels_in_group(
+    uint first, uint end, global const uint* offsets, global const uint* level, global const int2* children, global double* node_boxes) {
+  for (uint l = first; l < end; ++l) {
+    for (uint i = offsets[l] + get_local_id(0); i < offsets[l + 1]; i += CCD_GROUP_SIZE) {
+      const uint node = level[i];
+      const int2 c = children[node];
+      ccd_box_store(node_boxes, node, ccd_box_merge(ccd_box_load(node_boxes, (uint)c.x), ccd_box_load(node_boxes, (uint)c.y)));
+    }
+    barrier(CLK_GLOBAL_MEM_FENCE);
+  }
+}
+
 /* Candidate triangle pairs: query q is face q_face[q] (its leaf q_leaf[q]) against the tree rooted at q_root[q].
  * Modes: 1 self (keeps the faces g > f, each pair once); 4 a face against its own tree (keeps g != f: apccd's
  * partial traversal, whose query box is not the leaf's); 0 a pair of objects; 2 and 3 a pair of objects in moving
