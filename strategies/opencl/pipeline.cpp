@@ -36,8 +36,8 @@ constexpr long kSecondPassIterations = 4000;
 /// took the large suite's step from 0.76 to 0.56 ms in this stage, and made no difference on rod-twist's 4,944).
 constexpr std::size_t kOutputChunk = 512;
 /// Largest level that the refit leaves to one work group with the levels around it (a few nodes per work item):
-/// the device finishes such a level in less time than it waits between two launches (issue 36: rod-twist's tree
-/// has 18 levels, 13 of them of at most 1,024 nodes, each a launch before).
+/// the device finishes such a level in less time than it waits between two launches (issue 36: a median-split
+/// tree's levels within 10 of the root are that small, more than half of an 80k-face tree's; reports/opencl/step).
 constexpr std::size_t kLevelsInGroupNodes = 1024;
 /// Depth the traversal kernel's stack holds (CCD_TRAVERSAL_STACK): the hierarchies split at the median, so a tree
 /// of n faces is ceil(log2 n) + 1 deep; init refuses a deeper tree before any launch.
