@@ -220,6 +220,7 @@ void ApccdSession::start(std::span<const Vec3> relative0, std::span<const Vec3> 
 /// than an edge per frame relative to itself: apccd ran at 0.65x full with unlimited sessions). Reads per-frame
 /// budgets.
 void ApccdSession::limit_session_by_inflation(const std::vector<double>& budget) {
+  const int planned = nf_;
   int allowed = settings_.nf_max;
   for (ObjectId id = 0; id < scene_->objects().size(); ++id) {
     const SceneObject& object = scene_->object(id);
@@ -235,12 +236,13 @@ void ApccdSession::limit_session_by_inflation(const std::vector<double>& budget)
     if (frames < settings_.nf_max) allowed = std::min(allowed, 1 + static_cast<int>(frames));
   }
   nf_ = std::clamp(std::min(nf_, allowed), settings_.nf_min, settings_.nf_max);
+  planned_ = allowed < planned ? SessionEnd::inflation_cap : nf_ == settings_.nf_max ? SessionEnd::nf_max : SessionEnd::nf_adapted;
 }
 
-void ApccdSession::advance(std::size_t dangling_vertices, std::size_t admissible, std::size_t pending) {
+SessionEnd ApccdSession::advance(std::size_t dangling_vertices, std::size_t admissible, std::size_t pending) {
   if (!settings_.skip) {
     frame_ = 0;
-    return;
+    return SessionEnd::skip_off;
   }
   const double fraction =
       static_cast<double>(dangling_vertices) / static_cast<double>(std::max<std::size_t>(1, scene_->topology().num_vertices()));
@@ -251,11 +253,32 @@ void ApccdSession::advance(std::size_t dangling_vertices, std::size_t admissible
     nf_ = std::max(settings_.nf_min, nf_ / 2);
     frame_ = 0;
     worst_dangling_ = 0;
-  } else if (frame_ >= nf_) {
+    return fraction > settings_.dangling_max ? SessionEnd::dangling : SessionEnd::pending;
+  }
+  if (frame_ >= nf_) {
     if (worst_dangling_ < settings_.dangling_max / 4) nf_ = std::min(settings_.nf_max, nf_ * 2);
     frame_ = 0;
     worst_dangling_ = 0;
+    return planned_;
   }
+  return SessionEnd::none;
+}
+
+std::string session_end_counter(SessionEnd end) {
+  switch (end) {
+    case SessionEnd::none: return "session_end_none";
+    case SessionEnd::nf_max: return "session_end_nf_max";
+    case SessionEnd::nf_adapted: return "session_end_nf_adapted";
+    case SessionEnd::inflation_cap: return "session_end_inflation_cap";
+    case SessionEnd::dangling: return "session_end_dangling";
+    case SessionEnd::pending: return "session_end_pending";
+    case SessionEnd::skip_off: return "session_end_skip_off";
+  }
+  return "session_end_unknown";
+}
+
+void add_session_end_counters(SessionEnd end, std::vector<std::pair<std::string, double>>& counters) {
+  for (const SessionEnd reason : kSessionEnds) counters.emplace_back(session_end_counter(reason), reason == end ? 1.0 : 0.0);
 }
 
 std::size_t ProximityHistory::apply(const MeshTopology& topology, std::span<const Vec3> x1, const TestedPairs& tested,

@@ -54,6 +54,36 @@ struct ApccdSettings {
   bool fresh_object_pairs = true;
 };
 
+/// Why a step ended its session: each step's counters session_end_REASON are 1 for the rule that ended the
+/// session there (0 for the others, and all 0 while it goes on), so a summary's mean times its steps counts the
+/// sessions each rule ended (issue 37). The paper's rules (DESIGN.md: a session of adaptive length nf, ended early
+/// when too many vertices dangle): nf_max, nf_adapted and dangling. Ours: pending (the pending list's cost,
+/// pending_max) and inflation_cap (inflation_max, which shortens nf when a session starts), each with its reason
+/// at its setting in ApccdSettings.
+enum class SessionEnd {
+  none,
+  /// The session ran nf_max frames.
+  nf_max,
+  /// It ran the nf frames it started with, nf below nf_max because an earlier session ended early (nf halves) and
+  /// has not grown back (nf doubles after a session with few dangling vertices).
+  nf_adapted,
+  /// It ran the frames that inflation_max allowed when it started (fewer than nf).
+  inflation_cap,
+  /// More than dangling_max of the vertices dangled.
+  dangling,
+  /// The pending list outgrew pending_max times the admissible pairs.
+  pending,
+  /// skip=off: every step is a session of one frame.
+  skip_off,
+};
+/// Every reason a session ends, in the counters' order.
+inline constexpr SessionEnd kSessionEnds[] = {SessionEnd::nf_max, SessionEnd::nf_adapted, SessionEnd::inflation_cap, SessionEnd::dangling,
+                                              SessionEnd::pending, SessionEnd::skip_off};
+/// The counter of a reason: "session_end_nf_max", ...
+std::string session_end_counter(SessionEnd end);
+/// Appends the step's session_end_* counters (one per reason in kSessionEnds, 1 for `end`).
+void add_session_end_counters(SessionEnd end, std::vector<std::pair<std::string, double>>& counters);
+
 /// The keys apccd itself declares (its backend's and its narrow phase's are declared by them).
 std::vector<narrowphase::KeySpec> apccd_keys();
 
@@ -92,8 +122,9 @@ class ApccdSession {
   void start(std::span<const Vec3> relative0, std::span<const Vec3> relative1, std::vector<double>& budget);
 
   /// Ends the session after nf frames, or early when too many vertices dangle or the pending list costs more than
-  /// it saves; adapts nf for the next one (nf = 1 is a refit and full traversal every frame).
-  void advance(std::size_t dangling_vertices, std::size_t admissible, std::size_t pending);
+  /// it saves; adapts nf for the next one (nf = 1 is a refit and full traversal every frame). Returns why the
+  /// session ended at this step (SessionEnd::none while it goes on).
+  SessionEnd advance(std::size_t dangling_vertices, std::size_t admissible, std::size_t pending);
 
  private:
   void limit_session_by_inflation(const std::vector<double>& budget);
@@ -105,6 +136,8 @@ class ApccdSession {
   std::vector<Vec3> centroid0_, centroid1_;
   int nf_ = 1;
   int frame_ = 0;
+  /// What set this session's nf when it started: nf_max, nf_adapted or inflation_cap.
+  SessionEnd planned_ = SessionEnd::nf_max;
   double worst_dangling_ = 0;
 };
 

@@ -118,6 +118,67 @@ TEST(Apccd, FindsContactsInsideSessionsNotOnlyAtTheirStarts) {
 
 // History's two lifetimes: a vertex crosses a face while the front end did not test the pair (the step between).
 // history=on forgot the pair's side when it went untested; the paper's persistent history still has it.
+// Each rule that ends a session, driven through ApccdSession on one triangle (edge length 1): the step's reason is
+// the rule that ended it, and the next session's length follows from it.
+TEST(ApccdSession, EachSessionEndsByTheRuleThatEndedIt) {
+  const std::vector<Vec3> rest = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const Scene scene({ObjectDescription{"sheet", ObjectKind::deformable, true, 3, {{0, 1, 2}}}}, {}, 1e-3);
+  // Every vertex moves `motion` (relative to the others: the centroid is taken out by the caller, here none).
+  auto moved = [&](double motion) {
+    std::vector<Vec3> x = rest;
+    x[0].x() -= motion;
+    x[1].x() += motion;
+    x[2].y() += motion;
+    return x;
+  };
+  // Runs one session from its start, each step with `dangling` vertices and `pending` pairs per admissible one;
+  // returns every step's reason up to the end and the next session's nf.
+  auto session = [&](ApccdSession& s, double motion, std::size_t dangling, std::size_t pending) {
+    std::vector<double> budget;
+    s.start(rest, moved(motion), budget);
+    std::vector<SessionEnd> ends;
+    do {
+      ends.push_back(s.advance(dangling, 1, pending));
+    } while (ends.back() == SessionEnd::none && ends.size() < 100);
+    return ends;
+  };
+  ApccdSettings settings;  // nf_max 8, inflation_max 0.5, dangling_max 0.05, pending_max 4
+  const std::vector<SessionEnd> eight_frames = {SessionEnd::none, SessionEnd::none, SessionEnd::none, SessionEnd::none,
+                                                SessionEnd::none, SessionEnd::none, SessionEnd::none, SessionEnd::nf_max};
+  {
+    ApccdSession s;
+    s.init(settings, scene, rest);
+    EXPECT_EQ(session(s, 1e-6, 0, 0), eight_frames) << "a still sheet runs nf_max frames";
+    EXPECT_EQ(session(s, 1e-6, 3, 0), std::vector<SessionEnd>{SessionEnd::dangling}) << "every vertex dangles at once";
+    EXPECT_EQ(s.nf(), 4);
+    EXPECT_EQ(session(s, 1e-6, 0, 5), std::vector<SessionEnd>{SessionEnd::pending}) << "5 pending pairs per admissible one";
+    EXPECT_EQ(s.nf(), 2);
+    const std::vector<SessionEnd> two = {SessionEnd::none, SessionEnd::nf_adapted};
+    EXPECT_EQ(session(s, 1e-6, 0, 0), two) << "nf halved twice, then doubled at the end of a quiet session";
+    EXPECT_EQ(s.nf(), 4);
+  }
+  {
+    // Motion 0.1 an edge per frame: a budget of about 0.1 to 0.2 per frame reaches inflation_max (0.5) in a few
+    // frames, fewer than nf_max.
+    ApccdSession s;
+    s.init(settings, scene, rest);
+    const std::vector<SessionEnd> capped = session(s, 0.1, 0, 0);
+    ASSERT_GT(capped.size(), 1u);
+    EXPECT_LT(capped.size(), 8u);
+    EXPECT_EQ(capped.back(), SessionEnd::inflation_cap);
+  }
+  {
+    settings.skip = false;
+    ApccdSession s;
+    s.init(settings, scene, rest);
+    EXPECT_EQ(session(s, 1e-6, 0, 0), std::vector<SessionEnd>{SessionEnd::skip_off});
+  }
+  std::vector<std::pair<std::string, double>> counters;
+  add_session_end_counters(SessionEnd::pending, counters);
+  ASSERT_EQ(counters.size(), std::size(kSessionEnds));
+  for (const auto& [name, value] : counters) EXPECT_EQ(value, name == "session_end_pending" ? 1.0 : 0.0) << name;
+}
+
 TEST(ProximityHistory, PersistentKeepsAPairTheFrontEndSkippedAndCatchesItsFlip) {
   const MeshTopology topology(4, {{0, 1, 2}});
   const VertexFacePair pair{3, 0};

@@ -192,7 +192,7 @@ class Apccd final : public Strategy {
                              {"relative_motion", relative_motion}};
     // Shapes are beyond the paper: their faces are tested every step, as `full` does (face_shape.hpp).
     run_face_shape_stage(result, *scene_, step, *narrow_phase_, audit);
-    session_.advance(dangling_vertices, admissible.size(), pending_.size());
+    add_session_end_counters(session_.advance(dangling_vertices, admissible.size(), pending_.size()), result.counters.extra);
     return result;
   }
 

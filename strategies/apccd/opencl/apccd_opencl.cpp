@@ -196,7 +196,7 @@ class ApccdOpenCl final : public Strategy {
     result.counters.extra = std::move(extra);
     // Face-shape pairs on the host, with the host's narrow phase (face_shape.hpp), as the CPU backend does.
     run_face_shape_stage(result, *scene_, step, *pipeline_.narrow_phase().host, audit);
-    session_.advance(dangling_vertices, admissible, pending_.count);
+    add_session_end_counters(session_.advance(dangling_vertices, admissible, pending_.count), result.counters.extra);
     opencl::add_launch_and_wait(result, started);
     return result;
   }
