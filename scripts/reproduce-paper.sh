@@ -111,6 +111,10 @@ for r in $memory_res; do
 done
 run memory none "apccd,apccd:history=persistent" "${memory_scenes[@]}"
 
+# 5. The map (issue 37): apccd against full over motion per step, resolution, every paper scene and both narrow
+#    phases, with session lengths and why sessions end (scripts/apccd-map.sh; BACKENDS adds opencl).
+OUT="$work/map" CELLS="$cells/map" CCDBENCH_BIN="$CCDBENCH_BIN" scripts/apccd-map.sh "$profile"
+
 elapsed=$(( $(date +%s) - started ))
 printf 'profile\t%s\nelapsed_s\t%s\nthreads\t%s\n' "$profile" "$elapsed" "${THREADS:-all}" > "$work/raw/run.tsv"
 if /usr/bin/python3 -c "import matplotlib" 2>/dev/null; then
