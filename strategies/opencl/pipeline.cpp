@@ -266,11 +266,13 @@ void DevicePipeline::refit_levels(const RefitPlan& plan, const Buffer& node_boxe
   cl_kernel level = context.kernel("refit_level");
   cl_kernel in_group = context.kernel("refit_levels_in_group");
   const std::vector<std::size_t>& offsets = plan.level_offsets;
+  if (offsets.empty()) return;
   // A level of more than kLevelsInGroupNodes nodes is a launch of its own; each run of smaller levels between them
-  // is one launch of one work group, which refits them in order with a barrier between levels.
+  // is one launch of one work group, which refits them in order with a barrier between levels. A run without a
+  // node (the deepest level holds leaves only, and a plan without moving objects is empty) launches nothing.
   std::size_t run = 0;  // first level of the run of small levels not yet launched
   auto launch_run = [&](std::size_t end) {
-    if (end == run) return;
+    if (offsets[end] == offsets[run]) return;
     set_arguments(in_group, static_cast<cl_uint>(run), static_cast<cl_uint>(end), plan.offsets.get(), plan.levels.get(), children_.get(),
                   node_boxes.get());
     launch(context, in_group, group_, group_, events != nullptr ? events->add("refit") : nullptr);

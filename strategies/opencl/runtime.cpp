@@ -302,7 +302,8 @@ std::vector<std::pair<std::string, double>> StageEvents::collect() {
     }
   }
   events_.clear();
-  // An in-order queue runs one command at a time: the span less their sum is the time between them.
+  // An in-order queue runs one command at a time: the span less their sum is the time between them (or in commands
+  // enqueued without an event).
   span_ = last > first ? static_cast<double>(last - first) * 1e-6 : 0;
   idle_ = std::max(0.0, span_ - busy);
   return stages;

@@ -114,7 +114,8 @@ class StageEvents {
   /// Milliseconds per stage (in first-use order), from CL_PROFILING_COMMAND_START to _END; releases the events.
   std::vector<std::pair<std::string, double>> collect();
   /// Of the commands collected last: milliseconds from the first one's start to the last one's end, and the part of
-  /// that span in no command (the device waiting on the host between commands: launches, blocking reads). A
+  /// that span in no profiled command: the device waiting on the host between commands (launches, blocking reads),
+  /// and the few commands enqueued without an event (a list's counter reset and read, a grown buffer's copy). A
   /// profile of where a step's "launch and wait" goes (issue 36).
   double span_milliseconds() const { return span_; }
   double idle_milliseconds() const { return idle_; }
