@@ -83,7 +83,18 @@ def missed(cells):
 
 
 def colliding(cells):
+    """Colliding pairs over the verified cells: each strategy's cell of a scene counts its truth again."""
     return sum(c.get("colliding", 0) for c in cells.values() if c.get("verified"))
+
+
+def distinct_colliding(cells):
+    """Colliding pairs of the verified scenes, each scene's truth once (every strategy of a scene is judged against
+    the same truth, so its cells agree on the count; the largest is taken)."""
+    per_scene = {}
+    for (scene, _), c in cells.items():
+        if c.get("verified"):
+            per_scene[scene] = max(per_scene.get(scene, 0), c.get("colliding", 0))
+    return sum(per_scene.values()), len(per_scene)
 
 
 def verified_steps(cells):
@@ -257,7 +268,9 @@ def main(work, shown_as):
 
     verdicts = []
     no_miss = total_missed == 0
-    miss_text = f"{total_missed} missed of {colliding(all_verified)} colliding pairs on {verified_steps(all_verified)} verified cell-steps"
+    distinct, verified_scenes = distinct_colliding(all_verified)
+    miss_text = (f"{total_missed} missed of {distinct} distinct colliding pairs ({verified_scenes} verified scenes, each truth "
+                 f"counted once; {colliding(all_verified)} over every strategy's cell) on {verified_steps(all_verified)} verified cell-steps")
 
     # 1
     persistent = sorted(memory_points.get("apccd:history=persistent", []))
