@@ -111,7 +111,22 @@ for r in $memory_res; do
 done
 run memory none "apccd,apccd:history=persistent" "${memory_scenes[@]}"
 
-# 5. The map (issue 37): apccd against full over motion per step, resolution, every paper scene and both narrow
+# 5. The seed's claims not yet judged (issue 37; rules in claims.py, written before measuring), where skipping can
+#    pay (the map: sessions reach nf_max at 8 CCD steps per frame): the paper scenes at 8 steps per frame, from
+#    frame 20 (contact), every step verified. history=persistent with cubic64 (a narrow phase that misses: what
+#    history catches), dangling_max=0 (every dangling vertex ends the session: a full re-traversal instead of the
+#    partial one), global-only and local-only inflation, and a fixed nf against the adaptive one.
+seed_frames=$(( steps / 8 + 1 > 2 ? steps / 8 + 1 : 2 ))
+seed_scenes=(
+  "$(scene spinning-ball seed-spinning-ball resolution=$(res 100) frames=$((20 + seed_frames)) first_frame=20 steps_per_frame=8)"
+  "$(scene drape seed-drape resolution=$(res 100) frames=$((20 + seed_frames)) first_frame=20 steps_per_frame=8)"
+  "$(scene flag seed-flag resolution=$(res 100) frames=$((20 + seed_frames)) first_frame=20 steps_per_frame=8)"
+  "$(scene twist seed-twist resolution=$(res 80) frames=$((20 + seed_frames)) first_frame=20 steps_per_frame=8)"
+  "$(scene funnel seed-funnel resolution=$(res 100) frames=$((20 + seed_frames)) first_frame=20 steps_per_frame=8)"
+  "$(scene pile seed-pile resolution=$(res 64) frames=$((20 + seed_frames)) first_frame=20 steps_per_frame=8)")
+run seed exact "apccd,apccd:dangling_max=0,apccd:local=0:global=1.25,apccd:local=1:global=0,apccd:nf_min=4:nf_max=4,apccd+cubic64,apccd+cubic64:history=persistent" "${seed_scenes[@]}"
+
+# 6. The map (issue 37): apccd against full over motion per step, resolution, every paper scene and both narrow
 #    phases, with session lengths and why sessions end (scripts/apccd-map.sh; BACKENDS adds opencl).
 OUT="$work/map" CELLS="$cells/map" CCDBENCH_BIN="$CCDBENCH_BIN" scripts/apccd-map.sh "$profile"
 
