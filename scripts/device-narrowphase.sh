@@ -18,26 +18,16 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/device-env.sh
 out=/tmp/ccdbench-narrowphase
-mkdir -p "$out" /tmp/icd
+source scripts/device-builds.sh
 pack() { if [ -n "${OUT:-}" ]; then tar czf "$OUT/narrowphase-device.tgz" -C "$out" --exclude='./scene-*' .; fi; }
 trap pack EXIT
-echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd
-export OCL_ICD_VENDORS=/tmp/icd
-export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-cache}
-export CCDBENCH_DATA_DIR=${CCDBENCH_DATA_DIR:-$PWD/device-carry/data}
 PARTS=${PARTS:-public paper large}
 VARIANTS=${VARIANTS:-before after}
 REPEATS=${REPEATS:-5}
 PAPER_STEPS=${PAPER_STEPS:-10}
 LARGE_REPEATS=${LARGE_REPEATS:-1}
-threads=$(nproc)
-bin=device-carry/bin
 strategies="full,full+cubic64,full:backend=opencl,full+cubic64:backend=opencl"
-{ nproc; lscpu | grep -E 'Model name|^CPU\(s\)' || true; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true; } > "$out/machine.txt" 2>&1
-for v in $VARIANTS; do echo "$v: $("$bin/ccdbench-$v" --version | head -1)"; done >> "$out/machine.txt"
-cat "$out/machine.txt"
-part() { [[ " $PARTS " == *" $1 "* ]]; }
-frames() { echo "$CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$2.ply $CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$3.ply"; }
+write_machine $VARIANTS
 # run VARIANT NAME ARGS...: one ccdbench run on every core, its table and JSON kept as NAME-VARIANT.
 run() {
   local variant=$1 name=$2

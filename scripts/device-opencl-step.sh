@@ -24,28 +24,16 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/device-env.sh
 out=/tmp/ccdbench-opencl-step
-mkdir -p "$out" /tmp/icd
+source scripts/device-builds.sh
 pack() { if [ -n "${OUT:-}" ]; then tar czf "$OUT/opencl-step.tgz" -C "$out" --exclude='./scene-*' --exclude='./runs-*' .; fi; }
 trap pack EXIT
-if command -v nvidia-smi > /dev/null; then  # (elsewhere, e.g. trying the script with PoCL: the registered devices)
-  echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd
-  export OCL_ICD_VENDORS=/tmp/icd
-fi
-export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-cache}
-export CCDBENCH_DATA_DIR=${CCDBENCH_DATA_DIR:-$PWD/device-carry/data}
 PARTS=${PARTS:-tiny public paper large}
 VARIANTS=${VARIANTS:-before after}
 REPEATS=${REPEATS:-5}
 PAPER_STEPS=${PAPER_STEPS:-10}
 LARGE_REPEATS=${LARGE_REPEATS:-3}
 SAMPLE_MS=${SAMPLE_MS:-20}
-threads=$(nproc)
-bin=device-carry/bin
-{ nproc; lscpu | grep -E 'Model name|^CPU\(s\)' || true; nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader || true; } > "$out/machine.txt" 2>&1
-for v in $VARIANTS; do echo "$v: $("$bin/ccdbench-$v" --version | head -1)"; done >> "$out/machine.txt"
-cat "$out/machine.txt"
-part() { [[ " $PARTS " == *" $1 "* ]]; }
-frames() { echo "$CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$2.ply $CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$3.ply"; }
+write_machine $VARIANTS
 # run VARIANT NAME ARGS...: each GPU strategy in its own process, sampled by nvidia-smi; kept as NAME-VARIANT-NARROW.
 run() {
   local variant=$1 name=$2
