@@ -450,7 +450,7 @@ void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const
     // Chunks of at least kOutputChunk pairs: sorted side by side and merged in a tree (normalize_in_parallel).
     const std::size_t chunks = std::max<std::size_t>(1, std::min(host_threads, kept / kOutputChunk));
     std::vector<CollisionSet> parts(chunks);
-    auto assemble = [&](std::size_t c) {
+    tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
       for (std::size_t i = c * kept / chunks; i < (c + 1) * kept / chunks; ++i) {
         if (status[i] != 1) continue;
         const cl_uint4& p = pairs[i];
@@ -460,18 +460,10 @@ void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const
           parts[c].add(edge_pair(p), toi[i]);
         }
       }
-    };
-    if (chunks == 1) {
-      // A small set on this thread: no pool threads woken for one chunk.
-      assemble(0);
-      parts[0].normalize();
-      result.collisions = std::move(parts[0]);
-    } else {
-      tbb::parallel_for(std::size_t{0}, chunks, assemble);
-      std::vector<CollisionSet*> sets;
-      for (CollisionSet& part : parts) sets.push_back(&part);
-      result.collisions = strategies::normalize_in_parallel(std::move(sets));
-    }
+    });
+    std::vector<CollisionSet*> sets;
+    for (CollisionSet& part : parts) sets.push_back(&part);
+    result.collisions = strategies::normalize_in_parallel(std::move(sets));
   }
   result.counters.extra.emplace_back("device_given_up_pairs", static_cast<double>(given_up.size()));
   result.counters.extra.emplace_back("device_second_pass_pairs", static_cast<double>(second_pass));
