@@ -153,7 +153,7 @@ struct Traversal {
     }
     const auto& na = node_a(task.a);
     const auto& nb = task_is_same_tree_ ? node_a(task.b) : node_b(task.b);
-    if (!na.box.intersects(task_is_same_tree_ ? nb.box : shifted(nb.box))) return true;
+    if (!boxes_overlap(na.box, task_is_same_tree_ ? nb.box : shifted(nb.box))) return true;
     if (na.is_leaf() && nb.is_leaf()) return false;
     const bool descend_a = !na.is_leaf() && (nb.is_leaf() || na.box.volume() >= nb.box.volume());
     if (descend_a) {
@@ -236,7 +236,7 @@ std::vector<TrianglePair> self_overlaps(const TriangleBvh& tree) {
       while (size > 0) {
         const TriangleBvh::Node& node = nodes[static_cast<std::size_t>(stack[--size])];
         // Each pair once, from its smaller face: subtrees with no larger face are the other faces' to find.
-        if (node.max_face <= a || !node.box.intersects(box)) continue;
+        if (node.max_face <= a || !boxes_overlap(node.box, box)) continue;
         if (node.is_leaf()) {
           list.emplace_back(a, node.face);
         } else {
@@ -278,7 +278,7 @@ std::vector<TrianglePair> subset_overlaps(std::span<const FaceId> subset, std::s
     while (!stack.empty()) {
       const auto& node = tree.nodes()[static_cast<std::size_t>(stack.back())];
       stack.pop_back();
-      if (!node.box.intersects(subset_boxes[i])) continue;
+      if (!boxes_overlap(node.box, subset_boxes[i])) continue;
       if (!node.is_leaf()) {
         stack.push_back(node.left);
         stack.push_back(node.right);
