@@ -42,36 +42,40 @@ auto& list_of(TestedPairs& pairs) {
   }
 }
 
+/// Each primitive's swept box over the step, widened by δ/2: a primitive pair whose boxes are apart cannot come
+/// within δ. A face's box is the union of its corners' boxes and an edge's of its ends' (min and max: exact), each
+/// formed once per step instead of once per candidate that holds it (a face is in about nine candidates).
+struct PrimitiveBoxes {
+  std::vector<Box3> vertex, edge, face;
+};
+
 /// Calls vertex_face(pair) and edge_edge(pair) for each elementary pair of candidate (a, b) that the masks give and
-/// whose primitives' swept boxes (`vertex_boxes`, widened by δ/2) overlap: a primitive pair whose boxes are apart
-/// cannot come within δ, so the cheap box test spares the narrow phase most pairs of a candidate triangle pair
-/// (they are counted as culled).
+/// whose primitives' boxes overlap: the cheap box test spares the narrow phase most pairs of a candidate triangle
+/// pair (they are counted as culled). Every primitive's box lies in its face's box, so a candidate whose face boxes
+/// are apart has none.
 template <class VertexFace, class EdgeEdge>
-void for_each_elementary_pair(const MeshTopology& topology, std::span<const AssignmentMask> masks,
-                              const std::vector<Box3>& vertex_boxes, FaceId a, FaceId b, VertexFace&& vertex_face,
-                              EdgeEdge&& edge_edge) {
-  auto box_of = [&](std::initializer_list<VertexId> vertices) {
-    Box3 box;
-    for (VertexId v : vertices) box.extend(vertex_boxes[v]);
-    return box;
-  };
+void for_each_elementary_pair(const MeshTopology& topology, std::span<const AssignmentMask> masks, const PrimitiveBoxes& boxes,
+                              FaceId a, FaceId b, VertexFace&& vertex_face, EdgeEdge&& edge_edge) {
+  if (!boxes_overlap(boxes.face[a], boxes.face[b])) return;
   for (const auto& [owner, other] : {std::pair{a, b}, std::pair{b, a}}) {
     const Face& face = topology.face(other);
+    const Face& own = topology.face(owner);
     for (int k = 0; k < 3; ++k) {
       if (!(masks[owner] & owns_vertex_bit(k))) continue;
-      const VertexId v = topology.face(owner)[k];
-      if (corner_of(v, face) || !vertex_boxes[v].intersects(box_of({face[0], face[1], face[2]}))) continue;
+      const VertexId v = own[k];
+      if (corner_of(v, face) || !boxes_overlap(boxes.vertex[v], boxes.face[other])) continue;
       vertex_face(VertexFacePair{v, other});
     }
   }
   for (int i_edge = 0; i_edge < 3; ++i_edge) {
     if (!(masks[a] & owns_edge_bit(i_edge))) continue;
-    const Edge ea = topology.edge(topology.face_edges(a)[i_edge]);
+    const EdgeId ia = topology.face_edges(a)[i_edge];
+    const Edge ea = topology.edge(ia);
     for (int j_edge = 0; j_edge < 3; ++j_edge) {
       if (!(masks[b] & owns_edge_bit(j_edge))) continue;
-      const Edge eb = topology.edge(topology.face_edges(b)[j_edge]);
-      if (shares_vertex(ea, eb)) continue;
-      if (!box_of({ea.v0, ea.v1}).intersects(box_of({eb.v0, eb.v1}))) continue;
+      const EdgeId ib = topology.face_edges(b)[j_edge];
+      const Edge eb = topology.edge(ib);
+      if (shares_vertex(ea, eb) || !boxes_overlap(boxes.edge[ia], boxes.edge[ib])) continue;
       edge_edge(make_edge_edge_pair(ea, eb));
     }
   }
@@ -85,7 +89,7 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
                                   bool separation_filter, StageTimes& stages, std::string_view narrow_stage) {
   const auto& x0 = step.x0;
   const auto& x1 = step.x1;
-  std::vector<Box3> vertex_boxes(x0.size());
+  PrimitiveBoxes boxes;
   tbb::enumerable_thread_specific<Local> locals;
   // The narrow phase on one elementary pair (VertexFacePair or EdgeEdgePair).
   auto test = [&](Local& local, const auto& pair) {
@@ -105,18 +109,30 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
       }
     }
   };
-  // The swept vertex boxes, then every elementary pair of every candidate handed to visit(local, pair), in parallel.
+  // The primitives' swept boxes, then every elementary pair of every candidate handed to visit(local, pair), in
+  // parallel.
   auto visit_candidates = [&](auto&& visit) {
+    boxes.vertex.resize(x0.size());
     tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
       Box3 box(x0[v]);
       box.extend(x1[v]);
-      vertex_boxes[v] = bvh::widened(box, thickness / 2);
+      boxes.vertex[v] = bvh::widened(box, thickness / 2);
+    });
+    boxes.edge.resize(topology.num_edges());
+    tbb::parallel_for(std::size_t{0}, topology.num_edges(), [&](std::size_t e) {
+      const Edge edge = topology.edge(static_cast<EdgeId>(e));
+      boxes.edge[e] = boxes.vertex[edge.v0].merged(boxes.vertex[edge.v1]);
+    });
+    boxes.face.resize(topology.num_faces());
+    tbb::parallel_for(std::size_t{0}, topology.num_faces(), [&](std::size_t f) {
+      const Face& face = topology.face(static_cast<FaceId>(f));
+      boxes.face[f] = boxes.vertex[face[0]].merged(boxes.vertex[face[1]]).merged(boxes.vertex[face[2]]);
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
       Local& local = locals.local();
       auto one = [&](const auto& pair) { visit(local, pair); };
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        for_each_elementary_pair(topology, masks, vertex_boxes, candidates[i].first, candidates[i].second, one, one);
+        for_each_elementary_pair(topology, masks, boxes, candidates[i].first, candidates[i].second, one, one);
       }
     });
   };
