@@ -12,6 +12,15 @@
 namespace ccd::strategies {
 namespace {
 
+const char* front_end_name(FrontEnd front_end) {
+  switch (front_end) {
+    case FrontEnd::off: return "off";
+    case FrontEnd::boxes: return "boxes";
+    case FrontEnd::on: return "on";
+  }
+  return "on";
+}
+
 const char* history_name(HistoryMode mode) {
   switch (mode) {
     case HistoryMode::off: return "off";
@@ -82,7 +91,10 @@ std::vector<narrowphase::KeySpec> apccd_keys() {
           KeySpec::number("pending_max", defaults.pending_max, kPendingRatio, "pending pairs per admissible pair that ends a session"),
           KeySpec::number("inflation_max", defaults.inflation_max, kInflationCap,
                           "a session is shortened so the mean budget stays within this fraction of the mean edge length"),
-          KeySpec::on_off("heuristic", defaults.heuristic, "the front end's distance heuristic"),
+          KeySpec::choice("heuristic", {"on", "boxes", "off"}, front_end_name(defaults.front_end),
+                          "the front end: on (the box filter, then the distance heuristic: the paper's), boxes (the box filter alone: "
+                          "cheaper in front of a narrow phase that costs what the heuristic costs, such as cubic64), off (neither)",
+                          {{"true", "on"}, {"1", "on"}, {"false", "off"}, {"0", "off"}}),
           KeySpec::choice("history", {"off", "on", "persistent"}, history_name(defaults.history),
                           "orientation history: off, on (pairs tested last step), persistent (the paper's: every pair tested since the start)",
                           {{"step", "on"}, {"true", "on"}, {"1", "on"}, {"false", "off"}, {"0", "off"}}),
@@ -93,7 +105,8 @@ std::vector<narrowphase::KeySpec> apccd_keys() {
 ApccdSettings read_apccd_settings(const narrowphase::SpecReader& keys) {
   ApccdSettings settings;
   settings.skip = keys.choice("skip") == "on";
-  settings.heuristic = keys.choice("heuristic") == "on";
+  const std::string front_end = keys.choice("heuristic");
+  settings.front_end = front_end == "on" ? FrontEnd::on : front_end == "boxes" ? FrontEnd::boxes : FrontEnd::off;
   const std::string history = keys.choice("history");
   settings.history = history == "persistent" ? HistoryMode::persistent : history == "on" ? HistoryMode::step : HistoryMode::off;
   settings.fresh_object_pairs = keys.choice("object_pairs") == "fresh";
@@ -114,7 +127,7 @@ std::string apccd_name(const ApccdSettings& settings, const std::string& narrow_
          ":nf_max=" + std::to_string(settings.nf_max) + ":local=" + format_spec_number(settings.local) +
          ":global=" + format_spec_number(settings.global) + ":dangling_max=" + format_spec_number(settings.dangling_max) +
          ":pending_max=" + format_spec_number(settings.pending_max) + ":inflation_max=" + format_spec_number(settings.inflation_max) +
-         ":heuristic=" + (settings.heuristic ? "on" : "off") + ":object_pairs=" + (settings.fresh_object_pairs ? "fresh" : "session") +
+         ":heuristic=" + front_end_name(settings.front_end) + ":object_pairs=" + (settings.fresh_object_pairs ? "fresh" : "session") +
          ":history=" + history_name(settings.history);
 }
 

@@ -176,12 +176,12 @@ TEST_F(OpenClParity, ApccdOnTheDefaultSuiteGivesTheCpuAnswers) {
 }
 
 // Each knob that changes the session logic, on the ci suite at both δ: skipping off, nf bounds, inflation (local,
-// global, inflation_max), the session's end (dangling_max, pending_max), the front end off, pairs across objects
+// global, inflation_max), the session's end (dangling_max, pending_max), the front end off or boxes only, pairs across objects
 // from the session's trees, and history; in two parts (Steps): the first 5 steps, in which every ci scene collides
 // at both δ and sessions outlive their first frame with every knob, and the rest (the two fold scenes).
 const std::vector<const char*> kApccdKnobs{":skip=off", ":nf_min=2:nf_max=4", ":nf_max=16:inflation_max=1e9", ":local=2.5:global=0",
                                            ":local=0.5:global=1.5:inflation_max=0.25", ":dangling_max=0.001:pending_max=1.5",
-                                           ":heuristic=off", ":object_pairs=session", ":history=persistent:inflation_max=1e9"};
+                                           ":heuristic=off", ":heuristic=boxes", ":object_pairs=session", ":history=persistent:inflation_max=1e9"};
 
 TEST_F(OpenClParity, ApccdKnobsGiveTheCpuAnswers) {
   for (const char* keys : kApccdKnobs) {

@@ -72,9 +72,9 @@ TEST_P(ApccdOnScene, MissesNothingUnderEveryKnobAndThreadCount) {
     }
     EXPECT_GT(colliding, 0u) << GetParam() << ", δ = " << thickness << ": nothing to miss, the test would prove nothing";
     // Every knob, at least once: defaults; no skipping, no front end, history on; no inflation at all (every
-    // motion dangles); object pairs from the session's trees with persistent history; long sessions (nf 2..16, no
+    // motion dangles) with the box filter alone as front end; object pairs from the session's trees with persistent history; long sessions (nf 2..16, no
     // inflation cap, many dangling vertices and a long pending list allowed before a session ends).
-    for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off:history=on", "apccd:local=0:global=0",
+    for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off:history=on", "apccd:local=0:global=0:heuristic=boxes",
                              "apccd:object_pairs=session:history=persistent",
                              "apccd:nf_min=2:nf_max=16:inflation_max=1e9:dangling_max=0.5:pending_max=1e9"}) {
       SCOPED_TRACE(GetParam() + ", δ = " + std::to_string(thickness) + ", " + spec);
@@ -95,6 +95,53 @@ TEST_P(ApccdOnScene, MissesNothingUnderEveryKnobAndThreadCount) {
 INSTANTIATE_TEST_SUITE_P(BuiltInScenes, ApccdOnScene, ::testing::ValuesIn(testing::procedural_scene_names()),
                          testing::param_name);
 INSTANTIATE_TEST_SUITE_P(ShapeScenes, ApccdOnScene, ::testing::ValuesIn(testing::shape_scene_names()), testing::param_name);
+
+// With the box filter alone as its front end, apccd admits exactly the candidates whose fresh swept boxes overlap:
+// full's candidates, whatever its sessions, partial traversals and object pairs did to find them (a pair they lost
+// would be missing even where it does not collide). So it tests full's elementary pairs and reports full's set, TOIs
+// included, at every step: on the fold (self contact inside sessions, both δ) and the spinning ball (object pairs),
+// with the default inflation and with none (every moving vertex dangles: the partial traversals find the rest).
+TEST(Apccd, WithTheBoxFrontEndTestsExactlyWhatFullTests) {
+  testing::TempDir dir;
+  const auto tois = [](const CollisionSet& set) {
+    std::vector<double> all;
+    for (const auto& contact : set.vertex_face()) all.push_back(contact.toi);
+    for (const auto& contact : set.edge_edge()) all.push_back(contact.toi);
+    for (const auto& contact : set.face_shape()) all.push_back(contact.toi);
+    return all;
+  };
+  for (const char* name : {"fold", "spinning-ball"}) {
+    const testing::LoadedScene loaded = testing::small_scene(name, dir);
+    for (double thickness : {0.0, loaded.sequence.scene().thickness()}) {
+      const Scene scene = loaded.sequence.scene().with_thickness(thickness);
+      for (const char* spec : {"apccd+cubic64:heuristic=boxes", "apccd+cubic64:heuristic=boxes:local=0:global=0"}) {
+        auto full = make_strategy("full+cubic64");
+        auto apccd = make_strategy(spec);
+        full->init(scene, loaded.frames[0]);
+        apccd->init(scene, loaded.frames[0]);
+        double inside = 0, dangling = 0;
+        std::size_t reported = 0;
+        for (std::size_t k = 0; k + 1 < loaded.frames.size(); ++k) {
+          SCOPED_TRACE(std::string(name) + ", δ = " + std::to_string(thickness) + ", " + spec + ", step " + std::to_string(k));
+          const StepView step{&scene, k, loaded.frames[k], loaded.frames[k + 1]};
+          const StepResult expected = full->step(step, false);
+          const StepResult result = apccd->step(step, false);
+          EXPECT_EQ(extra(result, "distance_filtered"), 0.0) << "the distance heuristic ran";
+          ASSERT_EQ(result.counters.candidate_triangle_pairs, expected.counters.candidate_triangle_pairs);
+          ASSERT_EQ(result.counters.elementary_tests, expected.counters.elementary_tests);
+          ASSERT_TRUE(result.collisions.same_pairs(expected.collisions));
+          ASSERT_EQ(tois(result.collisions), tois(expected.collisions)) << "the same pairs with other TOIs";
+          inside += 1 - extra(result, "session_start");
+          dangling += extra(result, "dangling_vertices");
+          reported += result.collisions.size();
+        }
+        EXPECT_GT(inside, 0.0) << name << ", " << spec << ": no step inside a session";
+        EXPECT_GT(reported, 0u) << name << ": nothing reported, nothing compared";
+        if (std::string(spec).find("local=0") != std::string::npos) EXPECT_GT(dangling, 0.0) << name << ": no partial traversal";
+      }
+    }
+  }
+}
 
 // The pairs a session start finds are not the whole story: on the fold, contacts begin inside sessions, where only
 // the pending list and partial traversals can bring them to the back end.

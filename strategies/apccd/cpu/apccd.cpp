@@ -26,7 +26,7 @@
 /// Knobs (spec keys, all recorded in the resolved name): skip (on/off), nf_min, nf_max, local, global,
 /// dangling_max (fraction of dangling vertices that ends a session), pending_max (pending pairs per admissible
 /// pair that ends a session), inflation_max (mean budget per mean edge length that shortens a session), heuristic
-/// (front end on/off), history, object_pairs (fresh/session).
+/// (the front end: on, boxes, off), history, object_pairs (fresh/session).
 
 #include "core/assignment.hpp"
 #include "strategies/apccd/opencl/apccd_opencl.hpp"
@@ -156,7 +156,7 @@ class Apccd final : public Strategy {
     std::vector<bvh::TrianglePair> admissible;
     {
       ScopedStageTimer timer(result.stages, "front end");
-      if (settings_.heuristic) {
+      if (settings_.front_end != FrontEnd::off) {
         // Admissible: the two triangles' fresh swept boxes, widened by δ/2, overlap this step. Each face's box is
         // computed once per step; candidate pairs then only compare two boxes.
         std::vector<Box3> face_boxes(topology.num_faces());
@@ -177,7 +177,7 @@ class Apccd final : public Strategy {
     // device): pairs provably farther apart than δ over the step never reach the narrow phase
     // (separation_filter.hpp). The back end: the narrow phase, then history.
     outcome = test_candidates(topology, masks_, admissible, step, *narrow_phase_, scene_->thickness(), audit || settings_.history != HistoryMode::off,
-                              settings_.heuristic, result.stages, "back end");
+                              settings_.front_end == FrontEnd::on, result.stages, "back end");
     if (settings_.history != HistoryMode::off) {
       ScopedStageTimer timer(result.stages, "back end");
       history_catches = history_.apply(topology, step.x1, *outcome.tested, outcome.collisions);

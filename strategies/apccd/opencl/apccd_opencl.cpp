@@ -132,7 +132,8 @@ class ApccdOpenCl final : public Strategy {
       across = &across_;
     }
     // The front end: candidates whose fresh swept boxes overlap.
-    if (settings_.heuristic) {
+    const bool box_filter = settings_.front_end != FrontEnd::off;
+    if (box_filter) {
       cl_kernel kernel = context.kernel("face_boxes");
       const std::size_t faces = scene_->topology().num_faces();
       set_arguments(kernel, static_cast<cl_uint>(faces), pipeline_.faces().get(), x0.get(), x1.get(), half, face_boxes_.get());
@@ -147,7 +148,7 @@ class ApccdOpenCl final : public Strategy {
     if (admissible_.capacity == 0) admissible_.capacity = pipeline_.list_start(std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024));
     const std::size_t admissible = pipeline_.fill_list(
         "admit", pending_.count + across_count, admissible_, sizeof(cl_uint2), events, "front end", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
-          const cl_uchar check_boxes = settings_.heuristic ? 1 : 0;
+          const cl_uchar check_boxes = box_filter ? 1 : 0;
           set_arguments(kernel, static_cast<cl_uint>(pending_.count), pending_.buffer.get(), static_cast<cl_uint>(across_count), across_memory,
                         face_boxes_.get(), check_boxes, capacity, counter.get(), admissible_.buffer.get());
         });
@@ -155,7 +156,7 @@ class ApccdOpenCl final : public Strategy {
     pipeline_.vertex_boxes(x0, x1, events);
     const std::size_t elementary = pipeline_.expand(admissible_.buffer, admissible, elementary_, events);
     const DeviceList* tested = &elementary_;
-    if (settings_.heuristic) {
+    if (settings_.front_end == FrontEnd::on) {
       pipeline_.filter(elementary_.buffer, elementary, x0, x1, tested_, events);
       tested = &tested_;
     }
