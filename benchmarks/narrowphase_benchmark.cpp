@@ -7,6 +7,7 @@
 #include "datasets/query_file.hpp"
 #include "datasets/sample_step.hpp"
 #include "strategies/narrowphase/registry.hpp"
+#include "strategies/separation_filter.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -88,7 +89,28 @@ void BM_NarrowPhase(benchmark::State& state, const std::string& spec, const std:
   state.counters["collide_share"] = static_cast<double>(collisions) / static_cast<double>(std::max<std::size_t>(1, i));
 }
 
+/// apccd's distance heuristic (strategies/separation_filter.hpp) on the same pairs: what it costs per pair beside
+/// the narrow phases it runs in front of (it pays only where it is cheaper than the test it spares).
+void BM_SeparationFilter(benchmark::State& state, const std::string& set) {
+  const auto it = inputs().sets.find(set);
+  if (it == inputs().sets.end() || it->second.empty()) return state.SkipWithError("no public data (CCDBENCH_DATA_DIR)");
+  const bool vertex_face = set.ends_with("/vf");
+  const Pairs& pairs = it->second;
+  std::size_t i = 0, apart = 0;
+  for (auto _ : state) {
+    const bool proven = strategies::provably_apart(pairs[i++ % pairs.size()], vertex_face, 0.0);
+    apart += proven ? 1 : 0;
+    benchmark::DoNotOptimize(proven);
+  }
+  state.counters["pairs"] = static_cast<double>(pairs.size());
+  state.counters["apart_share"] = static_cast<double>(apart) / static_cast<double>(std::max<std::size_t>(1, i));
+}
+
 const bool registered = [] {
+  for (const char* set : {"queries/vf", "queries/ee", "candidates/vf", "candidates/ee"}) {
+    benchmark::RegisterBenchmark((std::string("separation-filter/") + set).c_str(), BM_SeparationFilter, std::string(set))
+        ->Unit(benchmark::kNanosecond);
+  }
   for (const char* spec : {"cubic32", "cubic64", "conservative", "advancement"}) {
     for (const char* set : {"queries/vf", "queries/ee", "candidates/vf", "candidates/ee"}) {
       benchmark::RegisterBenchmark((std::string(spec) + "/" + set).c_str(), BM_NarrowPhase, std::string(spec), std::string(set))
