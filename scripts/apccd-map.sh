@@ -45,7 +45,7 @@ for backend in ${BACKENDS:-cpu}; do
   [[ "$backend" == opencl ]] && suffix=":backend=opencl"
   # apccd:skip=off (every step a session start: the same front end, no skipping) splits apccd's gain over full
   # into its front end's and its skipping's; apccd+cubic64:heuristic=boxes is apccd with the front end that pays in
-  # front of cubic64 (the box filter alone: it then tests exactly full's pairs).
+  # front of cubic64 (the box filter alone: it then tests full's pairs less those its object frames prove apart).
   strategies+="${strategies:+,}full+cubic64$suffix,apccd+cubic64$suffix,apccd+cubic64:heuristic=boxes$suffix,apccd+cubic64:skip=off$suffix"
   strategies+=",full$suffix,apccd$suffix,apccd:skip=off$suffix"
 done

@@ -4,7 +4,8 @@
 # a drift of the machine touches both alike. Each round runs full and apccd with both narrow phases (and, with the
 # after build, apccd+cubic64:heuristic=boxes, which the before build lacks) over the paper scenes from frame 20 at 4
 # and 16 CCD steps per frame, --verify none: the map verifies these strategies; here the answers of every step are
-# compared between the builds by their digests instead (they must agree: the changes are for speed only).
+# compared between the builds by their digests instead (they must agree: the changes are for speed only; the script
+# fails where one differs). Not resumable: a run starts again from its first round.
 # reports/apccd-paper/profile.py then writes profile.md: per cell, the median over the rounds of each build's mean
 # ms per step and of each stage.
 # Usage: scripts/apccd-profile.sh [quick|full|smoke]
@@ -47,6 +48,8 @@ threads=()
 [[ -n "${THREADS:-}" ]] && threads=(--threads "$THREADS")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+# A run starts from an empty folder: profile.py reads every round it finds there.
+rm -rf "$out/raw" "$out/scenes"
 mkdir -p "$out/raw" "$out/scenes"
 started=$(date +%s)
 
@@ -102,6 +105,13 @@ common = sorted(set(before) & set(after))
 print("compared_steps\tdiffering_steps")
 print(f"{len(common)}\t{sum(1 for k in common if before[k] != after[k])}")
 EOF
+# The changes are for speed only: a step whose answers differ between the builds is a defect, and so is a run that
+# compared none.
+read -r compared differing < <(tail -n 1 "$out/raw/answers.tsv")
+if [[ "$compared" == 0 || "$differing" != 0 ]]; then
+  echo "apccd-profile.sh: $differing of $compared steps answer differently before and after" >&2
+  exit 1
+fi
 printf 'profile\t%s\nelapsed_s\t%s\nthreads\t%s\nrounds\t%s\nbefore\t%s\nbackends\t%s\n' "$profile" "$(( $(date +%s) - started ))" \
   "${THREADS:-all}" "$rounds" "$before" "${BACKENDS:-cpu}" > "$out/raw/run.tsv"
 if /usr/bin/python3 -c "import json" 2>/dev/null; then

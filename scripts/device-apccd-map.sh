@@ -17,6 +17,9 @@ out=/tmp/ccdbench-map-device
 source scripts/device-env.sh
 source scripts/device-builds.sh
 cells=/tmp/ccdbench-map-cells
+# A machine still warm from an earlier call keeps /tmp: its map folder is rebuilt from the cells (kept or carried),
+# never packed as this call's.
+rm -rf "$out/map-device"
 mkdir -p "$cells"
 [[ -f device-carry/map-cells.tgz ]] && tar xzf device-carry/map-cells.tgz -C "$cells"
 pack() {

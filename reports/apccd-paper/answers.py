@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Every step's answers digest of a map's cells, for verification by parity: OUT/raw/answers.tsv.gz holds scene,
-resolved strategy, step and the digest of the pairs and TOI bits the strategy reported (`run` writes it into each step
-record of --out's results.jsonl). map.py --parity compares an OpenCL map's digests with those of the CPU map's cells,
+"""Every step's answers digest of a map's cells, for verification by parity: OUT/raw/answers.tsv.gz holds each cell of
+map.json (its unique name), its scene's content digest and δ (from the cell's key), the step and the digest of the pairs
+and TOI bits the strategy reported (`run` writes it into each step record of --out's results.jsonl). map.py --parity compares an OpenCL map's digests with those of the CPU map's cells,
 which were verified against the exact truth: equal digests at every step are equal collision sets, so equal verdicts.
 
 Usage: answers.py CELLS OUT   (CELLS: the map's --out folder; OUT: the map's folder, holding raw/map.json)"""
@@ -12,21 +12,32 @@ import sys
 
 
 def main(cells, out):
-    wanted = {(s["scene"], s["strategy"]) for s in json.load(open(os.path.join(out, "raw", "map.json")))}
+    # The cells map.json holds, by their unique names: a folder of cells may hold others of the same scene label and
+    # strategy (another profile, another build), whose steps must not be taken for these.
+    summaries = {s["cell"]: s for s in json.load(open(os.path.join(out, "raw", "map.json")))}
     digests = {}
+    steps = []
     path = os.path.join(cells, "results.jsonl")
     with (gzip.open(path, "rt") if path.endswith(".gz") else open(path)) as results:
         for line in results:
             record = json.loads(line)
-            key = (record.get("scene"), record.get("strategy"))
-            if record.get("record") == "step" and key in wanted:
-                # A cell run again (after an interruption) writes its steps again: the last run's are the cell's.
-                digests[key + (record["step"],)] = record["answers"]
+            if record.get("record") == "step":
+                steps.append(record)
+                continue
+            # A cell's step records come just before its summary.
+            if record.get("record") == "summary" and record.get("cell") in summaries:
+                digests[record["cell"]] = {step["step"]: step["answers"] for step in steps
+                                           if (step["scene"], step["strategy"]) == (record["scene"], record["strategy"])}
+            steps = []
     with gzip.open(os.path.join(out, "raw", "answers.tsv.gz"), "wt") as tsv:
-        tsv.write("scene\tstrategy\tstep\tanswers\n")
-        for (scene, strategy, step), answers in sorted(digests.items()):
-            tsv.write(f"{scene}\t{strategy}\t{step}\t{answers}\n")
-    print(f"answers: {len(digests)} steps of {len(wanted)} cells into {out}/raw/answers.tsv.gz")
+        tsv.write("cell\tscene_content\tthickness\tstep\tanswers\n")
+        for cell, by_step in sorted(digests.items()):
+            key = summaries[cell]["key"]
+            for step, answers in sorted(by_step.items()):
+                tsv.write(f"{cell}\t{key['scene_content']}\t{key['thickness']!r}\t{step}\t{answers}\n")
+    missing = len(summaries) - len(digests)
+    print(f"answers: {sum(len(d) for d in digests.values())} steps of {len(digests)} cells into {out}/raw/answers.tsv.gz"
+          + (f"; {missing} cells of map.json have no step records in {path}" if missing else ""))
 
 
 if __name__ == "__main__":

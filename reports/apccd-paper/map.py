@@ -65,19 +65,20 @@ def panel_name(panel):
 
 
 def read_answers(folder):
-    """(scene, resolved strategy) -> {step: digest} from FOLDER/raw/answers.tsv.gz."""
-    answers = defaultdict(dict)
+    """cell -> (scene content digest, δ, {step: digest}) from FOLDER/raw/answers.tsv.gz (answers.py)."""
+    answers = {}
     with gzip.open(os.path.join(folder, "raw", "answers.tsv.gz"), "rt") as tsv:
         next(tsv)
         for line in tsv:
-            scene, strategy, step, digest = line.rstrip("\n").split("\t")
-            answers[(scene, strategy)][int(step)] = digest
+            cell, content, thickness, step, digest = line.rstrip("\n").split("\t")
+            answers.setdefault(cell, (content, thickness, {}))[2][int(step)] = digest
     return answers
 
 
 def verify_by_parity(summaries, out, cpu_map):
-    """Gives each unverified OpenCL cell the verdicts of the verified CPU cell of the same scene and strategy when
-    every step's answers digest agrees (see the usage); returns (cells verified so, cells whose answers differ)."""
+    """Gives each unverified OpenCL cell the verdicts of the verified CPU cell of the same scene and strategy when both
+    ran the same scene content at the same δ and every step's answers digest agrees (see the usage); returns (cells
+    verified so, cells whose answers differ or cannot be compared)."""
     mine, theirs = read_answers(out), read_answers(cpu_map)
     cpu = {}
     for c in json.load(open(os.path.join(cpu_map, "raw", "map.json"))):
@@ -90,10 +91,12 @@ def verify_by_parity(summaries, out, cpu_map):
         reference = cpu.get((cell["scene"], family, narrow))
         if cell.get("verified") or backend != "opencl" or reference is None:
             continue
-        steps = mine.get((cell["scene"], cell["strategy"]), {})
-        expected = theirs.get((reference["scene"], reference["strategy"]), {})
-        if len(steps) == cell["steps"] and steps == expected:
-            for field in ("colliding", "missed", "missed_culled", "missed_tested", "false_alarms", "reported"):
+        content, thickness, steps = mine.get(cell["cell"], (None, None, {}))
+        expected = theirs.get(reference["cell"], (None, None, {}))
+        if (content, thickness) == expected[:2] and content is not None and len(steps) == cell["steps"] and steps == expected[2]:
+            # Equal answers at every step are equal collision sets: the CPU cell's verdicts (how many pairs collide, were
+            # missed and were false alarms) are this cell's. Why a miss was missed (culled or tested) is not carried over.
+            for field in ("colliding", "missed", "false_alarms", "reported"):
                 cell[field] = reference.get(field, 0)
             cell["verified"] = True
             cell["verified_by"] = "parity"
@@ -196,8 +199,8 @@ def main(out, cpu_map=None):
         if parity:
             md.write(f"Verified by parity with the CPU map ({parity[0]} cells): these cells ran without the exact truth, and "
                      "every step's digest of reported pairs and TOI bits equals that of the same strategy's CPU cell, which "
-                     f"was verified against it (map.py --parity); {parity[1]} cells whose answers differ anywhere stay "
-                     "unverified.\n\n")
+                     f"was verified against it, on the same scene content at the same δ (map.py --parity); {parity[1]} "
+                     "cells whose answers differ anywhere, or that could not be compared, stay unverified.\n\n")
         if best:
             (bname, bres, bspf, bratio, blength), bpanel = best
             md.write(f"Best cell: {bname} r{bres} spf{bspf}, {panel_name(bpanel)}: {bratio:.2f}x (sessions of {blength:.1f} frames). "
@@ -240,11 +243,32 @@ def main(out, cpu_map=None):
                  "|---|---|---|---:|---:|---:|---|\n")
         md.write("\n".join(reasons_rows) + "\n\n")
         md.write("## Missed collisions\n\n")
+        md.write(miss_summary(cells) + "\n\n")
         if missed_rows:
             md.write("| cell | narrow phase | backend | strategy | missed |\n|---|---|---|---|---|\n" + "\n".join(missed_rows) + "\n")
         else:
             md.write("None in any cell.\n")
     plot(points, skip_points, spfs, panels, os.path.join(out, "map.png"))
+
+
+def miss_summary(cells):
+    """Misses over the verified cells: the conservative narrow phase's (must be none) and, with cubic64 (which misses
+    pairs it tests), whether each apccd variant misses exactly what full misses on the same scene."""
+    conservative = [c for k, c in cells.items() if k[3] == "conservative" and c.get("verified")]
+    missed = sum(c.get("missed", 0) for c in conservative)
+    same = differ = 0
+    for (name, res, spf, narrow, backend, family), cell in cells.items():
+        full = cells.get((name, res, spf, narrow, backend, "full"))
+        if narrow != "cubic64" or family == "full" or not full or not (cell.get("verified") and full.get("verified")):
+            continue
+        if cell.get("missed", 0) == full.get("missed", 0):
+            same += 1
+        else:
+            differ += 1
+    return (f"Conservative narrow phase: {missed} missed over {len(conservative)} verified cells "
+            f"({sum(c.get('colliding', 0) for c in conservative if kind(c['strategy'])[0] == 'full')} colliding pairs, "
+            "summed over full's cells). cubic64 misses pairs it tests: each apccd variant's cell misses as many pairs as "
+            f"full's on the same scene in {same} of {same + differ} cells.")
 
 
 def stage_tables(panels, spfs, stage_sums):
