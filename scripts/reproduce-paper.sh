@@ -9,8 +9,9 @@
 # is too noisy for the sweeps' ratios. The full profile's cells hold 96-99 steps (the crossover's from 8: it keeps 3).
 # Usage: scripts/reproduce-paper.sh [quick|full|smoke]
 #   quick  10 steps per scene, fewer sweep points: under 10 minutes on 16 cores from a cold truth cache
-#   full   99 steps per scene and every sweep point (about 2.5 hours on 2 cores; reuses the truth cache and finished
-#          cells, so on a machine with a call limit it is run again until done, each call resuming the last)
+#   full   99 steps per scene and every sweep point (about an hour on 2 cores from a cold cache, 46 minutes with the
+#          scenes and truth cached; finished cells are reused, so on a machine with a call limit it is run again until
+#          done, each call resuming the last)
 #   smoke  tiny resolutions, seconds on 2 cores: checks the pipeline end to end, its numbers mean nothing
 # Environment: CCDBENCH_BIN (a built ccdbench; default: build it with scripts/build.sh release), BEFORE_BIN (the
 # build before issue 37's changes for profile/; default: scripts/apccd-profile.sh builds it), OUT (default

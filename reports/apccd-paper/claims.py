@@ -244,8 +244,8 @@ def main(work, shown_as):
     machine = f"{any_cell['machine']}, {any_cell['threads']} threads, revision {any_cell['git_revision']}"
     profile = run["profile"]
     header = (f"Profile **{profile}**, machine: {machine}. All cells ran in one invocation of "
-              f"`scripts/reproduce-paper.sh {profile}` ({int(run['elapsed_s']) / 60:.1f} minutes including scene "
-              f"generation and truth); the raw summaries are in `raw/`.")
+              f"`scripts/reproduce-paper.sh {profile}` ({int(run['elapsed_s']) / 60:.1f} minutes, with the scenes and the "
+              f"exact truth read from the cache where an earlier run had made them); the raw summaries are in `raw/`.")
 
     def cmd(experiment):
         return f"```sh\n{commands[experiment]}\n```"
@@ -460,8 +460,11 @@ def main(work, shown_as):
 | history off; `history=on` keeps the orientations of the pairs tested last step | pairs in close proximity keep their orientation throughout the simulation | `history=persistent` | attribution (last column), memory |
 | the distance heuristic runs in its own stage after the box filter | the heuristic is part of the front end | timed as the stage "distance heuristic"; the front-end column adds it to "front end" | attribution |
 | pairs across objects from tight world-frame trees refitted every step | the session's inflated trees, traversed per frame | `object_pairs=session` | attribution |
-| the session is shortened so that the mean budget stays within half an edge (`inflation_max=0.5`) | no such cap is described | `inflation_max=1e9` | `../apccd-sweep/` |
-| the narrow phase is conservative (the project's) | the paper's elementary tests | `apccd+cubic64` etc. | `../narrowphase/` |
+| the session is shortened so that the mean budget stays within half an edge (`inflation_max=0.5`); the counter `session_end_inflation_cap` says where it ended a session | no such cap is described (its rules: nf_max, nf adapted, too many dangling vertices) | `inflation_max=1e9` | `../../apccd-sweep/`, `map/` (why sessions end) |
+| a session also ends when the pending list outgrows 4 times the admissible pairs (`pending_max=4`; counter `session_end_pending`): beyond that it costs more than a fresh traversal | no such rule is described | `pending_max=1e9` | `map/` (why sessions end) |
+| self pairs are found in each object's frame (relative to its centroid): a whole object's translation costs no inflation | one frame | — | `../../../README.md` (apccd) |
+| `heuristic=boxes` drops the distance heuristic and keeps the box filter: in front of a narrow phase as cheap as the heuristic (cubic64) it spares nothing | the heuristic is always part of the front end | `heuristic=on` (the default) | `map/`, `profile/` |
+| the narrow phase is conservative (the project's) | the paper's elementary tests | `apccd+cubic64` etc. | `../../narrowphase/` |
 | speed-ups from mean ms per step of cells of one invocation | — | — | — |
 """
     readme = [f"# apccd against the paper's claims: attribution, crossover, wind, memory\n", header + "\n",
