@@ -52,10 +52,10 @@ struct ApccdSettings {
   /// A session is shortened so that a self-colliding object's mean budget stays within this fraction of its mean
   /// edge length (0: every frame is a session start).
   double inflation_max = 0.5;
-  /// The front end. The distance heuristic spares the narrow phase the pairs it proves apart, at about 75-200 ns a
-  /// pair on 2 cores of an AMD EPYC (narrowphase_benchmark's separation-filter/*): it pays in front of the
-  /// conservative test (about 230 ns on the same pairs), while cubic64 costs about as much as the heuristic itself,
-  /// so in front of it `boxes` (no heuristic) is the cheaper front end.
+  /// The front end. The distance heuristic spares the narrow phase the pairs it proves apart, at 75-77 ns a pair on
+  /// the public cloth-funnel candidates (narrowphase_benchmark's separation-filter/*, one core of an AMD EPYC): it pays
+  /// in front of the conservative test (225-230 ns on the same pairs), while cubic64 costs about as much as the
+  /// heuristic itself (81-110 ns), so in front of it `boxes` (no heuristic) is the cheaper front end.
   FrontEnd front_end = FrontEnd::on;
   /// Off by default: with the default (conservative) narrow phase there is no missed crossing for history to
   /// catch, and on the drape scene it cost about 2 ms of a 5 ms step and added false alarms. It pays only with a
