@@ -3,10 +3,10 @@
 // two self-traversal designs (issue 18, reports/cpu-step): per-face queries with ordered output (self_overlaps)
 // and the simultaneous tree-against-tree descent with a sort (self_overlaps_tree_pairs).
 
+#include "benchmarks/thread_counts.hpp"
 #include "core/scene.hpp"
 #include "datasets/data_dir.hpp"
 #include "datasets/sample_step.hpp"
-#include "benchmarks/thread_counts.hpp"
 #include "strategies/bvh/bvh.hpp"
 
 #include <benchmark/benchmark.h>
@@ -81,8 +81,7 @@ using benchmarks::thread_counts;
 const bool registered = [] {
   for (const char* name : kSteps) {
     const std::string step(name);
-    benchmark::RegisterBenchmark(("BM_SelfTraversal/per_face_ordered/" + step).c_str(), BM_SelfTraversal<self_overlaps>, name)
-        ->Apply(thread_counts);
+    benchmark::RegisterBenchmark(("BM_SelfTraversal/per_face_ordered/" + step).c_str(), BM_SelfTraversal<self_overlaps>, name)->Apply(thread_counts);
     benchmark::RegisterBenchmark(("BM_SelfTraversal/tree_pairs_sorted/" + step).c_str(), BM_SelfTraversal<self_overlaps_tree_pairs>, name)
         ->Apply(thread_counts);
     benchmark::RegisterBenchmark(("BM_Refit/" + step).c_str(), BM_Refit, name)->Apply(thread_counts);

@@ -74,8 +74,8 @@ void BM_FaceShape(benchmark::State& state, ShapeKind kind, Stage stage) {
       switch (stage) {
         case Stage::cull:
         case Stage::certified_only: {
-          const bool apart = strategies::cull_face_shape(pairs.shape, rows, kThickness, stage == Stage::cull) ==
-                             strategies::FaceShapeCull::certified_apart;
+          const bool apart =
+              strategies::cull_face_shape(pairs.shape, rows, kThickness, stage == Stage::cull) == strategies::FaceShapeCull::certified_apart;
           culled += apart ? 1 : 0;
           break;
         }
@@ -92,9 +92,7 @@ void BM_FaceShape(benchmark::State& state, ShapeKind kind, Stage stage) {
         case Stage::narrow_only:
           colliding += strategies::narrow_phase_face_shape(conservative(), pairs.shape, rows, kThickness).collides ? 1 : 0;
           break;
-        case Stage::reference:
-          colliding += reference::decide_face_shape(pairs.shape, rows, kThickness).collides ? 1 : 0;
-          break;
+        case Stage::reference: colliding += reference::decide_face_shape(pairs.shape, rows, kThickness).collides ? 1 : 0; break;
       }
     }
   }
@@ -105,14 +103,13 @@ void BM_FaceShape(benchmark::State& state, ShapeKind kind, Stage stage) {
 
 void register_all() {
   for (const ShapeKind kind : {ShapeKind::sphere, ShapeKind::box}) {
-    for (const auto& [stage, name] : {std::pair{Stage::cull, "cull"}, std::pair{Stage::certified_only, "certified_only"},
-                                      std::pair{Stage::cull_narrow, "cull_narrow"},
-                                      std::pair{Stage::cull_narrow_no_prefilter, "cull_narrow_no_prefilter"},
-                                      std::pair{Stage::narrow_only, "narrow_only"},
-                                      std::pair{Stage::reference, "reference"}}) {
-      benchmark::RegisterBenchmark(("FaceShape/" + std::string(to_string(kind)) + "/" + name).c_str(),
-                                   [kind, stage](benchmark::State& state) { BM_FaceShape(state, kind, stage); })
-          ->Unit(benchmark::kMicrosecond);
+    for (const auto& [stage, name] :
+         {std::pair{Stage::cull, "cull"}, std::pair{Stage::certified_only, "certified_only"}, std::pair{Stage::cull_narrow, "cull_narrow"},
+          std::pair{Stage::cull_narrow_no_prefilter, "cull_narrow_no_prefilter"}, std::pair{Stage::narrow_only, "narrow_only"},
+          std::pair{Stage::reference, "reference"}}) {
+      benchmark::RegisterBenchmark(("FaceShape/" + std::string(to_string(kind)) + "/" + name).c_str(), [kind, stage](benchmark::State& state) {
+        BM_FaceShape(state, kind, stage);
+      })->Unit(benchmark::kMicrosecond);
     }
   }
 }

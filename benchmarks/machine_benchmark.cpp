@@ -51,17 +51,23 @@ void BM_MemoryBound(benchmark::State& state) {
   // split of blocks over threads as the timed loop: on a machine with several NUMA nodes, pages lie near their
   // thread (the GPU machine has one).
   const std::unique_ptr<double[]> a(new double[kCount]), b(new double[kCount]), c(new double[kCount]);
-  tbb::parallel_for(std::size_t{0}, kBlocks, [&](std::size_t block) {
-    for (std::size_t i = block * kPerBlock; i < (block + 1) * kPerBlock; ++i) {
-      a[i] = 0.0;
-      b[i] = 1.0;
-      c[i] = 2.0;
-    }
-  }, tbb::static_partitioner());
+  tbb::parallel_for(
+      std::size_t{0}, kBlocks,
+      [&](std::size_t block) {
+        for (std::size_t i = block * kPerBlock; i < (block + 1) * kPerBlock; ++i) {
+          a[i] = 0.0;
+          b[i] = 1.0;
+          c[i] = 2.0;
+        }
+      },
+      tbb::static_partitioner());
   for (auto _ : state) {
-    tbb::parallel_for(std::size_t{0}, kBlocks, [&](std::size_t block) {
-      for (std::size_t i = block * kPerBlock; i < (block + 1) * kPerBlock; ++i) a[i] = b[i] + 3.0 * c[i];
-    }, tbb::static_partitioner());
+    tbb::parallel_for(
+        std::size_t{0}, kBlocks,
+        [&](std::size_t block) {
+          for (std::size_t i = block * kPerBlock; i < (block + 1) * kPerBlock; ++i) a[i] = b[i] + 3.0 * c[i];
+        },
+        tbb::static_partitioner());
     benchmark::DoNotOptimize(a.get());
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(kBlocks * kPerBlock));

@@ -89,8 +89,7 @@ void BM_StepTruthRodTwist(benchmark::State& state) {
   const auto data = datasets::external_data_dir();
   if (!data) return state.SkipWithError("no public data (CCDBENCH_DATA_DIR)");
   const auto step = datasets::load_sample_step(*data / "scalable-ccd-sample/rod-twist");
-  const Scene scene({{"rod", ObjectKind::deformable, true, step.topology.num_vertices(), step.topology.faces()}}, {},
-                    0.0);
+  const Scene scene({{"rod", ObjectKind::deformable, true, step.topology.num_vertices(), step.topology.faces()}}, {}, 0.0);
   TruthStatistics statistics;
   for (auto _ : state) statistics = compute_step_truth(scene, step.x0, step.x1, {0.0, false, {}}).statistics;
   const double pairs = static_cast<double>(statistics.vertex_face_pairs + statistics.edge_edge_pairs);

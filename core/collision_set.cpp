@@ -24,8 +24,7 @@ struct Before {
 
 template <class Pair>
 void keep_first_of_each_pair(std::vector<Contact<Pair>>& contacts) {
-  contacts.erase(std::unique(contacts.begin(), contacts.end(),
-                             [](const Contact<Pair>& x, const Contact<Pair>& y) { return x.pair == y.pair; }),
+  contacts.erase(std::unique(contacts.begin(), contacts.end(), [](const Contact<Pair>& x, const Contact<Pair>& y) { return x.pair == y.pair; }),
                  contacts.end());
 }
 
@@ -47,20 +46,17 @@ void merge_contacts(std::vector<Contact<Pair>>& into, const std::vector<Contact<
 
 template <class Pair>
 bool contains_pair(const std::vector<Contact<Pair>>& contacts, const Pair& pair) {
-  const auto it = std::lower_bound(contacts.begin(), contacts.end(), pair,
-                                   [](const Contact<Pair>& c, const Pair& p) { return c.pair < p; });
+  const auto it = std::lower_bound(contacts.begin(), contacts.end(), pair, [](const Contact<Pair>& c, const Pair& p) { return c.pair < p; });
   return it != contacts.end() && it->pair == pair;
 }
 
 template <class Pair>
 bool same_pair_lists(const std::vector<Contact<Pair>>& x, const std::vector<Contact<Pair>>& y) {
-  return std::equal(x.begin(), x.end(), y.begin(), y.end(),
-                    [](const Contact<Pair>& p, const Contact<Pair>& q) { return p.pair == q.pair; });
+  return std::equal(x.begin(), x.end(), y.begin(), y.end(), [](const Contact<Pair>& p, const Contact<Pair>& q) { return p.pair == q.pair; });
 }
 
 template <class Pair>
-std::vector<Contact<Pair>> contacts_difference(const std::vector<Contact<Pair>>& a,
-                                               const std::vector<Contact<Pair>>& b) {
+std::vector<Contact<Pair>> contacts_difference(const std::vector<Contact<Pair>>& a, const std::vector<Contact<Pair>>& b) {
   std::vector<Contact<Pair>> out;
   std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out),
                       [](const Contact<Pair>& x, const Contact<Pair>& y) { return x.pair < y.pair; });

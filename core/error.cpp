@@ -3,8 +3,7 @@
 namespace ccd {
 namespace {
 
-std::string format_input_error(const std::filesystem::path& file, const std::string& where,
-                               const std::string& reason) {
+std::string format_input_error(const std::filesystem::path& file, const std::string& where, const std::string& reason) {
   std::string text = file.empty() ? std::string() : file.string() + ":";
   if (!where.empty()) text += where + ":";
   if (!text.empty()) text += " ";
@@ -14,9 +13,6 @@ std::string format_input_error(const std::filesystem::path& file, const std::str
 }  // namespace
 
 InputError::InputError(std::filesystem::path file, std::string where, std::string reason)
-    : std::runtime_error(format_input_error(file, where, reason)),
-      file_(std::move(file)),
-      where_(std::move(where)),
-      reason_(std::move(reason)) {}
+    : std::runtime_error(format_input_error(file, where, reason)), file_(std::move(file)), where_(std::move(where)), reason_(std::move(reason)) {}
 
 }  // namespace ccd

@@ -45,9 +45,7 @@ inline EdgeEdgePair make_edge_edge_pair(Edge p, Edge q) { return p < q ? EdgeEdg
 
 template <>
 struct std::hash<ccd::VertexFacePair> {
-  std::size_t operator()(const ccd::VertexFacePair& p) const noexcept {
-    return std::hash<std::uint64_t>{}((std::uint64_t{p.v} << 32) | p.f);
-  }
+  std::size_t operator()(const ccd::VertexFacePair& p) const noexcept { return std::hash<std::uint64_t>{}((std::uint64_t{p.v} << 32) | p.f); }
 };
 
 template <>

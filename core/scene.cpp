@@ -50,8 +50,7 @@ void check_shape_object(const ObjectDescription& object) {
 
 }  // namespace
 
-Scene::Scene(std::vector<ObjectDescription> objects, std::vector<std::pair<ObjectId, ObjectId>> collidable,
-             double thickness)
+Scene::Scene(std::vector<ObjectDescription> objects, std::vector<std::pair<ObjectId, ObjectId>> collidable, double thickness)
     : thickness_(thickness) {
   check_thickness(thickness);
   std::vector<Face> global_faces;
@@ -64,8 +63,7 @@ Scene::Scene(std::vector<ObjectDescription> objects, std::vector<std::pair<Objec
     }
     check_shape_object(object);
     if (object.kind == ObjectKind::shape) shape_objects_.push_back(static_cast<ObjectId>(objects_.size()));
-    objects_.push_back(SceneObject{object.name, object.kind, object.self_collision,
-                                   static_cast<VertexId>(num_vertices), object.num_vertices,
+    objects_.push_back(SceneObject{object.name, object.kind, object.self_collision, static_cast<VertexId>(num_vertices), object.num_vertices,
                                    static_cast<FaceId>(global_faces.size()), object.faces.size(), object.shape});
     for (const Face& face : object.faces) {
       const auto offset = static_cast<VertexId>(num_vertices);
@@ -78,8 +76,7 @@ Scene::Scene(std::vector<ObjectDescription> objects, std::vector<std::pair<Objec
       throw InputError({}, "collidable", "object index out of range");
     }
     if (a == b) {
-      throw InputError({}, "collidable", "object '" + objects_[a].name +
-                                             "' is paired with itself: use its self_collision flag instead");
+      throw InputError({}, "collidable", "object '" + objects_[a].name + "' is paired with itself: use its self_collision flag instead");
     }
     collidable_.emplace_back(std::min(a, b), std::max(a, b));
   }
@@ -101,14 +98,12 @@ bool Scene::may_collide(ObjectId a, ObjectId b) const {
 }
 
 ObjectId Scene::object_of_vertex(VertexId v) const {
-  const auto it = std::upper_bound(objects_.begin(), objects_.end(), v,
-                                   [](VertexId x, const SceneObject& o) { return x < o.first_vertex; });
+  const auto it = std::upper_bound(objects_.begin(), objects_.end(), v, [](VertexId x, const SceneObject& o) { return x < o.first_vertex; });
   return static_cast<ObjectId>((it - objects_.begin()) - 1);
 }
 
 ObjectId Scene::object_of_face(FaceId f) const {
-  const auto it = std::upper_bound(objects_.begin(), objects_.end(), f,
-                                   [](FaceId x, const SceneObject& o) { return x < o.first_face; });
+  const auto it = std::upper_bound(objects_.begin(), objects_.end(), f, [](FaceId x, const SceneObject& o) { return x < o.first_face; });
   return static_cast<ObjectId>((it - objects_.begin()) - 1);
 }
 

@@ -57,8 +57,7 @@ class Scene {
   /// @throws InputError on an empty or duplicate name, a bad face list (named by object and face), a collidable
   ///         pair naming a missing object or one object twice, a negative or non-finite thickness, or a shape object
   ///         without a valid shape, with other than one vertex, with faces or with self-collision.
-  Scene(std::vector<ObjectDescription> objects, std::vector<std::pair<ObjectId, ObjectId>> collidable,
-        double thickness);
+  Scene(std::vector<ObjectDescription> objects, std::vector<std::pair<ObjectId, ObjectId>> collidable, double thickness);
 
   const std::vector<SceneObject>& objects() const { return objects_; }
   const SceneObject& object(ObjectId id) const { return objects_[id]; }

@@ -71,8 +71,8 @@ extern const std::array<std::array<int, 2>, 12> kBoxEdges;
 /// visit(vertex_face, rows) with rows in the query files' order (step.hpp) and stops when it returns true. Both the
 /// reference (exact corners) and the strategies (rounded corners) decide this same list.
 template <class Point, class Visit>
-void for_each_box_surface_pair(const std::array<Point, 3>& face_t0, const std::array<Point, 3>& face_t1,
-                               const std::array<Point, 8>& corners_t0, const std::array<Point, 8>& corners_t1, Visit visit) {
+void for_each_box_surface_pair(const std::array<Point, 3>& face_t0, const std::array<Point, 3>& face_t1, const std::array<Point, 8>& corners_t0,
+                               const std::array<Point, 8>& corners_t1, Visit visit) {
   const auto& f0 = face_t0;
   const auto& f1 = face_t1;
   const auto& c0 = corners_t0;

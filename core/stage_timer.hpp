@@ -27,8 +27,7 @@ class StageTimes {
 /// normally a literal). Uses the steady clock.
 class ScopedStageTimer {
  public:
-  ScopedStageTimer(StageTimes& times, std::string_view stage)
-      : times_(times), stage_(stage), start_(std::chrono::steady_clock::now()) {}
+  ScopedStageTimer(StageTimes& times, std::string_view stage) : times_(times), stage_(stage), start_(std::chrono::steady_clock::now()) {}
   ScopedStageTimer(const ScopedStageTimer&) = delete;
   ScopedStageTimer& operator=(const ScopedStageTimer&) = delete;
   ~ScopedStageTimer() {

@@ -22,19 +22,16 @@ struct StepView {
 
 /// A pair's eight positions in the query files' row order (DESIGN.md §7): VF v, f0, f1, f2 at t = 0 then t = 1;
 /// EE a.v0, a.v1, b.v0, b.v1 at t = 0 then t = 1.
-inline std::array<Vec3, 8> pair_rows(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                                     const VertexFacePair& p) {
+inline std::array<Vec3, 8> pair_rows(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1, const VertexFacePair& p) {
   const Face& f = topology.face(p.f);
   return {x0[p.v], x0[f[0]], x0[f[1]], x0[f[2]], x1[p.v], x1[f[0]], x1[f[1]], x1[f[2]]};
 }
-inline std::array<Vec3, 8> pair_rows(const MeshTopology&, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                                     const EdgeEdgePair& p) {
+inline std::array<Vec3, 8> pair_rows(const MeshTopology&, std::span<const Vec3> x0, std::span<const Vec3> x1, const EdgeEdgePair& p) {
   return {x0[p.a.v0], x0[p.a.v1], x0[p.b.v0], x0[p.b.v1], x1[p.a.v0], x1[p.a.v1], x1[p.b.v0], x1[p.b.v1]};
 }
 
 /// A face-shape pair's face corners and shape centre at t = 0 and t = 1 (the centre is the shape object's vertex).
-inline FaceShapeRows face_shape_rows(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                                     const FaceShapePair& p) {
+inline FaceShapeRows face_shape_rows(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, const FaceShapePair& p) {
   const Face& f = scene.topology().face(p.f);
   const VertexId c = scene.object(p.shape).first_vertex;
   return {{x0[f[0]], x0[f[1]], x0[f[2]]}, {x1[f[0]], x1[f[1]], x1[f[2]]}, x0[c], x1[c]};

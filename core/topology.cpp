@@ -13,15 +13,13 @@ std::optional<FaceListProblem> find_face_list_problem(std::size_t num_vertices, 
     const Face& face = faces[f];
     for (int k = 0; k < 3; ++k) {
       if (face[k] >= num_vertices) {
-        return FaceListProblem{static_cast<FaceId>(f), "vertex index " + std::to_string(face[k]) +
-                                                           " out of range (the mesh has " +
+        return FaceListProblem{static_cast<FaceId>(f), "vertex index " + std::to_string(face[k]) + " out of range (the mesh has " +
                                                            std::to_string(num_vertices) + " vertices)"};
       }
     }
     if (face[0] == face[1] || face[1] == face[2] || face[0] == face[2]) {
-      return FaceListProblem{static_cast<FaceId>(f), "degenerate face (repeated vertex index: " +
-                                                         std::to_string(face[0]) + " " + std::to_string(face[1]) +
-                                                         " " + std::to_string(face[2]) + ")"};
+      return FaceListProblem{static_cast<FaceId>(f), "degenerate face (repeated vertex index: " + std::to_string(face[0]) + " " +
+                                                         std::to_string(face[1]) + " " + std::to_string(face[2]) + ")"};
     }
   }
   return std::nullopt;
@@ -31,8 +29,8 @@ namespace {
 
 /// Counting sort of (key, face) incidences into compressed lists; faces come out ascending per key
 /// because incidences are generated in ascending face order.
-void build_incidence(std::size_t num_keys, const std::vector<std::pair<std::uint32_t, FaceId>>& incidences,
-                     std::vector<std::uint32_t>& begin, std::vector<FaceId>& ids) {
+void build_incidence(std::size_t num_keys, const std::vector<std::pair<std::uint32_t, FaceId>>& incidences, std::vector<std::uint32_t>& begin,
+                     std::vector<FaceId>& ids) {
   begin.assign(num_keys + 1, 0);
   for (const auto& [key, face] : incidences) ++begin[key + 1];
   for (std::size_t k = 0; k < num_keys; ++k) begin[k + 1] += begin[k];
@@ -43,10 +41,8 @@ void build_incidence(std::size_t num_keys, const std::vector<std::pair<std::uint
 
 }  // namespace
 
-MeshTopology::MeshTopology(std::size_t num_vertices, std::vector<Face> faces)
-    : num_vertices_(num_vertices), faces_(std::move(faces)) {
-  if (num_vertices_ > std::numeric_limits<VertexId>::max() ||
-      faces_.size() > std::numeric_limits<FaceId>::max() / 3) {
+MeshTopology::MeshTopology(std::size_t num_vertices, std::vector<Face> faces) : num_vertices_(num_vertices), faces_(std::move(faces)) {
+  if (num_vertices_ > std::numeric_limits<VertexId>::max() || faces_.size() > std::numeric_limits<FaceId>::max() / 3) {
     throw InputError({}, {}, "mesh too large for 32-bit ids");
   }
   if (auto problem = find_face_list_problem(num_vertices_, faces_)) {

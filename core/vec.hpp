@@ -31,8 +31,8 @@ inline bool boxes_overlap(const Box3& a, const Box3& b) {
   const Scalar* a_max = a.max().data();
   const Scalar* b_min = b.min().data();
   const Scalar* b_max = b.max().data();
-  return (a_min[0] <= b_max[0]) & (a_min[1] <= b_max[1]) & (a_min[2] <= b_max[2]) & (b_min[0] <= a_max[0]) &
-         (b_min[1] <= a_max[1]) & (b_min[2] <= a_max[2]);
+  return (a_min[0] <= b_max[0]) & (a_min[1] <= b_max[1]) & (a_min[2] <= b_max[2]) & (b_min[0] <= a_max[0]) & (b_min[1] <= a_max[1]) &
+         (b_min[2] <= a_max[2]);
 }
 
 /// Smallest box that holds every point of `points` (empty box for no points).

@@ -7,9 +7,9 @@
 #include <fcntl.h>
 #include <sys/file.h>
 
+#include <unistd.h>
 #include <stdexcept>
 #include <system_error>
-#include <unistd.h>
 
 namespace ccd::datasets {
 

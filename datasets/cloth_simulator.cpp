@@ -16,9 +16,7 @@ constexpr std::array<std::array<int, 2>, 6> kFamilies = {{{0, 1}, {1, 0}, {1, 1}
 
 }  // namespace
 
-ClothSimulator::ClothSimulator(SimulatorSettings settings) : settings_(settings) {
-  constraint_groups_.resize(2 * kFamilies.size());
-}
+ClothSimulator::ClothSimulator(SimulatorSettings settings) : settings_(settings) { constraint_groups_.resize(2 * kFamilies.size()); }
 
 std::size_t ClothSimulator::add_cloth(std::size_t n, const std::vector<Vec3>& positions) {
   const std::size_t first = x_.size();
@@ -51,8 +49,8 @@ std::size_t ClothSimulator::add_cloth(std::size_t n, const std::vector<Vec3>& po
   }
   const ShapeMesh grid = cloth_grid(n, 1.0);
   for (const Face& face : grid.faces) {
-    triangles_.push_back({static_cast<std::uint32_t>(first + face[0]), static_cast<std::uint32_t>(first + face[1]),
-                          static_cast<std::uint32_t>(first + face[2])});
+    triangles_.push_back(
+        {static_cast<std::uint32_t>(first + face[0]), static_cast<std::uint32_t>(first + face[1]), static_cast<std::uint32_t>(first + face[2])});
   }
   std::vector<std::vector<std::uint32_t>> incident(x_.size());
   for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
@@ -171,9 +169,7 @@ void ClothSimulator::self_repulsion() {
     return (bits(c[0]) << 42) | (bits(c[1]) << 21) | bits(c[2]);
   };
   std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(p_.size());
-  tbb::parallel_for(std::size_t{0}, p_.size(), [&](std::size_t v) {
-    sorted[v] = {key_of(cell_of(p_[v])), static_cast<std::uint32_t>(v)};
-  });
+  tbb::parallel_for(std::size_t{0}, p_.size(), [&](std::size_t v) { sorted[v] = {key_of(cell_of(p_[v])), static_cast<std::uint32_t>(v)}; });
   tbb::parallel_sort(sorted.begin(), sorted.end());
   std::vector<Vec3> correction(p_.size(), Vec3(0, 0, 0));
   tbb::parallel_for(std::size_t{0}, p_.size(), [&](std::size_t v) {

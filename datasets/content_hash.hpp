@@ -26,8 +26,7 @@ class ContentHash {
   /// A value's object representation: only for types without padding (integers, doubles, packed arrays of them).
   template <class T>
   void value(const T& v) {
-    static_assert((std::is_trivially_copyable_v<T> && std::has_unique_object_representations_v<T>) ||
-                      std::is_floating_point_v<T>,
+    static_assert((std::is_trivially_copyable_v<T> && std::has_unique_object_representations_v<T>) || std::is_floating_point_v<T>,
                   "hash only types whose bytes are their value");
     bytes(&v, sizeof v);
   }

@@ -31,8 +31,12 @@ Rows transformed(Rows rows, const std::function<Vec3(const Vec3&)>& map) {
   for (Vec3& row : rows) row = map(row);
   return rows;
 }
-Rows translated(const Rows& rows, const Vec3& by) { return transformed(rows, [&](const Vec3& p) { return Vec3(p + by); }); }
-Rows scaled(const Rows& rows, double by) { return transformed(rows, [&](const Vec3& p) { return Vec3(p * by); }); }
+Rows translated(const Rows& rows, const Vec3& by) {
+  return transformed(rows, [&](const Vec3& p) { return Vec3(p + by); });
+}
+Rows scaled(const Rows& rows, double by) {
+  return transformed(rows, [&](const Vec3& p) { return Vec3(p * by); });
+}
 
 double size_of(const Rows& rows) {
   Vec3 lower = rows[0], upper = rows[0];
@@ -100,8 +104,8 @@ std::vector<Base> base_cases() {
   add("two-roots", "tangential double root at t=1/2", VF,
       vf({0.5, 0.5, 0.125}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, 0.5, 0.125}, {0, 0, 0}, {1, 0, 1}, {1, 1, 0}));
   add("two-roots", "double root lifted by 2^-30: a miss", VF,
-      vf({0.5, 0.5, 0.125 + std::ldexp(1.0, -30)}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0},
-         {0.5, 0.5, 0.125 + std::ldexp(1.0, -30)}, {0, 0, 0}, {1, 0, 1}, {1, 1, 0}));
+      vf({0.5, 0.5, 0.125 + std::ldexp(1.0, -30)}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, 0.5, 0.125 + std::ldexp(1.0, -30)}, {0, 0, 0}, {1, 0, 1},
+         {1, 1, 0}));
 
   for (double delta : {0.1, 1e-3}) {
     const double below = std::nextafter(delta, 0.0), above = std::nextafter(delta, 1.0);
@@ -124,8 +128,7 @@ std::vector<Base> base_cases() {
   for (double scale : {1e-12, 1e-6, 1.0, 1e3, 1e9}) {
     // Positions of magnitude `scale`, moving by 1e-6 of it: a crossing and a miss.
     const double m = 1e-6 * scale;
-    add("magnitudes", "crossing at scale " + number(scale), VF,
-        vf_still({0.25 * scale, 0.25 * scale, m}, {0.25 * scale, 0.25 * scale, -m}));
+    add("magnitudes", "crossing at scale " + number(scale), VF, vf_still({0.25 * scale, 0.25 * scale, m}, {0.25 * scale, 0.25 * scale, -m}));
     const Rows base = vf_still({0.25, 0.25, 1e-6}, {0.25, 0.25, -1e-6});
     add("magnitudes", "small crossing at magnitude " + number(scale), VF, translated(scaled(base, m), Vec3::Constant(scale)));
     add("magnitudes", "small miss at magnitude " + number(scale), VF,
@@ -187,7 +190,6 @@ std::vector<Base> base_cases() {
   return cases;
 }
 
-
 }  // namespace
 
 std::optional<std::array<Vec3, 8>> scaled_exactly(const std::array<Vec3, 8>& rows, int exponent) {
@@ -210,8 +212,8 @@ std::string scaled_family(int exponent) { return "scaled-2^" + std::to_string(ex
 
 /// Families whose cases are already at an extreme of double, which rescaling would push out of range.
 bool at_an_extreme(const std::string& family) {
-  return family == "smallest-normal" || family == "subnormal" || family == "near-max" || family == "magnitudes" ||
-         family == "tiny-next-to-one" || family == "large-translation" || family == "huge-motion";
+  return family == "smallest-normal" || family == "subnormal" || family == "near-max" || family == "magnitudes" || family == "tiny-next-to-one" ||
+         family == "large-translation" || family == "huge-motion";
 }
 
 }  // namespace
@@ -277,8 +279,8 @@ std::vector<ExtremeQuery> extremes_suite(std::uint64_t seed) {
       const std::optional<Rows> rows = scaled_exactly(base.rows, exponent);
       if (!rows) continue;
       const double positive = std::ldexp(base.positive_thickness > 0 ? base.positive_thickness : 1e-3 * size_of(base.rows), exponent);
-      suite.push_back({scaled_family(exponent), base.family + ": " + base.name + ", scaled by 2^" + std::to_string(exponent),
-                       base.kind, *rows, positive});
+      suite.push_back(
+          {scaled_family(exponent), base.family + ": " + base.name + ", scaled by 2^" + std::to_string(exponent), base.kind, *rows, positive});
     }
   }
   return suite;

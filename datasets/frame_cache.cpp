@@ -95,10 +95,9 @@ CacheHeader read_header(const std::filesystem::path& path, std::istream& in) {
   if (header.num_vertices == 0) throw InputError(path, "header", "a frame cache with no vertices");
   if (header.num_faces > actual / kFaceBytes || header.num_vertices > actual / kVertexBytes ||
       header.num_frames > actual / (header.num_vertices * kVertexBytes)) {
-    throw InputError(path, "header", "corrupt counts: " + std::to_string(header.num_vertices) + " vertices, " +
-                                         std::to_string(header.num_faces) + " faces, " +
-                                         std::to_string(header.num_frames) + " frames do not fit in " +
-                                         std::to_string(actual) + " bytes");
+    throw InputError(path, "header",
+                     "corrupt counts: " + std::to_string(header.num_vertices) + " vertices, " + std::to_string(header.num_faces) + " faces, " +
+                         std::to_string(header.num_frames) + " frames do not fit in " + std::to_string(actual) + " bytes");
   }
   if (header.num_frames == 0) throw InputError(path, "header", "a frame cache with no frames");
   header.frames_offset = header.faces_offset + header.num_faces * kFaceBytes;
@@ -107,8 +106,8 @@ CacheHeader read_header(const std::filesystem::path& path, std::istream& in) {
     const std::uint64_t frame_bytes = std::max<std::uint64_t>(1, header.num_vertices * 3 * sizeof(double));
     const std::uint64_t complete = actual < header.frames_offset ? 0 : (actual - header.frames_offset) / frame_bytes;
     throw InputError(path, "frame " + std::to_string(complete),
-                     "truncated frame cache: " + std::to_string(actual) + " bytes, " + std::to_string(expected) +
-                         " expected for " + std::to_string(header.num_frames) + " frames");
+                     "truncated frame cache: " + std::to_string(actual) + " bytes, " + std::to_string(expected) + " expected for " +
+                         std::to_string(header.num_frames) + " frames");
   }
   if (actual > expected) throw InputError(path, "end", "frame cache has trailing bytes");
   verify_checksum(path, header, actual);
@@ -138,8 +137,7 @@ class CachedFrameSource final : public FrameSource {
     }
     for (std::size_t i = 0; i < positions.size(); ++i) {
       if (!positions[i].allFinite()) {
-        throw InputError(path_, "frame " + std::to_string(k) + ", vertex " + std::to_string(i),
-                         "non-finite coordinate in frame cache");
+        throw InputError(path_, "frame " + std::to_string(k) + ", vertex " + std::to_string(i), "non-finite coordinate in frame cache");
       }
     }
     return positions;
@@ -153,8 +151,7 @@ class CachedFrameSource final : public FrameSource {
   std::vector<Face> faces_;
 };
 
-std::unique_ptr<FrameSource> open_with_header(const std::filesystem::path& path, std::ifstream& in,
-                                              CacheHeader header) {
+std::unique_ptr<FrameSource> open_with_header(const std::filesystem::path& path, std::ifstream& in, CacheHeader header) {
   std::vector<Face> faces(header.num_faces);
   for (Face& face : faces) {
     for (VertexId& v : face) {
@@ -188,8 +185,8 @@ struct FrameCacheWriter::Impl {
   }
 };
 
-FrameCacheWriter::FrameCacheWriter(const std::filesystem::path& path, const std::string& key,
-                                   std::size_t num_vertices, const std::vector<Face>& faces)
+FrameCacheWriter::FrameCacheWriter(const std::filesystem::path& path, const std::string& key, std::size_t num_vertices,
+                                   const std::vector<Face>& faces)
     : impl_(new Impl{AtomicFile(path), 0, num_vertices, 0, false, {}}) {
   Impl& w = *impl_;
   w.write(kMagic, 8);
@@ -224,8 +221,7 @@ void FrameCacheWriter::finish() {
   impl_->file.commit();
 }
 
-std::optional<std::unique_ptr<FrameSource>> open_frame_cache(const std::filesystem::path& path,
-                                                             const std::string& expected_key) {
+std::optional<std::unique_ptr<FrameSource>> open_frame_cache(const std::filesystem::path& path, const std::string& expected_key) {
   if (!std::filesystem::exists(path)) return std::nullopt;
   std::ifstream in = open_input_file(path, "frame cache", std::ios::in | std::ios::binary);
   CacheHeader header = read_header(path, in);

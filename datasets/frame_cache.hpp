@@ -21,8 +21,7 @@ namespace ccd::datasets {
 /// Writes a cache frame by frame (memory stays one frame), visible under `path` only after finish().
 class FrameCacheWriter {
  public:
-  FrameCacheWriter(const std::filesystem::path& path, const std::string& key, std::size_t num_vertices,
-                   const std::vector<Face>& faces);
+  FrameCacheWriter(const std::filesystem::path& path, const std::string& key, std::size_t num_vertices, const std::vector<Face>& faces);
   ~FrameCacheWriter();
   FrameCacheWriter(const FrameCacheWriter&) = delete;
   FrameCacheWriter& operator=(const FrameCacheWriter&) = delete;
@@ -40,8 +39,7 @@ class FrameCacheWriter {
 /// Opens the cache at `path` as a frame source when it exists and was written with `expected_key`;
 /// nullopt when it is absent or holds another key.
 /// @throws InputError when the file exists but is not a valid cache (bad magic, version, truncated).
-std::optional<std::unique_ptr<FrameSource>> open_frame_cache(const std::filesystem::path& path,
-                                                             const std::string& expected_key);
+std::optional<std::unique_ptr<FrameSource>> open_frame_cache(const std::filesystem::path& path, const std::string& expected_key);
 
 /// Opens a cache whatever its key (for scene files that name a cache, and for inspect).
 /// @throws InputError when absent or invalid.

@@ -28,20 +28,19 @@ class FileFrameSource final : public FrameSource {
     MeshFrame mesh = read_mesh(files_.at(k));
     if (mesh.positions.size() != num_vertices_) {
       throw InputError(files_[k], "vertex count",
-                       "topology changed between frames: " + std::to_string(mesh.positions.size()) +
-                           " vertices here, " + std::to_string(num_vertices_) + " in " + files_.front().string());
+                       "topology changed between frames: " + std::to_string(mesh.positions.size()) + " vertices here, " +
+                           std::to_string(num_vertices_) + " in " + files_.front().string());
     }
     if (mesh.faces.size() != faces_.size()) {
       throw InputError(files_[k], "face count",
-                       "topology changed between frames: " + std::to_string(mesh.faces.size()) + " faces here, " +
-                           std::to_string(faces_.size()) + " in " + files_.front().string());
+                       "topology changed between frames: " + std::to_string(mesh.faces.size()) + " faces here, " + std::to_string(faces_.size()) +
+                           " in " + files_.front().string());
     }
     const auto differs = std::mismatch(mesh.faces.begin(), mesh.faces.end(), faces_.begin());
     if (differs.first != mesh.faces.end()) {
       const auto f = static_cast<std::size_t>(differs.first - mesh.faces.begin());
       throw InputError(files_[k], "face " + std::to_string(f),
-                       "topology changed between frames: this face's corners differ from those in " +
-                           files_.front().string());
+                       "topology changed between frames: this face's corners differ from those in " + files_.front().string());
     }
     return std::move(mesh.positions);
   }
@@ -59,8 +58,7 @@ class FileFrameSource final : public FrameSource {
 
 bool is_mesh_extension(const std::filesystem::path& path) {
   std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return extension == ".ply" || extension == ".obj";
 }
 
@@ -75,12 +73,13 @@ std::optional<unsigned long long> trailing_number(const std::string& stem, std::
 }
 
 /// Adds `path` as frame `number`, refusing a second file with the same number ("frame_0001" and "frame_01").
-void add_numbered_frame(const std::filesystem::path& where, std::map<unsigned long long, std::filesystem::path>& numbered,
-                        unsigned long long number, const std::filesystem::path& path) {
+void add_numbered_frame(const std::filesystem::path& where, std::map<unsigned long long, std::filesystem::path>& numbered, unsigned long long number,
+                        const std::filesystem::path& path) {
   const auto [it, inserted] = numbered.emplace(number, path);
   if (!inserted) {
-    throw InputError(where, {}, "two files for frame " + std::to_string(number) + ": '" + it->second.filename().string() +
-                                    "' and '" + path.filename().string() + "'");
+    throw InputError(
+        where, {},
+        "two files for frame " + std::to_string(number) + ": '" + it->second.filename().string() + "' and '" + path.filename().string() + "'");
   }
 }
 
@@ -100,8 +99,9 @@ std::vector<std::filesystem::path> list_frame_directory(const std::filesystem::p
     const std::string shape = stem.substr(0, digits) + "#" + path.extension().string();
     if (prefix_and_extension.empty()) prefix_and_extension = shape;
     if (shape != prefix_and_extension) {
-      throw InputError(directory, {}, "frame files with different names or formats: '" + path.filename().string() +
-                                          "' does not match " + prefix_and_extension + " (# = frame number)");
+      throw InputError(directory, {},
+                       "frame files with different names or formats: '" + path.filename().string() + "' does not match " + prefix_and_extension +
+                           " (# = frame number)");
     }
     add_numbered_frame(directory, numbered, *number, path);
   }
@@ -176,8 +176,7 @@ namespace {
 
 class TrackFrameSource final : public FrameSource {
  public:
-  TrackFrameSource(std::vector<Vec3> centres, std::string description)
-      : centres_(std::move(centres)), description_(std::move(description)) {}
+  TrackFrameSource(std::vector<Vec3> centres, std::string description) : centres_(std::move(centres)), description_(std::move(description)) {}
   std::size_t num_vertices() const override { return 1; }
   const std::vector<Face>& faces() const override { return faces_; }
   std::size_t num_frames() const override { return centres_.size(); }
@@ -232,19 +231,19 @@ std::vector<std::filesystem::path> expand_frame_files(const std::filesystem::pat
   if (error) throw InputError(listed, {}, "cannot list the frame pattern's folder: " + error.message());
   if (numbered.empty()) throw InputError(directory_or_pattern, {}, "no frame file matches this pattern");
   if (numbered.begin()->first > 1) {
-    throw InputError(directory_or_pattern, {}, "frames start at " + std::to_string(numbered.begin()->first) +
-                                                   ": frame 0 or 1 must exist");
+    throw InputError(directory_or_pattern, {}, "frames start at " + std::to_string(numbered.begin()->first) + ": frame 0 or 1 must exist");
   }
   std::vector<std::filesystem::path> files;
   unsigned long long expected = numbered.begin()->first;
   for (const auto& [number, path] : numbered) {
     if (number != expected) {
-      throw InputError(directory_or_pattern, {}, "frame numbers have a gap: frame " + std::to_string(expected) +
-                                                     " is missing but frame " + std::to_string(number) + " exists");
+      throw InputError(directory_or_pattern, {},
+                       "frame numbers have a gap: frame " + std::to_string(expected) + " is missing but frame " + std::to_string(number) + " exists");
     }
     if (path != pattern.format(number)) {
-      throw InputError(path, {}, "frame " + std::to_string(number) + " is not padded as the pattern says (expected '" +
-                                     pattern.format(number).filename().string() + "')");
+      throw InputError(
+          path, {},
+          "frame " + std::to_string(number) + " is not padded as the pattern says (expected '" + pattern.format(number).filename().string() + "')");
     }
     files.push_back(path);
     ++expected;

@@ -53,8 +53,7 @@ nlohmann::json parse_json_text(const std::string& text, const std::filesystem::p
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& error) {
     // error.byte is the 1-based position of the last character read.
-    throw InputError(file, "line " + std::to_string(line_of_byte(text, error.byte == 0 ? 0 : error.byte - 1)),
-                     "malformed JSON");
+    throw InputError(file, "line " + std::to_string(line_of_byte(text, error.byte == 0 ? 0 : error.byte - 1)), "malformed JSON");
   } catch (const nlohmann::json::out_of_range& error) {
     // The only range error of parsing: a number too large for a double. nlohmann names the token, not where it
     // is; its first occurrence gives the line.

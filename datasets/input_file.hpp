@@ -16,8 +16,7 @@ namespace ccd::datasets {
 /// Opens `path` for reading. @param what names the expected content in messages ("PLY file", "scene file").
 /// @throws InputError (path) when it does not exist, is a folder or not a regular file (a pipe, a device), or cannot
 ///         be opened.
-std::ifstream open_input_file(const std::filesystem::path& path, const std::string& what,
-                              std::ios::openmode mode = std::ios::in);
+std::ifstream open_input_file(const std::filesystem::path& path, const std::string& what, std::ios::openmode mode = std::ios::in);
 
 /// "line N": where in a text file an InputError points (1-based).
 std::string line_at(std::size_t line);

@@ -13,8 +13,7 @@ namespace {
 
 std::string lower_extension(const std::filesystem::path& path) {
   std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return extension;
 }
 
@@ -42,8 +41,8 @@ std::size_t warn_unused_vertices(const std::filesystem::path& path, const MeshFr
   const auto unused = static_cast<std::size_t>(std::count(used.begin(), used.end(), false));
   if (unused > 0) {
     const auto first = static_cast<std::size_t>(std::find(used.begin(), used.end(), false) - used.begin());
-    std::cerr << "warning: " << path.string() << ": " << unused << " vertices are used by no face (first: vertex "
-              << first << "); they are not primitives and are never tested\n";
+    std::cerr << "warning: " << path.string() << ": " << unused << " vertices are used by no face (first: vertex " << first
+              << "); they are not primitives and are never tested\n";
   }
   return unused;
 }

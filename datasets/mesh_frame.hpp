@@ -33,8 +33,7 @@ void write_mesh(const std::filesystem::path& path, const MeshFrame& frame);
 /// `where_vertex(i)`/`where_face(i)` give the location text for element i (e.g. its line).
 /// @throws InputError attributed to `path`.
 template <class WhereVertex, class WhereFace>
-void validate_mesh_frame(const std::filesystem::path& path, const MeshFrame& frame, WhereVertex where_vertex,
-                         WhereFace where_face);
+void validate_mesh_frame(const std::filesystem::path& path, const MeshFrame& frame, WhereVertex where_vertex, WhereFace where_face);
 
 /// Counts vertices that no face uses and, when there are any, prints one warning line to stderr.
 std::size_t warn_unused_vertices(const std::filesystem::path& path, const MeshFrame& frame);

@@ -9,8 +9,7 @@
 namespace ccd::datasets {
 
 template <class WhereVertex, class WhereFace>
-void validate_mesh_frame(const std::filesystem::path& path, const MeshFrame& frame, WhereVertex where_vertex,
-                         WhereFace where_face) {
+void validate_mesh_frame(const std::filesystem::path& path, const MeshFrame& frame, WhereVertex where_vertex, WhereFace where_face) {
   static constexpr const char* kAxis[3] = {"x", "y", "z"};
   // A mesh without triangles has no primitive to collide (and FCL cannot even build a model of it).
   if (frame.faces.empty()) throw InputError(path, "faces", "the mesh has no triangles (ccdbench reads triangle meshes)");
@@ -18,9 +17,9 @@ void validate_mesh_frame(const std::filesystem::path& path, const MeshFrame& fra
     for (int k = 0; k < 3; ++k) {
       const double value = frame.positions[i][k];
       if (!std::isfinite(value)) {
-        throw InputError(path, where_vertex(i),
-                         std::string("coordinate ") + kAxis[k] + " of vertex " + std::to_string(i) + " is " +
-                             (std::isnan(value) ? "NaN" : "infinite"));
+        throw InputError(
+            path, where_vertex(i),
+            std::string("coordinate ") + kAxis[k] + " of vertex " + std::to_string(i) + " is " + (std::isnan(value) ? "NaN" : "infinite"));
       }
     }
   }

@@ -22,8 +22,7 @@ double parse_coordinate(const std::filesystem::path& path, std::size_t line, con
 }
 
 /// OBJ indices are 1-based, or negative: relative to the vertices read so far (-1 is the last one).
-VertexId parse_index(const std::filesystem::path& path, std::size_t line, const std::string& token,
-                     std::size_t vertices_so_far) {
+VertexId parse_index(const std::filesystem::path& path, std::size_t line, const std::string& token, std::size_t vertices_so_far) {
   const std::string index_text = token.substr(0, token.find('/'));
   long long index = 0;
   const auto result = std::from_chars(index_text.data(), index_text.data() + index_text.size(), index);
@@ -32,8 +31,8 @@ VertexId parse_index(const std::filesystem::path& path, std::size_t line, const 
   }
   const long long zero_based = index > 0 ? index - 1 : static_cast<long long>(vertices_so_far) + index;
   if (index == 0 || zero_based < 0 || zero_based >= static_cast<long long>(vertices_so_far)) {
-    throw InputError(path, line_at(line), "face index " + std::to_string(index) + " out of range (" +
-                                              std::to_string(vertices_so_far) + " vertices so far)");
+    throw InputError(path, line_at(line),
+                     "face index " + std::to_string(index) + " out of range (" + std::to_string(vertices_so_far) + " vertices so far)");
   }
   return static_cast<VertexId>(zero_based);
 }
@@ -56,15 +55,15 @@ MeshFrame read_obj(const std::filesystem::path& path) {
       if (args.size() < 3 || args.size() > 4) {
         throw InputError(path, line_at(line_number), "a vertex needs 3 coordinates (or 4 with w)");
       }
-      frame.positions.emplace_back(parse_coordinate(path, line_number, args[0]),
-                                   parse_coordinate(path, line_number, args[1]),
+      frame.positions.emplace_back(parse_coordinate(path, line_number, args[0]), parse_coordinate(path, line_number, args[1]),
                                    parse_coordinate(path, line_number, args[2]));
       vertex_lines.push_back(line_number);
     } else if (keyword == "f") {
       if (args.size() != 3) {
-        throw InputError(path, line_at(line_number), "face has " + std::to_string(args.size()) +
-                                                         " corners; ccdbench reads triangle meshes only "
-                                                         "(triangulate it first)");
+        throw InputError(path, line_at(line_number),
+                         "face has " + std::to_string(args.size()) +
+                             " corners; ccdbench reads triangle meshes only "
+                             "(triangulate it first)");
       }
       Face face{};
       for (int k = 0; k < 3; ++k) face[k] = parse_index(path, line_number, args[k], frame.positions.size());
@@ -73,8 +72,7 @@ MeshFrame read_obj(const std::filesystem::path& path) {
     }
   }
   validate_mesh_frame(
-      path, frame, [&](std::size_t i) { return line_at(vertex_lines[i]); },
-      [&](std::size_t i) { return line_at(face_lines[i]); });
+      path, frame, [&](std::size_t i) { return line_at(vertex_lines[i]); }, [&](std::size_t i) { return line_at(face_lines[i]); });
   return frame;
 }
 

@@ -23,12 +23,10 @@ std::optional<PlyType> parse_ply_type(std::string_view name) {
     PlyType type;
   };
   static constexpr Entry kTypes[] = {
-      {"char", PlyType::int8},     {"int8", PlyType::int8},       {"uchar", PlyType::uint8},
-      {"uint8", PlyType::uint8},   {"short", PlyType::int16},     {"int16", PlyType::int16},
-      {"ushort", PlyType::uint16}, {"uint16", PlyType::uint16},   {"int", PlyType::int32},
-      {"int32", PlyType::int32},   {"uint", PlyType::uint32},     {"uint32", PlyType::uint32},
-      {"float", PlyType::float32}, {"float32", PlyType::float32}, {"double", PlyType::float64},
-      {"float64", PlyType::float64}};
+      {"char", PlyType::int8},     {"int8", PlyType::int8},       {"uchar", PlyType::uint8},    {"uint8", PlyType::uint8},
+      {"short", PlyType::int16},   {"int16", PlyType::int16},     {"ushort", PlyType::uint16},  {"uint16", PlyType::uint16},
+      {"int", PlyType::int32},     {"int32", PlyType::int32},     {"uint", PlyType::uint32},    {"uint32", PlyType::uint32},
+      {"float", PlyType::float32}, {"float32", PlyType::float32}, {"double", PlyType::float64}, {"float64", PlyType::float64}};
   for (const Entry& entry : kTypes) {
     if (entry.name == name) return entry.type;
   }
@@ -67,7 +65,7 @@ struct PlyElement {
 struct PlyHeader {
   PlyEncoding encoding = PlyEncoding::ascii;
   std::vector<PlyElement> elements;
-  std::size_t body_offset = 0;   // bytes
+  std::size_t body_offset = 0;      // bytes
   std::size_t body_first_line = 0;  // 1-based line number of the first body line (ASCII)
 };
 
@@ -97,10 +95,14 @@ PlyHeader parse_header(const std::filesystem::path& path, std::istream& in) {
     if (words[0] == "end_header") break;
     if (words[0] == "format") {
       if (words.size() != 3) throw InputError(path, line_at(line_number), "malformed format line");
-      if (words[1] == "ascii") header.encoding = PlyEncoding::ascii;
-      else if (words[1] == "binary_little_endian") header.encoding = PlyEncoding::binary_little_endian;
-      else if (words[1] == "binary_big_endian") header.encoding = PlyEncoding::binary_big_endian;
-      else throw InputError(path, line_at(line_number), "unknown PLY format '" + words[1] + "'");
+      if (words[1] == "ascii")
+        header.encoding = PlyEncoding::ascii;
+      else if (words[1] == "binary_little_endian")
+        header.encoding = PlyEncoding::binary_little_endian;
+      else if (words[1] == "binary_big_endian")
+        header.encoding = PlyEncoding::binary_big_endian;
+      else
+        throw InputError(path, line_at(line_number), "unknown PLY format '" + words[1] + "'");
       saw_format = true;
     } else if (words[0] == "element") {
       std::size_t count = 0;
@@ -222,8 +224,7 @@ class BinaryCursor {
 /// Reads the value tokens of ASCII body lines, one element per line (blank lines are skipped).
 class AsciiCursor {
  public:
-  AsciiCursor(const std::filesystem::path& path, std::istream& in, std::size_t first_line)
-      : path_(path), in_(in), line_number_(first_line - 1) {}
+  AsciiCursor(const std::filesystem::path& path, std::istream& in, std::size_t first_line) : path_(path), in_(in), line_number_(first_line - 1) {}
 
   /// Moves to the next non-blank line; false at the end of the file.
   bool next_line() {
@@ -281,14 +282,13 @@ class AsciiCursor {
   std::size_t position_ = 0;
 };
 
-std::string element_where(const PlyElement& element, std::size_t index) {
-  return element.name + " " + std::to_string(index);
-}
+std::string element_where(const PlyElement& element, std::size_t index) { return element.name + " " + std::to_string(index); }
 
 void check_face_count(const std::filesystem::path& path, const std::string& where, double count, std::size_t face) {
   if (count != 3.0) {
-    throw InputError(path, where, "face " + std::to_string(face) + " has " + std::to_string(static_cast<long long>(count)) +
-                                      " corners; ccdbench reads triangle meshes only (triangulate it first)");
+    throw InputError(path, where,
+                     "face " + std::to_string(face) + " has " + std::to_string(static_cast<long long>(count)) +
+                         " corners; ccdbench reads triangle meshes only (triangulate it first)");
   }
 }
 
@@ -304,8 +304,7 @@ VertexId to_vertex_index(const std::filesystem::path& path, const std::string& w
 void check_elements_have_properties(const std::filesystem::path& path, const PlyHeader& header) {
   for (const PlyElement& element : header.elements) {
     if (element.count > 0 && element.properties.empty()) {
-      throw InputError(path, "header", "element '" + element.name + "' has " + std::to_string(element.count) +
-                                           " entries but no properties");
+      throw InputError(path, "header", "element '" + element.name + "' has " + std::to_string(element.count) + " entries but no properties");
     }
   }
 }
@@ -336,8 +335,7 @@ MeshFrame read_ply(const std::filesystem::path& path) {
       const PlyElement& element = header.elements[e];
       for (std::size_t i = 0; i < element.count; ++i) {
         if (!cursor.next_line()) {
-          throw InputError(path, line_at(cursor.line_number()),
-                           "file ends at " + element_where(element, i) + " of " + std::to_string(element.count));
+          throw InputError(path, line_at(cursor.line_number()), "file ends at " + element_where(element, i) + " of " + std::to_string(element.count));
         }
         const std::string where = line_at(cursor.line_number());
         begin_element(e);
@@ -369,12 +367,10 @@ MeshFrame read_ply(const std::filesystem::path& path) {
     if (cursor.next_line()) {
       throw InputError(path, line_at(cursor.line_number()),
                        "more lines than the header declares (" + std::to_string(vertex_element.count) + " vertices, " +
-                           std::to_string(face_element.count) + " faces, " + std::to_string(header.elements.size()) +
-                           " elements in all)");
+                           std::to_string(face_element.count) + " faces, " + std::to_string(header.elements.size()) + " elements in all)");
     }
     validate_mesh_frame(
-        path, frame, [&](std::size_t i) { return line_at(vertex_lines[i]); },
-        [&](std::size_t i) { return line_at(face_lines[i]); });
+        path, frame, [&](std::size_t i) { return line_at(vertex_lines[i]); }, [&](std::size_t i) { return line_at(face_lines[i]); });
     return frame;
   }
 
@@ -390,8 +386,9 @@ MeshFrame read_ply(const std::filesystem::path& path) {
       auto read = [&](PlyType type) {
         double value = 0.0;
         if (!cursor.read(type, value)) {
-          throw InputError(path, where, "truncated binary PLY: file ends inside " + where + " of " +
-                                            std::to_string(element.count) + " " + element.name + " elements");
+          throw InputError(
+              path, where,
+              "truncated binary PLY: file ends inside " + where + " of " + std::to_string(element.count) + " " + element.name + " elements");
         }
         return value;
       };
@@ -421,12 +418,9 @@ MeshFrame read_ply(const std::filesystem::path& path) {
   if (cursor.remaining() != 0) {
     throw InputError(path, "end of body", std::to_string(cursor.remaining()) + " bytes after the last element");
   }
-  frame.format += vertex_element.properties[static_cast<std::size_t>(layout.axis_property[0])].type == PlyType::float32
-                      ? " (float)"
-                      : " (double)";
+  frame.format += vertex_element.properties[static_cast<std::size_t>(layout.axis_property[0])].type == PlyType::float32 ? " (float)" : " (double)";
   validate_mesh_frame(
-      path, frame, [](std::size_t i) { return "vertex " + std::to_string(i); },
-      [](std::size_t i) { return "face " + std::to_string(i); });
+      path, frame, [](std::size_t i) { return "vertex " + std::to_string(i); }, [](std::size_t i) { return "face " + std::to_string(i); });
   return frame;
 }
 

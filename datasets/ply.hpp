@@ -18,7 +18,6 @@ MeshFrame read_ply(const std::filesystem::path& path);
 
 /// Writes positions as doubles (ASCII with 17 significant digits), faces as uchar-counted int lists,
 /// atomically (temporary file + rename). Reading it back gives bit-identical positions.
-void write_ply(const std::filesystem::path& path, const MeshFrame& frame,
-               PlyEncoding encoding = PlyEncoding::binary_little_endian);
+void write_ply(const std::filesystem::path& path, const MeshFrame& frame, PlyEncoding encoding = PlyEncoding::binary_little_endian);
 
 }  // namespace ccd::datasets

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -20,7 +21,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
-#include <unistd.h>
 
 namespace ccd::datasets {
 namespace {
@@ -34,7 +34,7 @@ using procedural::Setup;
 constexpr int kGeneratorVersion = 3;
 
 const std::vector<SceneDefinition>& definitions() {
-  static const std::vector<SceneDefinition> scenes = {procedural::spinning_ball_scene(), procedural::drape_scene(), procedural::flag_scene(),
+  static const std::vector<SceneDefinition> scenes = {procedural::spinning_ball_scene(), procedural::drape_scene(),  procedural::flag_scene(),
                                                       procedural::twist_scene(),         procedural::funnel_scene(), procedural::pile_scene(),
                                                       procedural::fold_scene()};
   return scenes;
@@ -117,9 +117,8 @@ void check_scene_fits(const ProceduralSceneInfo& info, const SceneParameters& pa
   const auto space = std::filesystem::space(existing.empty() ? std::filesystem::path(".") : existing, error);
   const double frame_bytes = vertices * kFrameBytesPerVertex * parameters.at("frames");
   if (!error && frame_bytes > static_cast<double>(space.available)) {
-    message << "scene '" << info.name << "' with " << changed_parameters(info, parameters) << " needs about "
-            << frame_bytes / kGiB << " GiB for its frames; " << out.string() << " has " << static_cast<double>(space.available) / kGiB
-            << " GiB free";
+    message << "scene '" << info.name << "' with " << changed_parameters(info, parameters) << " needs about " << frame_bytes / kGiB
+            << " GiB for its frames; " << out.string() << " has " << static_cast<double>(space.available) / kGiB << " GiB free";
     throw std::invalid_argument(message.str());
   }
 }
@@ -131,7 +130,7 @@ std::string cache_key(const std::string& name, const SceneParameters& parameters
     // steps_per_frame=1 (the default) is left out, so that the scenes generated before it existed keep their key.
     if (parameter == "steps_per_frame" && value == 1) continue;
     if (parameter == "first_frame" && value == 0) continue;  // likewise first_frame=0
-    if (parameter == "obstacles" && value == 0) continue;  // likewise obstacles=mesh
+    if (parameter == "obstacles" && value == 0) continue;    // likewise obstacles=mesh
     key << ' ' << parameter << '=' << value;
   }
   return key.str();
@@ -156,18 +155,14 @@ void write_scene_json(const std::filesystem::path& out, const std::string& name,
       objects.push_back(entry);
       continue;
     }
-    nlohmann::json frames = object.kind == ObjectKind::static_object
-                                ? nlohmann::json{{"files", {object.name + "/frame_0000.ply"}}}
-                                : nlohmann::json{{"pattern", object.name + "/frame_%04d.ply"}};
-    objects.push_back({{"name", object.name},
-                       {"kind", std::string(to_string(object.kind))},
-                       {"self_collision", object.self_collision},
-                       {"frames", frames}});
+    nlohmann::json frames = object.kind == ObjectKind::static_object ? nlohmann::json{{"files", {object.name + "/frame_0000.ply"}}}
+                                                                     : nlohmann::json{{"pattern", object.name + "/frame_%04d.ply"}};
+    objects.push_back(
+        {{"name", object.name}, {"kind", std::string(to_string(object.kind))}, {"self_collision", object.self_collision}, {"frames", frames}});
   }
   nlohmann::json collidable = nlohmann::json::array();
   for (const auto& [a, b] : setup.collidable) collidable.push_back({a, b});
-  const nlohmann::json document = {{"name", name}, {"thickness", setup.thickness}, {"objects", objects},
-                                   {"collidable", collidable}};
+  const nlohmann::json document = {{"name", name}, {"thickness", setup.thickness}, {"objects", objects}, {"collidable", collidable}};
   write_json_file(out / "scene.json", document);
 }
 
@@ -184,8 +179,7 @@ bool complete_in(const std::filesystem::path& out, const Setup& setup, const std
     }
     const std::size_t count = frames_of(object, frames);
     if (object.shape) continue;  // a shape's track is its cache; it has no PLY frames
-    if (!std::filesystem::exists(frame_file(out, object.name, count - 1)) ||
-        std::filesystem::exists(frame_file(out, object.name, count))) {
+    if (!std::filesystem::exists(frame_file(out, object.name, count - 1)) || std::filesystem::exists(frame_file(out, object.name, count))) {
       return false;
     }
   }
@@ -222,8 +216,7 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
   const SceneDefinition& definition = find_definition(request.name);
   const SceneParameters parameters = resolve_parameters(definition.info, request.parameters);
   check_scene_fits(definition.info, parameters, request.out);
-  CommonParameters common{static_cast<std::size_t>(parameters.at("resolution")),
-                          static_cast<std::size_t>(parameters.at("frames")),
+  CommonParameters common{static_cast<std::size_t>(parameters.at("resolution")), static_cast<std::size_t>(parameters.at("frames")),
                           std::mt19937_64(static_cast<std::uint64_t>(parameters.at("seed"))),
                           static_cast<std::size_t>(parameters.at("steps_per_frame"))};
   Setup setup = definition.build(common, parameters);
@@ -257,8 +250,8 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
     std::filesystem::remove(request.out / "scene.json");
     std::vector<std::unique_ptr<FrameCacheWriter>> writers;
     for (const OutputObject& object : setup.objects) {
-      writers.push_back(std::make_unique<FrameCacheWriter>(request.out / "cache" / (object.name + ".frames"), key,
-                                                           object.num_vertices, object.faces));
+      writers.push_back(
+          std::make_unique<FrameCacheWriter>(request.out / "cache" / (object.name + ".frames"), key, object.num_vertices, object.faces));
     }
     for (std::size_t frame = 0; frame < emitted; ++frame) {
       if (frame > 0) setup.simulator->step_fraction(static_cast<int>(parts));

@@ -50,18 +50,15 @@ bool QueryFile::has_truth() const {
 }
 
 std::size_t QueryFile::labelled() const {
-  return static_cast<std::size_t>(
-      std::count_if(queries.begin(), queries.end(), [](const Query& q) { return q.truth.has_value(); }));
+  return static_cast<std::size_t>(std::count_if(queries.begin(), queries.end(), [](const Query& q) { return q.truth.has_value(); }));
 }
 
 std::size_t QueryFile::positives() const {
-  return static_cast<std::size_t>(
-      std::count_if(queries.begin(), queries.end(), [](const Query& q) { return q.truth.value_or(false); }));
+  return static_cast<std::size_t>(std::count_if(queries.begin(), queries.end(), [](const Query& q) { return q.truth.value_or(false); }));
 }
 
 std::size_t QueryFile::not_exactly_double() const {
-  return static_cast<std::size_t>(
-      std::count_if(queries.begin(), queries.end(), [](const Query& q) { return !q.exactly_double; }));
+  return static_cast<std::size_t>(std::count_if(queries.begin(), queries.end(), [](const Query& q) { return !q.exactly_double; }));
 }
 
 std::optional<QueryKind> classify_query_path(const std::filesystem::path& path) {
@@ -113,8 +110,9 @@ std::vector<bool> read_truth_file(const std::filesystem::path& path) {
 QueryFile read_query_file(const std::filesystem::path& path, std::optional<QueryKind> kind) {
   if (!kind) kind = classify_query_path(path);
   if (!kind) {
-    throw InputError(path, {}, "cannot tell vertex-face from edge-edge: put the file under a 'vertex-face' or "
-                               "'edge-edge' folder, or name it *vf.csv or *ee.csv");
+    throw InputError(path, {},
+                     "cannot tell vertex-face from edge-edge: put the file under a 'vertex-face' or "
+                     "'edge-edge' folder, or name it *vf.csv or *ee.csv");
   }
   std::ifstream in = open_input_file(path, "query file");
 
@@ -128,14 +126,12 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
     if (columns_expected == 0) {
       if (columns.size() != 6 && columns.size() != 7) {
         throw InputError(path, line_at(line_number),
-                         "expected 6 or 7 columns (x, y, z as numerator,denominator [, truth]), found " +
-                             std::to_string(columns.size()));
+                         "expected 6 or 7 columns (x, y, z as numerator,denominator [, truth]), found " + std::to_string(columns.size()));
       }
       columns_expected = columns.size();
     } else if (columns.size() != columns_expected) {
       throw InputError(path, line_at(line_number),
-                       "expected " + std::to_string(columns_expected) + " columns like the first row, found " +
-                           std::to_string(columns.size()));
+                       "expected " + std::to_string(columns_expected) + " columns like the first row, found " + std::to_string(columns.size()));
     }
     Row row;
     row.line = line_number;
@@ -177,8 +173,7 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
     for (std::size_t r = 0; r < kRowsPerQuery; ++r) {
       Row& row = rows[q * kRowsPerQuery + r];
       if (row.truth != query.truth) {
-        throw InputError(path, line_at(row.line), "truth changes within query " + std::to_string(q) +
-                                                      " (it must repeat on all 8 rows)");
+        throw InputError(path, line_at(row.line), "truth changes within query " + std::to_string(q) + " (it must repeat on all 8 rows)");
       }
       for (int k = 0; k < 3; ++k) {
         const RoundedRational rounded = round_to_double(row.point[k]);
@@ -197,8 +192,9 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
     if (truth_path && std::filesystem::exists(*truth_path)) {
       const std::vector<bool> truth = read_truth_file(*truth_path);
       if (truth.size() != file.queries.size()) {
-        throw InputError(*truth_path, {}, "has " + std::to_string(truth.size()) + " entries but " + path.string() +
-                                              " has " + std::to_string(file.queries.size()) + " queries");
+        throw InputError(
+            *truth_path, {},
+            "has " + std::to_string(truth.size()) + " entries but " + path.string() + " has " + std::to_string(file.queries.size()) + " queries");
       }
       for (std::size_t q = 0; q < truth.size(); ++q) file.queries[q].truth = truth[q];
       file.truth_file = *truth_path;

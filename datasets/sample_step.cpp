@@ -6,14 +6,14 @@
 
 #include <nlohmann/json.hpp>
 
-
 namespace ccd::datasets {
 namespace {
 
 void expect_same_count(const std::filesystem::path& candidates, std::size_t candidate_count, const QueryFile& queries) {
   if (candidate_count != queries.queries.size()) {
-    throw InputError(candidates, {}, "has " + std::to_string(candidate_count) + " pairs but " + queries.path.string() +
-                                         " has " + std::to_string(queries.queries.size()) + " queries");
+    throw InputError(candidates, {},
+                     "has " + std::to_string(candidate_count) + " pairs but " + queries.path.string() + " has " +
+                         std::to_string(queries.queries.size()) + " queries");
   }
 }
 
@@ -63,10 +63,9 @@ SampleStep load_sample_step(const std::filesystem::path& directory) {
   for (const auto& [a, b] : read_candidate_pairs(vf_path)) {
     // Ids number vertices first, then edges, then faces (face = id - V - E).
     if (a >= vertex_count || b < vertex_count + edge_count || b >= vertex_count + edge_count + face_count) {
-      throw InputError(vf_path, {}, "pair [" + std::to_string(a) + ", " + std::to_string(b) +
-                                        "] is not (vertex id, face id) for " + std::to_string(vertex_count) +
-                                        " vertices, " + std::to_string(edge_count) + " edges, " +
-                                        std::to_string(face_count) + " faces");
+      throw InputError(vf_path, {},
+                       "pair [" + std::to_string(a) + ", " + std::to_string(b) + "] is not (vertex id, face id) for " + std::to_string(vertex_count) +
+                           " vertices, " + std::to_string(edge_count) + " edges, " + std::to_string(face_count) + " faces");
     }
     step.vertex_face_candidates.emplace_back(a, static_cast<FaceId>(b - vertex_count - edge_count));
   }
@@ -77,8 +76,7 @@ SampleStep load_sample_step(const std::filesystem::path& directory) {
     if (a < vertex_count || b < vertex_count || a >= vertex_count + edge_count || b >= vertex_count + edge_count) {
       throw InputError(ee_path, {}, "pair [" + std::to_string(a) + ", " + std::to_string(b) + "] is not two edge ids");
     }
-    step.edge_edge_candidates.emplace_back(static_cast<std::uint32_t>(a - vertex_count),
-                                           static_cast<std::uint32_t>(b - vertex_count));
+    step.edge_edge_candidates.emplace_back(static_cast<std::uint32_t>(a - vertex_count), static_cast<std::uint32_t>(b - vertex_count));
   }
   expect_same_count(ee_path, step.edge_edge_candidates.size(), step.edge_edge_queries);
   return step;

@@ -46,12 +46,11 @@ void reject_unknown_keys(const std::filesystem::path& file, const std::string& w
   }
 }
 
-const json& require(const std::filesystem::path& file, const std::string& where, const json& value,
-                    const char* key, json::value_t type, const char* type_name) {
+const json& require(const std::filesystem::path& file, const std::string& where, const json& value, const char* key, json::value_t type,
+                    const char* type_name) {
   if (!value.contains(key)) throw InputError(file, where, std::string("missing key '") + key + "'");
   const json& member = value.at(key);
-  const bool ok = member.type() == type ||
-                  (type == json::value_t::number_float && member.is_number());
+  const bool ok = member.type() == type || (type == json::value_t::number_float && member.is_number());
   if (!ok) throw InputError(file, where + "." + key, std::string("must be ") + type_name);
   return member;
 }
@@ -61,8 +60,8 @@ std::filesystem::path resolve(const std::filesystem::path& base, const std::stri
   return path.is_absolute() ? path : base / path;
 }
 
-std::unique_ptr<FrameSource> frame_source_from_json(const json& frames, const std::filesystem::path& base,
-                                                    const std::filesystem::path& file, const std::string& where) {
+std::unique_ptr<FrameSource> frame_source_from_json(const json& frames, const std::filesystem::path& base, const std::filesystem::path& file,
+                                                    const std::string& where) {
   if (!frames.is_object() || frames.size() != 1) {
     throw InputError(file, where, "must be an object with exactly one of: files, pattern, directory, cache");
   }
@@ -118,8 +117,8 @@ Shape shape_from_json(const json& object, const std::filesystem::path& file, con
 
 /// A shape's motion track: {"centres": [[x, y, z], ...]} (one centre: it stays still) or {"cache": "file.frames"}
 /// (a frame cache of one vertex and no faces).
-std::unique_ptr<FrameSource> track_from_json(const json& track, const std::filesystem::path& base,
-                                             const std::filesystem::path& file, const std::string& where) {
+std::unique_ptr<FrameSource> track_from_json(const json& track, const std::filesystem::path& base, const std::filesystem::path& file,
+                                             const std::string& where) {
   if (!track.is_object() || track.size() != 1) throw InputError(file, where, "must be an object with exactly one of: centres, cache");
   reject_unknown_keys(file, where, track, {"centres", "cache"});
   if (track.contains("cache")) {
@@ -149,8 +148,7 @@ SceneSequence scene_from_generator(const json& block, const std::filesystem::pat
   if (!generator) {
     std::string known;
     for (const std::string& n : scene_generator_names()) known += (known.empty() ? "" : ", ") + n;
-    throw InputError(file, "generator.name",
-                     "unknown scene generator '" + name + "' (known: " + (known.empty() ? "none" : known) + ")");
+    throw InputError(file, "generator.name", "unknown scene generator '" + name + "' (known: " + (known.empty() ? "none" : known) + ")");
   }
   json parameters = block;
   parameters.erase("name");
@@ -181,8 +179,7 @@ std::vector<std::string> scene_generator_names() {
   return names;
 }
 
-SceneSequence scene_from_json(const json& document, const std::filesystem::path& base,
-                              const std::filesystem::path& file) {
+SceneSequence scene_from_json(const json& document, const std::filesystem::path& base, const std::filesystem::path& file) {
   if (!document.is_object()) throw InputError(file, {}, "a scene file must hold a JSON object");
   reject_unknown_keys(file, {}, document, {"name", "thickness", "objects", "collidable", "generator"});
   double thickness = 0.0;
@@ -231,8 +228,7 @@ SceneSequence scene_from_json(const json& document, const std::filesystem::path&
     reject_unknown_keys(file, where, object, {"name", "kind", "self_collision", "frames"});
     description.self_collision = description.kind == ObjectKind::deformable;
     if (object.contains("self_collision")) {
-      description.self_collision =
-          require(file, where, object, "self_collision", json::value_t::boolean, "true or false").get<bool>();
+      description.self_collision = require(file, where, object, "self_collision", json::value_t::boolean, "true or false").get<bool>();
     }
     if (!object.contains("frames")) throw InputError(file, where, "missing key 'frames'");
     auto source = frame_source_from_json(object.at("frames"), base, file, where + ".frames");

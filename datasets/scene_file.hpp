@@ -45,14 +45,12 @@ SceneSequence load_scene_file(const std::filesystem::path& path);
 void put_shape_keys(nlohmann::json& object, const Shape& shape);
 
 /// Builds a scene from a parsed scene-file document; `base` resolves relative paths; `file` names errors.
-SceneSequence scene_from_json(const nlohmann::json& document, const std::filesystem::path& base,
-                              const std::filesystem::path& file);
+SceneSequence scene_from_json(const nlohmann::json& document, const std::filesystem::path& base, const std::filesystem::path& file);
 
 /// A procedural scene: builds a whole scene (every object and its frames) from a generator block's parameters.
 /// @param parameters the generator block without "name"
 /// @param file       the scene file, for error messages
-using SceneGeneratorFunction =
-    std::function<SceneSequence(const nlohmann::json& parameters, const std::filesystem::path& file)>;
+using SceneGeneratorFunction = std::function<SceneSequence(const nlohmann::json& parameters, const std::filesystem::path& file)>;
 
 /// Makes `name` usable as {"generator": {"name": name, ...}}. Registering a name twice replaces it.
 void register_scene_generator(const std::string& name, SceneGeneratorFunction generator);

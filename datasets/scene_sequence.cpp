@@ -14,15 +14,14 @@ SceneSequence::SceneSequence(Scene scene, std::vector<std::unique_ptr<FrameSourc
     const SceneObject& object = scene_.object(id);
     const FrameSource& source = *sources_[id];
     if (source.num_vertices() != object.num_vertices || source.num_frames() == 0) {
-      throw InputError({}, "object '" + object.name + "'", "frame source does not match the object (" +
-                                                               source.describe() + ")");
+      throw InputError({}, "object '" + object.name + "'", "frame source does not match the object (" + source.describe() + ")");
     }
     if (source.num_frames() == 1) continue;
     if (object.kind == ObjectKind::static_object) static_first_frames_[id] = source.frame(0);
     if (multi_frame_count != 0 && source.num_frames() != multi_frame_count) {
       throw InputError({}, "object '" + object.name + "'",
-                       "has " + std::to_string(source.num_frames()) + " frames but object '" + multi_frame_object +
-                           "' has " + std::to_string(multi_frame_count) + " (" + source.describe() + ")");
+                       "has " + std::to_string(source.num_frames()) + " frames but object '" + multi_frame_object + "' has " +
+                           std::to_string(multi_frame_count) + " (" + source.describe() + ")");
     }
     multi_frame_count = source.num_frames();
     multi_frame_object = object.name;
@@ -31,8 +30,7 @@ SceneSequence::SceneSequence(Scene scene, std::vector<std::unique_ptr<FrameSourc
 }
 
 std::vector<Vec3> SceneSequence::frame(std::size_t k) const {
-  if (k >= num_frames_) throw std::out_of_range("SceneSequence::frame: frame " + std::to_string(k) + " of " +
-                                                std::to_string(num_frames_));
+  if (k >= num_frames_) throw std::out_of_range("SceneSequence::frame: frame " + std::to_string(k) + " of " + std::to_string(num_frames_));
   std::vector<Vec3> positions(scene_.topology().num_vertices());
   for (ObjectId id = 0; id < sources_.size(); ++id) {
     const SceneObject& object = scene_.object(id);

@@ -45,11 +45,10 @@ json load_cell(const std::filesystem::path& file) {
 }  // namespace
 
 json CellKey::to_json() const {
-  return {{"format", kCellFormat},   {"scene", scene},       {"scene_content", scene_content},
-          {"steps", steps},          {"thickness", thickness}, {"thickness_from", thickness_from},
-          {"strategy", strategy},
-          {"verify", verify},        {"toi", toi},           {"repeats", repeats},   {"threads", threads},
-          {"executable", executable}};
+  return {{"format", kCellFormat}, {"scene", scene},         {"scene_content", scene_content},
+          {"steps", steps},        {"thickness", thickness}, {"thickness_from", thickness_from},
+          {"strategy", strategy},  {"verify", verify},       {"toi", toi},
+          {"repeats", repeats},    {"threads", threads},     {"executable", executable}};
 }
 
 std::string scene_content_digest(const Scene& scene, std::span<const std::vector<Vec3>> frames) {
@@ -116,9 +115,8 @@ void rebuild_results_log(const std::filesystem::path& out, std::ostream& warning
       warnings << "ccdbench: warning: " << bad.what() << "; left out of results.jsonl\n";
     }
   }
-  std::sort(cells.begin(), cells.end(), [](const Finished& a, const Finished& b) {
-    return std::tie(a.finished_at, a.name) < std::tie(b.finished_at, b.name);
-  });
+  std::sort(cells.begin(), cells.end(),
+            [](const Finished& a, const Finished& b) { return std::tie(a.finished_at, a.name) < std::tie(b.finished_at, b.name); });
   datasets::AtomicFile lines(out / "results.jsonl", std::ios::out);
   for (const Finished& finished : cells) {
     for (const json& step : finished.cell["steps"]) lines.stream() << step.dump() << '\n';

@@ -5,6 +5,7 @@
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/sample_step.hpp"
 #include "datasets/scene_file.hpp"
+#include "harness/cell_store.hpp"
 #include "harness/inspect.hpp"
 #include "harness/progress.hpp"
 #include "harness/query_scoring.hpp"
@@ -14,7 +15,6 @@
 #include "harness/truth_cache.hpp"
 #include "harness/work_queue.hpp"
 #include "reference/step_truth.hpp"
-#include "harness/cell_store.hpp"
 #include "strategies/opencl/full_opencl.hpp"
 #include "strategies/plugin/plugin_narrow_phase.hpp"
 
@@ -108,10 +108,11 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
   for (const datasets::QueryFile& file : files) {
     const std::size_t unlabelled = file.queries.size() - file.labelled();
     if (unlabelled > 0 && !options.allow_unlabelled) {
-      throw InputError(file.path, {}, std::to_string(unlabelled) + " of " + std::to_string(file.queries.size()) +
-                                          " queries have no truth label (no 7th column, no mma_bool/NAME_mma_bool.json): "
-                                          "their misses cannot be counted; --allow-unlabelled scores them with FN and "
-                                          "FP shown as '-'");
+      throw InputError(file.path, {},
+                       std::to_string(unlabelled) + " of " + std::to_string(file.queries.size()) +
+                           " queries have no truth label (no 7th column, no mma_bool/NAME_mma_bool.json): "
+                           "their misses cannot be counted; --allow-unlabelled scores them with FN and "
+                           "FP shown as '-'");
     }
   }
   double thickness = options.thickness;
@@ -207,18 +208,15 @@ LoadedStep load_step(const TruthOptions& options) {
   if (options.sample) {
     datasets::SampleStep step = datasets::load_sample_step(*options.sample);
     const std::size_t num_vertices = step.topology.num_vertices();
-    Scene scene({{"mesh", ObjectKind::deformable, true, num_vertices, step.topology.faces()}}, {},
-                options.thickness.value_or(0.0));
+    Scene scene({{"mesh", ObjectKind::deformable, true, num_vertices, step.topology.faces()}}, {}, options.thickness.value_or(0.0));
     LoadedStep loaded{options.sample->string(), std::move(scene), step.x0, step.x1, std::nullopt};
     loaded.sample = std::move(step);
     return loaded;
   }
   if (!options.frames.empty()) {
     if (options.frames.size() != 2) throw std::invalid_argument("--frames takes exactly two files (the step's frames)");
-    const datasets::SceneSequence sequence =
-        datasets::scene_from_frame_files(options.frames, options.thickness.value_or(0.0));
-    return {options.frames[0].string() + " -> " + options.frames[1].string(), sequence.scene(), sequence.frame(0),
-            sequence.frame(1), std::nullopt};
+    const datasets::SceneSequence sequence = datasets::scene_from_frame_files(options.frames, options.thickness.value_or(0.0));
+    return {options.frames[0].string() + " -> " + options.frames[1].string(), sequence.scene(), sequence.frame(0), sequence.frame(1), std::nullopt};
   }
   datasets::SceneSequence sequence = datasets::load_scene_file(*options.scene);
   if (options.thickness) sequence.set_thickness(*options.thickness);
@@ -227,8 +225,8 @@ LoadedStep load_step(const TruthOptions& options) {
                      "the scene has " + std::to_string(sequence.num_steps()) + " steps (0.." +
                          std::to_string(sequence.num_steps() == 0 ? 0 : sequence.num_steps() - 1) + ")");
   }
-  return {options.scene->string() + " step " + std::to_string(options.step), sequence.scene(),
-          sequence.frame(options.step), sequence.frame(options.step + 1), std::nullopt};
+  return {options.scene->string() + " step " + std::to_string(options.step), sequence.scene(), sequence.frame(options.step),
+          sequence.frame(options.step + 1), std::nullopt};
 }
 
 }  // namespace
@@ -295,8 +293,7 @@ int run_truth_steps(const TruthOptions& options, std::ostream& out) {
   const std::size_t available = load().num_steps();
   if (options.step >= available) {
     throw InputError(*options.scene, "step " + std::to_string(options.step),
-                     "the scene has " + std::to_string(available) + " steps (0.." +
-                         std::to_string(available == 0 ? 0 : available - 1) + ")");
+                     "the scene has " + std::to_string(available) + " steps (0.." + std::to_string(available == 0 ? 0 : available - 1) + ")");
   }
   const std::size_t last = options.steps == 0 ? available : std::min(available, options.step + options.steps);
   std::vector<WorkItem> items;
@@ -311,14 +308,22 @@ int run_truth_steps(const TruthOptions& options, std::ostream& out) {
   out << "truth for " << options.scene->string() << " steps " << options.step << ".." << last - 1 << " (thickness "
       << records.front()["thickness"].get<double>() << "), stored in the truth cache\n";
   using Align = Table::Align;
-  Table table({{"step", Align::right}, {"vf", Align::right}, {"ee", Align::right}, {"vf enum.", Align::right}, {"ee enum.", Align::right},
-               {"slices", Align::right}, {"filter", Align::right}, {"exactly", Align::right}, {"ms", Align::right}});
+  Table table({{"step", Align::right},
+               {"vf", Align::right},
+               {"ee", Align::right},
+               {"vf enum.", Align::right},
+               {"ee enum.", Align::right},
+               {"slices", Align::right},
+               {"filter", Align::right},
+               {"exactly", Align::right},
+               {"ms", Align::right}});
   std::size_t vf = 0, ee = 0;
   double ms = 0;
   for (const nlohmann::json& r : records) {
     const double step_ms = r["enumeration_ms"].get<double>() + r["decision_ms"].get<double>();
     std::vector<std::string> row;
-    for (const char* field : {"index", "vf", "ee", "vf_pairs_enumerated", "ee_pairs_enumerated", "time_slices", "decided_by_filter", "decided_exactly"}) {
+    for (const char* field :
+         {"index", "vf", "ee", "vf_pairs_enumerated", "ee_pairs_enumerated", "time_slices", "decided_by_filter", "decided_exactly"}) {
       row.push_back(std::to_string(r[field].get<std::size_t>()));
     }
     row.push_back(fixed(step_ms, 1));
@@ -328,8 +333,8 @@ int run_truth_steps(const TruthOptions& options, std::ostream& out) {
     ms += step_ms;
   }
   table.print(out);
-  out << "total: " << records.size() << " steps, colliding pairs vertex-face " << vf << ", edge-edge " << ee
-      << std::fixed << std::setprecision(1) << ", " << ms << " ms of truth computation\n";
+  out << "total: " << records.size() << " steps, colliding pairs vertex-face " << vf << ", edge-edge " << ee << std::fixed << std::setprecision(1)
+      << ", " << ms << " ms of truth computation\n";
   out.unsetf(std::ios::fixed);
   if (options.json) datasets::write_json_file(*options.json, nlohmann::json(records));
   return 0;
@@ -352,24 +357,21 @@ int run_truth(const TruthOptions& options, std::ostream& out) {
 
   nlohmann::json result = truth_record(step.name, request.thickness, step.scene, truth);
   out << "truth for " << step.name << " (thickness " << request.thickness << ")\n"
-      << "  colliding pairs: vertex-face " << truth.collisions.vertex_face().size() << ", edge-edge "
-      << truth.collisions.edge_edge().size() << ", face-shape " << truth.collisions.face_shape().size() << "\n"
-      << "  pairs enumerated (overlapping swept boxes, " << s.time_slices << " time slice"
-      << (s.time_slices == 1 ? "" : "s") << "): vertex-face " << s.vertex_face_pairs << ", edge-edge "
-      << s.edge_edge_pairs << ", face-shape " << s.face_shape_pairs << "\n"
+      << "  colliding pairs: vertex-face " << truth.collisions.vertex_face().size() << ", edge-edge " << truth.collisions.edge_edge().size()
+      << ", face-shape " << truth.collisions.face_shape().size() << "\n"
+      << "  pairs enumerated (overlapping swept boxes, " << s.time_slices << " time slice" << (s.time_slices == 1 ? "" : "s") << "): vertex-face "
+      << s.vertex_face_pairs << ", edge-edge " << s.edge_edge_pairs << ", face-shape " << s.face_shape_pairs << "\n"
       << "  decided by the certified filter " << s.decided_by_filter << ", exactly " << s.decided_exactly << "\n"
-      << std::fixed << std::setprecision(1) << "  time: enumeration " << s.enumeration_milliseconds
-      << " ms, decisions " << s.decision_milliseconds << " ms\n";
+      << std::fixed << std::setprecision(1) << "  time: enumeration " << s.enumeration_milliseconds << " ms, decisions " << s.decision_milliseconds
+      << " ms\n";
   out.unsetf(std::ios::fixed);
   if (step.sample) {
     const SampleComparison comparison = compare_with_sample(*step.sample, truth.collisions);
     result["sample"] = to_json(comparison);
-    out << "  sample's own truth: vertex-face " << comparison.vertex_face_found << " of "
-        << comparison.vertex_face_positives << " found, edge-edge " << comparison.edge_edge_found << " of "
-        << comparison.edge_edge_positives << " found\n"
-        << "  colliding pairs outside the sample's candidate list: vertex-face "
-        << comparison.vertex_face_outside_candidates << ", edge-edge " << comparison.edge_edge_outside_candidates
-        << "\n";
+    out << "  sample's own truth: vertex-face " << comparison.vertex_face_found << " of " << comparison.vertex_face_positives << " found, edge-edge "
+        << comparison.edge_edge_found << " of " << comparison.edge_edge_positives << " found\n"
+        << "  colliding pairs outside the sample's candidate list: vertex-face " << comparison.vertex_face_outside_candidates << ", edge-edge "
+        << comparison.edge_edge_outside_candidates << "\n";
     for (const std::string& missing : comparison.missing) out << "  MISSING " << missing << "\n";
   }
   if (options.json) datasets::write_json_file(*options.json, result);
@@ -389,8 +391,8 @@ int run_stress_command(const StressOptions& options, std::ostream& out) {
   }
   std::vector<datasets::ExtremeQuery> suite;
   for (datasets::ExtremeQuery& query : datasets::extremes_suite(options.seed)) {
-    const bool chosen = options.families.empty() ||
-                        std::find(options.families.begin(), options.families.end(), query.family) != options.families.end();
+    const bool chosen =
+        options.families.empty() || std::find(options.families.begin(), options.families.end(), query.family) != options.families.end();
     if (chosen) suite.push_back(std::move(query));
   }
   out << "extremes suite: " << suite.size() << " queries in " << (options.families.empty() ? all_families.size() : options.families.size())
@@ -428,19 +430,29 @@ int run_devices(bool json, std::ostream& out) {
   for (const auto& d : devices) {
     const std::string verdict = d.refused_because.empty() ? "usable" : d.refused_because;
     if (json) {
-      const nlohmann::json line = {{"index", d.index}, {"platform", d.platform}, {"name", d.name}, {"version", d.version},
-                                   {"driver", d.driver}, {"type", d.gpu ? "gpu" : "other"}, {"compute_units", d.compute_units},
-                                   {"global_memory_bytes", d.global_memory}, {"fp64", d.fp64}, {"fp64_denormals", d.fp64_denormals},
-                                   {"int64_atomics", d.int64_atomics}, {"usable", d.refused_because.empty()}};
+      const nlohmann::json line = {{"index", d.index},
+                                   {"platform", d.platform},
+                                   {"name", d.name},
+                                   {"version", d.version},
+                                   {"driver", d.driver},
+                                   {"type", d.gpu ? "gpu" : "other"},
+                                   {"compute_units", d.compute_units},
+                                   {"global_memory_bytes", d.global_memory},
+                                   {"fp64", d.fp64},
+                                   {"fp64_denormals", d.fp64_denormals},
+                                   {"int64_atomics", d.int64_atomics},
+                                   {"usable", d.refused_because.empty()}};
       out << line.dump() << '\n';
     } else {
       out << d.index << ": " << d.name << " [" << d.platform << "; " << d.version << "; driver " << d.driver << "]\n"
-          << "   " << (d.gpu ? "GPU" : "not a GPU") << ", " << d.compute_units << " compute units, "
-          << d.global_memory / (1024 * 1024) << " MiB, fp64 " << (d.fp64 ? (d.fp64_denormals ? "yes (subnormals kept)" : "yes (subnormals flushed)") : "no")
-          << ", 64-bit atomics " << (d.int64_atomics ? "yes" : "no (apccd:backend=opencl needs them)") << "\n   " << verdict << "\n";
+          << "   " << (d.gpu ? "GPU" : "not a GPU") << ", " << d.compute_units << " compute units, " << d.global_memory / (1024 * 1024)
+          << " MiB, fp64 " << (d.fp64 ? (d.fp64_denormals ? "yes (subnormals kept)" : "yes (subnormals flushed)") : "no") << ", 64-bit atomics "
+          << (d.int64_atomics ? "yes" : "no (apccd:backend=opencl needs them)") << "\n   " << verdict << "\n";
     }
   }
-  if (!json) out << "choose one with --strategy full:backend=opencl:device=INDEX or apccd:backend=opencl:device=INDEX (default: the first GPU, else device 0)\n";
+  if (!json)
+    out << "choose one with --strategy full:backend=opencl:device=INDEX or apccd:backend=opencl:device=INDEX (default: the first GPU, else device "
+           "0)\n";
   return 0;
 }
 
@@ -449,10 +461,10 @@ int run_scenes(std::ostream& out) {
     out << scene.name << ": " << scene.description << "\n";
     Table table({{"  parameter"}, {"default", Table::Align::right}, {"meaning"}});
     for (const datasets::SceneParameter& parameter : scene.parameters) {
-      table.add_row({"  " + parameter.name,
-                     parameter.choices.empty() ? significant(parameter.default_value, 6)
-                                               : parameter.choices[static_cast<std::size_t>(parameter.default_value)],
-                     parameter.description});
+      table.add_row(
+          {"  " + parameter.name,
+           parameter.choices.empty() ? significant(parameter.default_value, 6) : parameter.choices[static_cast<std::size_t>(parameter.default_value)],
+           parameter.description});
     }
     table.print(out);
   }
@@ -499,8 +511,8 @@ int run_generate(const GenerateOptions& options, std::ostream& out) {
   }
   Progress progress("generate " + options.name + ": frames", 0);
   std::optional<Table> measurements;
-  datasets::GenerateRequest request{options.name, parameters, options.out,
-                                    [&](std::size_t done, std::size_t total) { progress.update(done, total); }, {}};
+  datasets::GenerateRequest request{
+      options.name, parameters, options.out, [&](std::size_t done, std::size_t total) { progress.update(done, total); }, {}};
   if (options.report) {
     request.report = [&](const datasets::FrameReport& report) {
       if (!measurements) {
@@ -515,10 +527,9 @@ int run_generate(const GenerateOptions& options, std::ostream& out) {
   }
   const datasets::GenerateResult result = datasets::generate_procedural_scene(request);
   if (measurements) measurements->print(out);
-  out << options.name << ": " << result.frames << " frames, " << result.cloth_triangles << " cloth triangles ("
-      << result.triangles << " in all), thickness " << result.thickness << ", "
-      << (result.from_cache ? "from the cache in " : "generated in ") << std::fixed << std::setprecision(2)
-      << result.seconds << " s\n  scene file: " << result.scene_file.string() << "\n";
+  out << options.name << ": " << result.frames << " frames, " << result.cloth_triangles << " cloth triangles (" << result.triangles
+      << " in all), thickness " << result.thickness << ", " << (result.from_cache ? "from the cache in " : "generated in ") << std::fixed
+      << std::setprecision(2) << result.seconds << " s\n  scene file: " << result.scene_file.string() << "\n";
   out.unsetf(std::ios::fixed);
   return 0;
 }

@@ -168,22 +168,22 @@ json inspect_path(const fs::path& path) {
       const bool vertex_face = name.ends_with("vf.json");
       return {{"path", text},
               {"type", "candidates"},
-              {"kind", vertex_face ? "vertex-face" : name.ends_with("ee.json") ? "edge-edge" : "unknown"},
+              {"kind", vertex_face                 ? "vertex-face"
+                       : name.ends_with("ee.json") ? "edge-edge"
+                                                   : "unknown"},
               {"pairs", pairs.size()}};
     }
     return describe_sequence(path, "scene", datasets::load_scene_file(path));
   }
   if (looks_like_frame_cache(path)) {
     const auto source = datasets::open_frame_cache(path);
-    json description = {{"path", text},
-                        {"type", "frame_cache"},
-                        {"key", datasets::frame_cache_key(path)},
-                        {"frames", source->num_frames()}};
+    json description = {{"path", text}, {"type", "frame_cache"}, {"key", datasets::frame_cache_key(path)}, {"frames", source->num_frames()}};
     description.update(topology_counts(MeshTopology(source->num_vertices(), source->faces())));
     return description;
   }
-  throw InputError(path, {}, "not a ccdbench input (expected a mesh, query, truth, candidate, scene or frame-cache "
-                             "file, or a directory of those)");
+  throw InputError(path, {},
+                   "not a ccdbench input (expected a mesh, query, truth, candidate, scene or frame-cache "
+                   "file, or a directory of those)");
 }
 
 namespace {
@@ -196,8 +196,7 @@ void print_topology(const json& d, std::ostream& out, const std::string& indent)
 }
 
 void print_queries(const json& d, std::ostream& out, const std::string& indent) {
-  out << indent << d["path"].get<std::string>() << ": " << d["kind"].get<std::string>() << ", queries "
-      << d["queries"];
+  out << indent << d["path"].get<std::string>() << ": " << d["kind"].get<std::string>() << ", queries " << d["queries"];
   if (d["positives"].is_null()) {
     out << ", truth: none";
   } else {
@@ -235,8 +234,8 @@ void print_inspection(const json& d, std::ostream& out) {
         if (object.contains("half_extents")) out << ", half extents " << object["half_extents"].dump();
         out << "), centre per frame";
       } else {
-        out << ", self-collision " << (object["self_collision"].get<bool>() ? "on" : "off") << ", vertices "
-            << object["vertices"] << ", faces " << object["faces"];
+        out << ", self-collision " << (object["self_collision"].get<bool>() ? "on" : "off") << ", vertices " << object["vertices"] << ", faces "
+            << object["faces"];
       }
       out << ", frames " << object["frames"] << " (" << object["source"].get<std::string>() << ")\n";
     }
@@ -245,8 +244,8 @@ void print_inspection(const json& d, std::ostream& out) {
     }
     print_displacements(d, out, "  ");
   } else if (type == "sample_step") {
-    out << "  step " << d["step"].get<std::string>() << ": " << d["frames"][0].get<std::string>() << " -> "
-        << d["frames"][1].get<std::string>() << "\n";
+    out << "  step " << d["step"].get<std::string>() << ": " << d["frames"][0].get<std::string>() << " -> " << d["frames"][1].get<std::string>()
+        << "\n";
     print_topology(d, out, "  ");
     out << "  candidates: vertex-face " << d["vf_candidates"] << ", edge-edge " << d["ee_candidates"] << "\n";
     print_queries(d["vf_queries"], out, "  ");

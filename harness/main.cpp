@@ -1,19 +1,19 @@
 // ccdbench: the command line of the harness.
 
-#include "datasets/atomic_file.hpp"
 #include "ccd/config.hpp"
+#include "core/error.hpp"
+#include "datasets/atomic_file.hpp"
 #include "datasets/input_file.hpp"
 #include "datasets/scene_file.hpp"
-#include "core/error.hpp"
 #include "harness/commands.hpp"
-#include "strategies/plugin/isolation.hpp"
-#include "strategies/plugin/plugin_narrow_phase.hpp"
 #include "harness/query_scoring.hpp"
 #include "harness/registry_listing.hpp"
-#include "harness/run/provenance.hpp"
 #include "harness/run.hpp"
+#include "harness/run/provenance.hpp"
 #include "harness/work_queue.hpp"
 #include "strategies/narrowphase/registry.hpp"
+#include "strategies/plugin/isolation.hpp"
+#include "strategies/plugin/plugin_narrow_phase.hpp"
 #include "strategies/registry.hpp"
 
 #include <CLI/CLI.hpp>
@@ -61,8 +61,8 @@ std::string method_names() {
 }
 
 std::string version_text() {
-  return std::string("ccdbench ") + CCDBENCH_VERSION + " (" + CCDBENCH_BUILD_TYPE + "; OpenCL " +
-         (CCDBENCH_WITH_OPENCL ? "on" : "off") + ", FCL " + (CCDBENCH_WITH_FCL ? "on" : "off") + ", MPI " + (CCDBENCH_WITH_MPI ? "on" : "off") + ")";
+  return std::string("ccdbench ") + CCDBENCH_VERSION + " (" + CCDBENCH_BUILD_TYPE + "; OpenCL " + (CCDBENCH_WITH_OPENCL ? "on" : "off") + ", FCL " +
+         (CCDBENCH_WITH_FCL ? "on" : "off") + ", MPI " + (CCDBENCH_WITH_MPI ? "on" : "off") + ")";
 }
 
 }  // namespace
@@ -90,35 +90,35 @@ int run_command_line(int argc, char** argv) {
                "compiler, and the version of every library)");
   app.require_subcommand(0, 1);
   std::size_t threads = 0;
-  app.add_option("--threads", threads,
-                 "worker threads for every command, 1 to " + std::to_string(kMaxThreads) +
-                     " (default: all cores); verdicts never depend on it, timings do")
+  app.add_option(
+         "--threads", threads,
+         "worker threads for every command, 1 to " + std::to_string(kMaxThreads) + " (default: all cores); verdicts never depend on it, timings do")
       ->check(CLI::Range(std::size_t{1}, kMaxThreads));
 
   ccd::harness::InspectOptions inspect_options;
-  CLI::App* inspect = app.add_subcommand(
-      "inspect",
-      "Print what a file or folder holds: counts of vertices, faces, edges, frames, steps, queries and truth\n"
-      "positives, and the largest vertex displacement of every step. PATH may be a mesh (.ply/.obj), a frame\n"
-      "folder or printf pattern (frame_%04d.ply), a scene file (.json, or a folder with scene.json), a\n"
-      "Scalable-CCD sample step folder, a query file (.csv) or folder, a truth file (mma_bool/*.json), a\n"
-      "candidate file (boxes/*.json) or a frame cache.");
+  CLI::App* inspect = app.add_subcommand("inspect",
+                                         "Print what a file or folder holds: counts of vertices, faces, edges, frames, steps, queries and truth\n"
+                                         "positives, and the largest vertex displacement of every step. PATH may be a mesh (.ply/.obj), a frame\n"
+                                         "folder or printf pattern (frame_%04d.ply), a scene file (.json, or a folder with scene.json), a\n"
+                                         "Scalable-CCD sample step folder, a query file (.csv) or folder, a truth file (mma_bool/*.json), a\n"
+                                         "candidate file (boxes/*.json) or a frame cache.");
   inspect->add_option("PATH", inspect_options.paths, "files or folders to describe")->required();
   inspect->add_flag("--json", inspect_options.json, "print one JSON object per PATH (one per line) instead of text");
 
   ccd::harness::QueriesOptions queries_options;
   std::string methods = "exact";
-  CLI::App* queries = app.add_subcommand(
-      "queries",
-      "Score methods on rational query files: per file and in total, queries, truth positives, reported,\n"
-      "false negatives (FN), false positives (FP) and time per query. Folders are searched for .csv files; a\n"
-      "file under vertex-face/ or named *vf.csv is vertex-face, under edge-edge/ or *ee.csv edge-edge; truth\n"
-      "is column 7 or mma_bool/NAME_mma_bool.json beside queries/NAME.csv.");
+  CLI::App* queries = app.add_subcommand("queries",
+                                         "Score methods on rational query files: per file and in total, queries, truth positives, reported,\n"
+                                         "false negatives (FN), false positives (FP) and time per query. Folders are searched for .csv files; a\n"
+                                         "file under vertex-face/ or named *vf.csv is vertex-face, under edge-edge/ or *ee.csv edge-edge; truth\n"
+                                         "is column 7 or mma_bool/NAME_mma_bool.json beside queries/NAME.csv.");
   queries->add_option("PATH", queries_options.paths, "query files or folders")->required();
-  queries->add_option("--method", methods,
-                      "comma-separated methods: " + method_names() + " (`exact` is the reference itself;\n"
-                      "narrow phases take their keys, NAME:key=value, as `ccdbench strategies` lists them);\n"
-                      "plugin:PATH[:key=value] is a plugin's queries (README: Audit your CCD)")
+  queries
+      ->add_option("--method", methods,
+                   "comma-separated methods: " + method_names() +
+                       " (`exact` is the reference itself;\n"
+                       "narrow phases take their keys, NAME:key=value, as `ccdbench strategies` lists them);\n"
+                       "plugin:PATH[:key=value] is a plugin's queries (README: Audit your CCD)")
       ->capture_default_str();
   std::vector<std::string> query_answer_files;
   queries->add_option("--answers", query_answer_files,
@@ -130,8 +130,7 @@ int run_command_line(int argc, char** argv) {
   queries->add_flag("--isolate", queries_options.isolate,
                     "run every plugin in a child process (isolate=on): a crash or a hang is that query's error, and\n"
                     "the run goes on");
-  queries->add_option("--faults", queries_options.faults,
-                      "where queries a method gave no answer to are written as query files, to replay")
+  queries->add_option("--faults", queries_options.faults, "where queries a method gave no answer to are written as query files, to replay")
       ->capture_default_str();
   queries->add_option("--thickness", queries_options.thickness, "thickness δ >= 0 (the data's truth is for 0)")
       ->check(CLI::Range(0.0, std::numeric_limits<double>::max()))
@@ -143,9 +142,10 @@ int run_command_line(int argc, char** argv) {
                     "also compare each method's time of impact with the exact earliest contact on the queries that\n"
                     "collide: TOI late (a defect for conservative methods), and the error's mean, median, 99th\n"
                     "percentile (nearest rank) and max, as fractions of the step");
-  queries->add_option("--scale-exponent", queries_options.scale_exponent,
-                      "multiply every query (and δ) by 2^K first, K in [-1074, 1023]: exact on the rationals; a query\n"
-                      "whose doubles are no longer exact is labelled again by the reference, one that overflows left out")
+  queries
+      ->add_option("--scale-exponent", queries_options.scale_exponent,
+                   "multiply every query (and δ) by 2^K first, K in [-1074, 1023]: exact on the rationals; a query\n"
+                   "whose doubles are no longer exact is labelled again by the reference, one that overflows left out")
       ->check(CLI::Range(-1074, 1023));
   queries->add_flag("--allow-unlabelled", queries_options.allow_unlabelled,
                     "score files without truth labels too: their FN and FP show as '-' (unlabelled), never as 0, and\n"
@@ -154,43 +154,39 @@ int run_command_line(int argc, char** argv) {
   queries->add_flag("--sweep", queries_options.sweep,
                     "vary each narrow phase's accuracies, one key at a time, its other keys as given: conservative\n"
                     "tolerance 1e-2..1e-7 then toi_tolerance 1e-2..1e-10, eta 0..1e-2 of the others");
-  queries->add_flag("--extremes", queries_options.extremes,
-                    "also score the extremes suite (see `ccdbench stress`), labelled by the reference");
+  queries->add_flag("--extremes", queries_options.extremes, "also score the extremes suite (see `ccdbench stress`), labelled by the reference");
   queries->add_option("--report", queries_options.report,
                       "write README.md (the table under the command that made it) and scores.json to this folder");
 
   ccd::harness::TruthOptions truth_options;
-  CLI::App* truth = app.add_subcommand(
-      "truth",
-      "Exact whole-step truth: every vertex-face and edge-edge pair that comes within the thickness during the\n"
-      "step, found by a certified sort-and-sweep of swept boxes and decided by the reference (certified\n"
-      "filter, then exact root isolation). Prints the colliding counts and how the pairs were decided.");
-  truth->add_option("--frames", truth_options.frames, "two mesh files: the step's first and last frame")
-      ->expected(2);
+  CLI::App* truth = app.add_subcommand("truth",
+                                       "Exact whole-step truth: every vertex-face and edge-edge pair that comes within the thickness during the\n"
+                                       "step, found by a certified sort-and-sweep of swept boxes and decided by the reference (certified\n"
+                                       "filter, then exact root isolation). Prints the colliding counts and how the pairs were decided.");
+  truth->add_option("--frames", truth_options.frames, "two mesh files: the step's first and last frame")->expected(2);
   truth->add_option("--scene", truth_options.scene, "a scene file (or folder with scene.json)");
   truth->add_option("--step", truth_options.step, "step K of the scene: frame K -> K+1")->capture_default_str();
-  truth->add_option("--steps", truth_options.steps,
-                    "with --scene: N steps from --step on (0: to the last), each stored in the truth cache that `run`\n"
-                    "reads; prints a table of every step (under mpirun, the steps are spread over the ranks)")
+  truth
+      ->add_option("--steps", truth_options.steps,
+                   "with --scene: N steps from --step on (0: to the last), each stored in the truth cache that `run`\n"
+                   "reads; prints a table of every step (under mpirun, the steps are spread over the ranks)")
       ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 40))
       ->capture_default_str();
-  truth->add_option("--sample", truth_options.sample,
-                    "a Scalable-CCD sample step folder: also compare with its own truth");
-  truth->add_option("--thickness", truth_options.thickness,
-                    "thickness δ >= 0 (default: the scene's; 0 for --frames and --sample)")
+  truth->add_option("--sample", truth_options.sample, "a Scalable-CCD sample step folder: also compare with its own truth");
+  truth->add_option("--thickness", truth_options.thickness, "thickness δ >= 0 (default: the scene's; 0 for --frames and --sample)")
       ->check(CLI::Range(0.0, std::numeric_limits<double>::max()));
   truth->add_flag("--toi", truth_options.toi, "also compute every colliding pair's earliest contact time exactly");
   truth->add_option("--json", truth_options.json, "also write the counts and statistics as JSON to this file");
 
   ccd::harness::StressOptions stress_options;
   std::string stress_methods;
-  for (const ccd::narrowphase::NarrowPhaseEntry& entry : ccd::narrowphase::narrow_phases()) stress_methods += (stress_methods.empty() ? "" : ",") + entry.name;
-  CLI::App* stress = app.add_subcommand(
-      "stress",
-      "Run every narrow phase on the extremes suite (coplanar motion, parallel and collinear edges, zero\n"
-      "motion, touching at t = 0 and 1, exact-thickness distances and one ulp either side, magnitudes from\n"
-      "1e-12 to 1e9, degenerate primitives, ...), labelled by the exact reference, at δ = 0 and at each case's\n"
-      "δ > 0. Prints family x variant -> false negatives (FN) and false positives (FP).");
+  for (const ccd::narrowphase::NarrowPhaseEntry& entry : ccd::narrowphase::narrow_phases())
+    stress_methods += (stress_methods.empty() ? "" : ",") + entry.name;
+  CLI::App* stress = app.add_subcommand("stress",
+                                        "Run every narrow phase on the extremes suite (coplanar motion, parallel and collinear edges, zero\n"
+                                        "motion, touching at t = 0 and 1, exact-thickness distances and one ulp either side, magnitudes from\n"
+                                        "1e-12 to 1e9, degenerate primitives, ...), labelled by the exact reference, at δ = 0 and at each case's\n"
+                                        "δ > 0. Prints family x variant -> false negatives (FN) and false positives (FP).");
   stress->add_option("--method", stress_methods, "comma-separated narrow-phase specs (`ccdbench strategies` lists them)")->capture_default_str();
   stress->add_option("--seed", stress_options.seed, "seed of the suite's exact transformations")->capture_default_str();
   std::string stress_families;
@@ -202,20 +198,21 @@ int run_command_line(int argc, char** argv) {
   ccd::harness::RunOptions run_options;
   std::string run_suite, run_strategies = "full", run_verify = "exact";
   std::vector<std::string> run_frames, run_scenes;
-  CLI::App* run = app.add_subcommand(
-      "run",
-      "Run strategies over every step of the scenes, verify every step against the exact truth, and print per\n"
-      "scene and strategy: ms per step (median; stage breakdown), speed-up over `full` (cells of this run only),\n"
-      "candidate triangle pairs, elementary tests, colliding pairs, missed (culled: never tested / tested: the\n"
-      "elementary test said no) and false alarms. Strategies: NAME[+NARROW][:key=value...], comma-separated:\n"
-      "NAME is " + strategy_names() + "; NARROW is " + ccd::narrowphase::narrow_phase_list() + " (default conservative).\n"
-      "`ccdbench strategies` lists what each is, its keys with their values and defaults, and its backends.\n"
-      "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
-  run->add_option("--suite", run_suite, "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper, large (the spinning\n"
+  CLI::App* run = app.add_subcommand("run",
+                                     "Run strategies over every step of the scenes, verify every step against the exact truth, and print per\n"
+                                     "scene and strategy: ms per step (median; stage breakdown), speed-up over `full` (cells of this run only),\n"
+                                     "candidate triangle pairs, elementary tests, colliding pairs, missed (culled: never tested / tested: the\n"
+                                     "elementary test said no) and false alarms. Strategies: NAME[+NARROW][:key=value...], comma-separated:\n"
+                                     "NAME is " +
+                                         strategy_names() + "; NARROW is " + ccd::narrowphase::narrow_phase_list() +
+                                         " (default conservative).\n"
+                                         "`ccdbench strategies` lists what each is, its keys with their values and defaults, and its backends.\n"
+                                         "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
+  run->add_option("--suite", run_suite,
+                  "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper, large (the spinning\n"
                   "ball at about 1M triangles, 3 steps of contact)");
   run->add_option("--scene", run_scenes, "scene files (or folders with scene.json); repeat or list several");
-  run->add_option("--frames", run_frames, "mesh files: one deformable self-colliding object, one step per pair")
-      ->expected(2, 100000);
+  run->add_option("--frames", run_frames, "mesh files: one deformable self-colliding object, one step per pair")->expected(2, 100000);
   run->add_option("--strategy", run_strategies, "comma-separated strategy specs")->capture_default_str();
   std::string run_thickness;
   run->add_option("--thickness", run_thickness,
@@ -224,8 +221,7 @@ int run_command_line(int argc, char** argv) {
   run->add_option("--verify", run_verify, "exact (every step against the exact truth) or none")
       ->check(CLI::IsMember({"exact", "none"}))
       ->capture_default_str();
-  run->add_option("--repeat", run_options.repeats, "timed passes (1 to 1000); ms per step is the median")
-      ->check(CLI::Range(1, kMaxRepeats));
+  run->add_option("--repeat", run_options.repeats, "timed passes (1 to 1000); ms per step is the median")->check(CLI::Range(1, kMaxRepeats));
   run->add_option("--out", run_options.out,
                   "results folder: cells/ (one file per finished cell, reused by a later run only when its inputs,\n"
                   "steps, δ, strategy, repeats, threads and executable are all the same) and results.jsonl (the step\n"
@@ -261,41 +257,38 @@ int run_command_line(int argc, char** argv) {
 
   std::string baseline_file;
   std::vector<std::string> results_files;
-  CLI::App* check = app.add_subcommand(
-      "check",
-      "The CI gate: exit 1 when it fails, 2 when a file is malformed. It fails when the results are empty, a result\n"
-      "has no baseline entry or an entry no result, a result was not verified or has no colliding pair (it could\n"
-      "not miss anything, so it gates nothing), or a result misses more than its entry allows.");
-  check->add_option("--baseline", baseline_file,
-                    "JSON array of {scene, strategy, thickness: \"scene\" or a number, max_missed: integer >= 0}")
+  CLI::App* check =
+      app.add_subcommand("check",
+                         "The CI gate: exit 1 when it fails, 2 when a file is malformed. It fails when the results are empty, a result\n"
+                         "has no baseline entry or an entry no result, a result was not verified or has no colliding pair (it could\n"
+                         "not miss anything, so it gates nothing), or a result misses more than its entry allows.");
+  check->add_option("--baseline", baseline_file, "JSON array of {scene, strategy, thickness: \"scene\" or a number, max_missed: integer >= 0}")
       ->required();
   check->add_option("RESULTS", results_files, "`ccdbench run --json` summary files, taken together")->required();
 
   CLI::App* scenes = app.add_subcommand("scenes", "List the built-in procedural scenes, their parameters and defaults.");
 
   bool strategies_json = false;
-  CLI::App* strategies = app.add_subcommand(
-      "strategies",
-      "List the strategies and narrow phases (the registries): what each is, its keys with their values and\n"
-      "defaults, its backends, and for a strategy what it is judged by and its speed-up baseline.");
+  CLI::App* strategies = app.add_subcommand("strategies",
+                                            "List the strategies and narrow phases (the registries): what each is, its keys with their values and\n"
+                                            "defaults, its backends, and for a strategy what it is judged by and its speed-up baseline.");
   strategies->add_flag("--json", strategies_json, "print one JSON object ({strategies, narrow_phases}) for scripts");
   std::vector<std::string> listed_plugins;
   strategies->add_option("--plugin", listed_plugins, "also list this plugin (a shared library, README: Audit your CCD) with its keys");
 
   bool devices_json = false;
-  CLI::App* devices = app.add_subcommand(
-      "devices",
-      "List the OpenCL platforms and devices: index (for full:backend=opencl:device=INDEX), name, compute units,\n"
-      "memory, and fp64 (required: the narrow phases are double precision, subnormals kept). Without device=, the\n"
-      "first GPU is used, else device 0. PoCL's CPU device is always there once pocl-opencl-icd is installed.");
+  CLI::App* devices =
+      app.add_subcommand("devices",
+                         "List the OpenCL platforms and devices: index (for full:backend=opencl:device=INDEX), name, compute units,\n"
+                         "memory, and fp64 (required: the narrow phases are double precision, subnormals kept). Without device=, the\n"
+                         "first GPU is used, else device 0. PoCL's CPU device is always there once pocl-opencl-icd is installed.");
   devices->add_flag("--json", devices_json, "one JSON object per device, one per line");
 
   ccd::harness::GenerateOptions generate_options;
-  CLI::App* generate = app.add_subcommand(
-      "generate",
-      "Simulate a built-in scene into a folder: scene.json and one PLY per object per frame\n"
-      "(OBJECT/frame_0000.ply, ...). The same parameters give bit-identical frames on any thread count, and a\n"
-      "second call with the same parameters reads the folder's cache instead of simulating again.");
+  CLI::App* generate = app.add_subcommand("generate",
+                                          "Simulate a built-in scene into a folder: scene.json and one PLY per object per frame\n"
+                                          "(OBJECT/frame_0000.ply, ...). The same parameters give bit-identical frames on any thread count, and a\n"
+                                          "second call with the same parameters reads the folder's cache instead of simulating again.");
   generate->add_option("NAME", generate_options.name, "scene name (see `ccdbench scenes`)")->required();
   generate->add_option("--resolution", generate_options.resolution, "cloth grid side N (N x N vertices)");
   generate->add_option("--frames", generate_options.frames, "number of frames");
@@ -333,9 +326,8 @@ int run_command_line(int argc, char** argv) {
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, threads);
 
   if (ccd::harness::rank_info().size > 1 && !*run && !*truth && !*queries) {
-    return ccd::harness::rank_info().rank == 0
-               ? refuse({}, "only run, truth and queries are spread over MPI ranks: run this command without mpirun")
-               : 2;
+    return ccd::harness::rank_info().rank == 0 ? refuse({}, "only run, truth and queries are spread over MPI ranks: run this command without mpirun")
+                                               : 2;
   }
 
   try {
@@ -356,8 +348,7 @@ int run_command_line(int argc, char** argv) {
       if (sources != 1) return refuse({}, "give exactly one of --suite, --scene, --frames");
       if (!run_suite.empty()) run_options.scenes = ccd::harness::suite_scenes(run_suite);
       for (const std::string& run_scene : run_scenes) {
-        run_options.scenes.push_back({ccd::harness::scene_file_label(run_scene),
-                                      [run_scene] { return ccd::datasets::load_scene_file(run_scene); }});
+        run_options.scenes.push_back({ccd::harness::scene_file_label(run_scene), [run_scene] { return ccd::datasets::load_scene_file(run_scene); }});
       }
       if (!run_frames.empty()) {
         const std::vector<std::filesystem::path> files(run_frames.begin(), run_frames.end());

@@ -1,10 +1,10 @@
 #include "harness/progress.hpp"
 
+#include <sys/ioctl.h>
+#include <unistd.h>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <sys/ioctl.h>
-#include <unistd.h>
 
 namespace ccd::harness {
 namespace {

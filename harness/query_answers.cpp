@@ -65,7 +65,8 @@ AnswerTable read_answer_table(const std::filesystem::path& path, const std::stri
       }
       for (const char* required : {"file", "index", "hit"}) {
         if (!column.count(required)) {
-          throw InputError(path, where, std::string("the header names no '") + required + "' column (an answer file starts with a header: file,index,hit,toi)");
+          throw InputError(path, where,
+                           std::string("the header names no '") + required + "' column (an answer file starts with a header: file,index,hit,toi)");
         }
       }
       continue;
@@ -109,7 +110,8 @@ AnswerTable read_answer_table(const std::filesystem::path& path, const std::stri
   std::string listed;
   for (const std::string& m : methods) listed += (listed.empty() ? "" : ", ") + (m.empty() ? std::string("(none)") : m);
   if (method.empty()) {
-    if (methods.size() > 1) throw InputError(path, {}, "holds the answers of several methods (" + listed + "): pick one with answers:FILE:method=NAME");
+    if (methods.size() > 1)
+      throw InputError(path, {}, "holds the answers of several methods (" + listed + "): pick one with answers:FILE:method=NAME");
     table.method = methods.empty() ? "" : *methods.begin();
   } else {
     std::vector<std::string> matching;
@@ -145,7 +147,8 @@ void bind_answers(AnswerTable& table, const std::vector<datasets::QueryFile>& fi
       if (match == nullptr) {
         for (const datasets::QueryFile& file : files) {
           if (!ends_with_components(file.path, line.file)) continue;
-          if (match != nullptr) throw InputError(table.path, where, "file '" + line.file + "' names several of the query files: give more of its path");
+          if (match != nullptr)
+            throw InputError(table.path, where, "file '" + line.file + "' names several of the query files: give more of its path");
           match = &file;
         }
       }
@@ -154,12 +157,14 @@ void bind_answers(AnswerTable& table, const std::vector<datasets::QueryFile>& fi
     }
     std::vector<const AnswerLine*>& slots = table.by_file.at(it->second->path.string());
     if (line.index >= slots.size()) {
-      throw InputError(table.path, where, "index " + std::to_string(line.index) + " is past the end of " + it->second->path.string() + " (" +
-                                              std::to_string(slots.size()) + " queries, indices from 0)");
+      throw InputError(table.path, where,
+                       "index " + std::to_string(line.index) + " is past the end of " + it->second->path.string() + " (" +
+                           std::to_string(slots.size()) + " queries, indices from 0)");
     }
     if (slots[line.index] != nullptr) {
-      throw InputError(table.path, where, "query " + std::to_string(line.index) + " of " + it->second->path.string() + " is answered twice (line " +
-                                              std::to_string(slots[line.index]->line) + " too)");
+      throw InputError(table.path, where,
+                       "query " + std::to_string(line.index) + " of " + it->second->path.string() + " is answered twice (line " +
+                           std::to_string(slots[line.index]->line) + " too)");
     }
     slots[line.index] = &line;
   }
@@ -168,9 +173,9 @@ void bind_answers(AnswerTable& table, const std::vector<datasets::QueryFile>& fi
     const auto missing = std::find(slots.begin(), slots.end(), nullptr);
     if (missing != slots.end()) {
       const std::size_t count = static_cast<std::size_t>(std::count(slots.begin(), slots.end(), nullptr));
-      throw InputError(table.path, {}, "no answer for query " + std::to_string(missing - slots.begin()) + " of " + file.path.string() + " (" +
-                                           std::to_string(count) + " of its " + std::to_string(slots.size()) +
-                                           " queries have none: cut short, or answers to other files?)");
+      throw InputError(table.path, {},
+                       "no answer for query " + std::to_string(missing - slots.begin()) + " of " + file.path.string() + " (" + std::to_string(count) +
+                           " of its " + std::to_string(slots.size()) + " queries have none: cut short, or answers to other files?)");
     }
   }
 }

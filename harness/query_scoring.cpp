@@ -47,8 +47,7 @@ class ExactQueryMethod final : public QueryMethod {
 /// A narrow-phase variant on the doubles the query's rationals round to (what a simulator would hand it).
 class NarrowPhaseQueryMethod final : public QueryMethod {
  public:
-  explicit NarrowPhaseQueryMethod(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase)
-      : narrow_phase_(std::move(narrow_phase)) {}
+  explicit NarrowPhaseQueryMethod(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase) : narrow_phase_(std::move(narrow_phase)) {}
   std::string name() const override { return narrow_phase_->name(); }
   QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const override {
     const datasets::Query& query = file.queries[index];
@@ -70,7 +69,8 @@ class OwnTestsQueryMethod final : public QueryMethod {
     if (thickness > 0) throw std::invalid_argument("method " + strategy_.name + " has no thickness: run it with --thickness 0");
     // No time: such tests answer yes or no.
     return {strategy_.elementary_test(file.queries[index].rounded, file.kind == datasets::QueryKind::vertex_face),
-            std::numeric_limits<double>::quiet_NaN(), {}};
+            std::numeric_limits<double>::quiet_NaN(),
+            {}};
   }
 
  private:
@@ -117,7 +117,8 @@ class AnswerFileMethod final : public QueryMethod {
       throw std::logic_error("answers " + table_.path.string() + " were not matched to " + file.path.string() + " (bind_answer_files)");
     }
     const AnswerLine& line = *it->second[index];
-    if (line.hit < 0) return {false, std::numeric_limits<double>::quiet_NaN(), "error (" + table_.path.string() + " line " + std::to_string(line.line) + ")"};
+    if (line.hit < 0)
+      return {false, std::numeric_limits<double>::quiet_NaN(), "error (" + table_.path.string() + " line " + std::to_string(line.line) + ")"};
     return {line.hit == 1, line.hit == 1 ? line.toi : std::numeric_limits<double>::quiet_NaN(), {}};
   }
 
@@ -163,29 +164,25 @@ std::vector<std::string> query_method_names() {
 namespace {
 
 /// A count over the labelled queries, or null (unknown) when none is labelled: never a 0 nobody measured.
-nlohmann::json labelled_count(const QueryScore& s, std::size_t count) {
-  return s.any_labelled() ? nlohmann::json(count) : nlohmann::json(nullptr);
-}
+nlohmann::json labelled_count(const QueryScore& s, std::size_t count) { return s.any_labelled() ? nlohmann::json(count) : nlohmann::json(nullptr); }
 
-std::string labelled_text(const QueryScore& s, std::size_t count) {
-  return s.any_labelled() ? std::to_string(count) : "-";
-}
+std::string labelled_text(const QueryScore& s, std::size_t count) { return s.any_labelled() ? std::to_string(count) : "-"; }
 
 }  // namespace
 
 nlohmann::json to_json(const QueryScore& s) {
   nlohmann::json row = {{"method", s.method},
-          {"file", s.file},
-          {"thickness", s.thickness},
-          {"queries", s.queries},
-          {"positives", labelled_count(s, s.positives)},
-          {"reported", s.reported},
-          {"false_negatives", labelled_count(s, s.false_negatives)},
-          {"false_positives", labelled_count(s, s.false_positives)},
-          {"unlabeled", s.unlabeled},
-          {"ns_per_query", s.ns_per_query},
-          {"false_negative_lines", s.false_negative_lines},
-          {"errors", s.faults}};
+                        {"file", s.file},
+                        {"thickness", s.thickness},
+                        {"queries", s.queries},
+                        {"positives", labelled_count(s, s.positives)},
+                        {"reported", s.reported},
+                        {"false_negatives", labelled_count(s, s.false_negatives)},
+                        {"false_positives", labelled_count(s, s.false_positives)},
+                        {"unlabeled", s.unlabeled},
+                        {"ns_per_query", s.ns_per_query},
+                        {"false_negative_lines", s.false_negative_lines},
+                        {"errors", s.faults}};
   if (!s.fault_queries.empty()) {
     row["error_queries"] = nlohmann::json::array();
     for (const QueryScore::Fault& f : s.fault_queries) row["error_queries"].push_back({{"index", f.index}, {"line", f.line}, {"message", f.message}});
@@ -211,8 +208,7 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
   if (request.toi || request.keep_answers) {
     for (std::size_t q = 0; q < file.queries.size(); ++q) {
       if (file.queries[q].truth == false) continue;
-      const reference::Decision decision =
-          reference::decide(reference_kind(file.kind), file.queries[q].rounded, request.thickness, {true, true, 64});
+      const reference::Decision decision = reference::decide(reference_kind(file.kind), file.queries[q].rounded, request.thickness, {true, true, 64});
       if (decision.toi_floor) exact_toi[q] = *decision.toi_floor;
     }
   }
@@ -308,8 +304,7 @@ void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std:
   }
 }
 
-std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files,
-                                          const QueryScoringRequest& request,
+std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files, const QueryScoringRequest& request,
                                           const std::function<void(std::size_t, std::size_t)>& on_file) {
   std::vector<QueryScore> scores;
   for (std::size_t index = 0; index < files.size(); ++index) {
@@ -354,13 +349,28 @@ nlohmann::json answer_list(const QueryScore& s) {
 }  // namespace
 
 nlohmann::json to_message(const QueryScore& s) {
-  return {{"method", s.method}, {"file", s.file}, {"thickness", s.thickness}, {"queries", s.queries},
-          {"positives", s.positives}, {"reported", s.reported}, {"false_negatives", s.false_negatives},
-          {"false_positives", s.false_positives}, {"unlabeled", s.unlabeled}, {"ns_per_query", s.ns_per_query},
-          {"with_toi", s.with_toi}, {"toi_checked", s.toi_checked}, {"toi_late", s.toi_late},
-          {"toi_error_max", s.toi_error_max}, {"toi_error_sum", s.toi_error_sum}, {"toi_errors", s.toi_errors},
-          {"false_negative_lines", s.false_negative_lines}, {"faults", s.faults}, {"fault_queries", fault_list(s)},
-          {"answers", answer_list(s)}, {"exact_toi", number_list(s.exact_toi)}, {"labels", label_list(s)}};
+  return {{"method", s.method},
+          {"file", s.file},
+          {"thickness", s.thickness},
+          {"queries", s.queries},
+          {"positives", s.positives},
+          {"reported", s.reported},
+          {"false_negatives", s.false_negatives},
+          {"false_positives", s.false_positives},
+          {"unlabeled", s.unlabeled},
+          {"ns_per_query", s.ns_per_query},
+          {"with_toi", s.with_toi},
+          {"toi_checked", s.toi_checked},
+          {"toi_late", s.toi_late},
+          {"toi_error_max", s.toi_error_max},
+          {"toi_error_sum", s.toi_error_sum},
+          {"toi_errors", s.toi_errors},
+          {"false_negative_lines", s.false_negative_lines},
+          {"faults", s.faults},
+          {"fault_queries", fault_list(s)},
+          {"answers", answer_list(s)},
+          {"exact_toi", number_list(s.exact_toi)},
+          {"labels", label_list(s)}};
 }
 
 QueryScore from_message(const nlohmann::json& m) {
@@ -385,8 +395,8 @@ QueryScore from_message(const nlohmann::json& m) {
   s.faults = m.at("faults");
   for (const nlohmann::json& f : m.at("fault_queries")) s.fault_queries.push_back({f.at(0), f.at(1), f.at(2)});
   for (const nlohmann::json& a : m.at("answers")) {
-    s.answers.push_back({a.at(0).get<bool>(), a.at(1).is_null() ? std::numeric_limits<double>::quiet_NaN() : a.at(1).get<double>(),
-                         a.at(2).get<std::string>()});
+    s.answers.push_back(
+        {a.at(0).get<bool>(), a.at(1).is_null() ? std::numeric_limits<double>::quiet_NaN() : a.at(1).get<double>(), a.at(2).get<std::string>()});
   }
   s.exact_toi = numbers_of(m.at("exact_toi"));
   for (const nlohmann::json& label : m.at("labels")) s.labels.push_back(label.is_null() ? std::nullopt : std::optional<bool>(label.get<bool>()));
@@ -398,21 +408,31 @@ namespace {
 /// The scores as a table: text on a terminal, Markdown in a report.
 Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
   using Align = Table::Align;
-  Table table({{"method"}, {"file"}, {"queries", Align::right}, {"positives", Align::right}, {"reported", Align::right},
-               {"FN", Align::right}, {"FP", Align::right}, {"ns/query", Align::right}});
+  Table table({{"method"},
+               {"file"},
+               {"queries", Align::right},
+               {"positives", Align::right},
+               {"reported", Align::right},
+               {"FN", Align::right},
+               {"FP", Align::right},
+               {"ns/query", Align::right}});
   const bool with_toi = !scores.empty() && scores.front().with_toi;
   // An error is its own outcome (a method that gave no answer): a column wherever a method can give one.
-  const bool with_errors = std::any_of(scores.begin(), scores.end(), [](const QueryScore& s) {
-    return s.faults > 0 || plugin::names_plugin(s.method) || names_answers(s.method);
-  });
+  const bool with_errors = std::any_of(scores.begin(), scores.end(),
+                                       [](const QueryScore& s) { return s.faults > 0 || plugin::names_plugin(s.method) || names_answers(s.method); });
   if (with_errors) table.add_column({"errors", Align::right});
   if (with_toi) {
     for (const char* header : {"TOI late", "TOI error mean", "median", "p99", "max"}) table.add_column({header, Align::right});
   }
   for (const QueryScore& s : scores) {
-    std::vector<std::string> row = {markdown ? "`" + s.method + "`" : s.method, s.file, std::to_string(s.queries),
-                                    labelled_text(s, s.positives), std::to_string(s.reported), labelled_text(s, s.false_negatives),
-                                    labelled_text(s, s.false_positives), fixed(s.ns_per_query, 0)};
+    std::vector<std::string> row = {markdown ? "`" + s.method + "`" : s.method,
+                                    s.file,
+                                    std::to_string(s.queries),
+                                    labelled_text(s, s.positives),
+                                    std::to_string(s.reported),
+                                    labelled_text(s, s.false_negatives),
+                                    labelled_text(s, s.false_positives),
+                                    fixed(s.ns_per_query, 0)};
     if (with_errors) row.push_back(std::to_string(s.faults));
     if (with_toi) {
       row.push_back(std::to_string(s.toi_late));
@@ -450,8 +470,11 @@ void write_query_answers(const std::filesystem::path& path, const std::vector<Qu
         const QueryAnswer& a = score->answers.at(q);
         const double exact = score->exact_toi.at(q);
         const std::optional<bool>& label = score->labels.at(q);
-        out << name << ',' << q << ',' << score->method << ',' << (!a.fault.empty() ? "error" : a.collides ? "1" : "0") << ','
-            << (a.collides && !std::isnan(a.toi) ? answer_number(a.toi) : "") << ',' << (label ? (*label ? "1" : "0") : "") << ','
+        out << name << ',' << q << ',' << score->method << ','
+            << (!a.fault.empty() ? "error"
+                : a.collides     ? "1"
+                                 : "0")
+            << ',' << (a.collides && !std::isnan(a.toi) ? answer_number(a.toi) : "") << ',' << (label ? (*label ? "1" : "0") : "") << ','
             << (std::isnan(exact) ? "" : answer_number(exact)) << '\n';
       }
     }
@@ -524,8 +547,7 @@ std::vector<std::string> sweep_methods(const std::vector<std::string>& methods) 
   return swept;
 }
 
-void write_query_report(const std::filesystem::path& directory, const std::vector<QueryScore>& scores,
-                        const std::string& command) {
+void write_query_report(const std::filesystem::path& directory, const std::vector<QueryScore>& scores, const std::string& command) {
   nlohmann::json rows = nlohmann::json::array();
   for (const QueryScore& score : scores) rows.push_back(to_json(score));
   datasets::write_json_file(directory / "scores.json", rows);
@@ -535,7 +557,8 @@ void write_query_report(const std::filesystem::path& directory, const std::vecto
       << "Every method on the same queries, in one run. ns/query is the median over the repeats of each file's time\n"
       << "divided by its queries; FN are missed collisions (truth positive, answer no), FP false alarms. Narrow phases\n"
       << "get the doubles the query's rationals round to; `exact` is the reference on the rationals. The truth labels are\n"
-      << "for zero thickness. Reproduce every number with:\n\n```sh\n" << command << "\n```\n\n";
+      << "for zero thickness. Reproduce every number with:\n\n```sh\n"
+      << command << "\n```\n\n";
   query_table(scores, true).print_markdown(out);
   out << "\nThe trade, per variant over all files (`(all)` rows), can be drawn with `/usr/bin/python3 "
          "scripts/plot_narrowphase.py scores.json tradeoff.png` (`scripts/narrowphase-report.sh` does).\n";

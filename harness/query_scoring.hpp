@@ -135,8 +135,7 @@ QueryScore from_message(const nlohmann::json& message);
 
 /// Scores every method on every file; returns per-file scores followed by one "(all)" score per method.
 /// `on_file(index, count)` is called after each file (progress).
-std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files,
-                                          const QueryScoringRequest& request,
+std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files, const QueryScoringRequest& request,
                                           const std::function<void(std::size_t, std::size_t)>& on_file = {});
 
 /// The methods of a sweep: each narrow-phase variant of `methods` at a range of each of its accuracy parameters in
@@ -146,8 +145,7 @@ std::vector<std::string> sweep_methods(const std::vector<std::string>& methods);
 
 /// Writes DIR/README.md (the table, with `command` written above it so the numbers can be reproduced) and
 /// DIR/scores.json (the same rows), atomically.
-void write_query_report(const std::filesystem::path& directory, const std::vector<QueryScore>& scores,
-                        const std::string& command);
+void write_query_report(const std::filesystem::path& directory, const std::vector<QueryScore>& scores, const std::string& command);
 
 /// A fixed-width table of the scores.
 void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out);

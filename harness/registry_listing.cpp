@@ -2,8 +2,8 @@
 
 #include "harness/table.hpp"
 #include "strategies/narrowphase/registry.hpp"
-#include "strategies/registry.hpp"
 #include "strategies/plugin/library.hpp"
+#include "strategies/registry.hpp"
 
 #include <ostream>
 
@@ -111,8 +111,8 @@ int run_strategies(bool json_output, std::ostream& out, const std::vector<std::s
          "phase's keys go after the name, in any order). The resolved spec, every default filled in, names the strategy in results.\n\n";
   for (const json& s : listing["strategies"]) {
     out << s["name"].get<std::string>() << ": " << s["help"].get<std::string>() << "\n  backends " << joined(s["backends"])
-        << "; narrow phase: " << s["narrow_phase"].get<std::string>() << "; judged by " << s["judged_by"].get<std::string>()
-        << "; speed-up against " << s["baseline"].get<std::string>() << "\n";
+        << "; narrow phase: " << s["narrow_phase"].get<std::string>() << "; judged by " << s["judged_by"].get<std::string>() << "; speed-up against "
+        << s["baseline"].get<std::string>() << "\n";
     if (!s["available"].get<bool>()) out << "  not available in this build: " << s["unavailable"].get<std::string>() << "\n";
     print_keys(s["keys"], out);
     out << "\n";

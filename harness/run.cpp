@@ -31,7 +31,8 @@ struct SceneVariant {
 
 /// Every scene at every thickness, scene by scene.
 std::vector<SceneVariant> scene_variants(const RunOptions& options) {
-  const std::vector<std::optional<double>> thicknesses = options.thicknesses.empty() ? std::vector<std::optional<double>>{std::nullopt} : options.thicknesses;
+  const std::vector<std::optional<double>> thicknesses =
+      options.thicknesses.empty() ? std::vector<std::optional<double>>{std::nullopt} : options.thicknesses;
   std::vector<SceneVariant> variants;
   for (const SceneSource& source : options.scenes) {
     for (const std::optional<double>& thickness : thicknesses) variants.push_back({&source, thickness});
@@ -87,9 +88,7 @@ struct PlannedItem {
   CellKey key;
 };
 
-std::string on_rank(int rank) {
-  return rank_info().size > 1 ? " (rank " + std::to_string(rank) + ")" : std::string();
-}
+std::string on_rank(int rank) { return rank_info().size > 1 ? " (rank " + std::to_string(rank) + ")" : std::string(); }
 
 }  // namespace
 
@@ -127,8 +126,8 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     const double fraction = (pass + static_cast<double>(step + 1) / static_cast<double>(steps)) / passes;
     const std::string label = data ? data->label : "";
     progress->update(static_cast<double>(cells_finished) + fraction, cell_total,
-                     label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + ", step " +
-                         std::to_string(step + 1) + "/" + std::to_string(steps));
+                     label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + ", step " + std::to_string(step + 1) +
+                         "/" + std::to_string(steps));
     if (!progress->terminal() && step + 1 == steps) {
       say("run: " + label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + " of " +
           std::to_string(options.repeats) + " done");
@@ -208,8 +207,8 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
           continue;
         }
       }
-      CellKey key{source.label, content, steps, scene.thickness(), data.thickness_from, strategy->name(), options.verify,
-                  options.toi, options.repeats, worker_threads(), executable_digest()};
+      CellKey key{source.label,   content,     steps,           scene.thickness(), data.thickness_from, strategy->name(),
+                  options.verify, options.toi, options.repeats, worker_threads(),  executable_digest()};
       const auto file = options.out / "cells" / cell_file_name(key);
       std::optional<json> kept;
       if (!options.fresh) {
@@ -221,8 +220,10 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
       }
       if (kept) {
         (*kept)["summary"]["resumed"] = true;
-        say("run: " + source.label + " / " + key.strategy + ": kept from an earlier run with the same inputs, strategy, steps, δ, "
-            "repeats, threads and executable (--fresh reruns it)" + (options.misses ? "; its misses are not written to --misses again" : ""));
+        say("run: " + source.label + " / " + key.strategy +
+            ": kept from an earlier run with the same inputs, strategy, steps, δ, "
+            "repeats, threads and executable (--fresh reruns it)" +
+            (options.misses ? "; its misses are not written to --misses again" : ""));
         ++cells_finished;
         cells.push_back(std::move(*kept));
         cell_specs.push_back(spec);
@@ -245,8 +246,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     }
     for (Pending& cell : pending) {
       const std::string file = cell.file.filename().string();
-      items.push_back({json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"file", file}, {"threads", worker_threads()}}.dump(),
-                       truth_items});
+      items.push_back({json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"file", file}, {"threads", worker_threads()}}.dump(), truth_items});
       planned.push_back({source.label, 0, steps, true, cell.slot, std::move(cell.file), std::move(cell.key)});
     }
   };
@@ -273,8 +273,8 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     ++cells_finished;
     progress->update(static_cast<double>(cells_finished), cell_total, item.label + " / " + strategies::short_label(item.key.strategy) + " done");
     if (rank_info().size > 1) {
-      say("run: " + item.label + " / " + item.key.strategy + ": cell " + std::to_string(cells_done) + " of " + std::to_string(cell_count) +
-          " done" + on_rank(rank));
+      say("run: " + item.label + " / " + item.key.strategy + ": cell " + std::to_string(cells_done) + " of " + std::to_string(cell_count) + " done" +
+          on_rank(rank));
     }
     cells[item.slot] = std::move(result);
   };
@@ -289,9 +289,10 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   } else {
     for (std::size_t s = 0; s < variants.size(); ++s) plan_scene(s);
     cell_count = static_cast<std::size_t>(std::count_if(planned.begin(), planned.end(), [](const PlannedItem& p) { return p.cell; }));
-    say_on_termination("run: stopped before every cell finished (a rank died, or the run was interrupted): finished "
-                       "cells are kept in " + (options.out / "cells").string() +
-                       "; the same command again, with any number of ranks, runs only the rest\n");
+    say_on_termination(
+        "run: stopped before every cell finished (a rank died, or the run was interrupted): finished "
+        "cells are kept in " +
+        (options.out / "cells").string() + "; the same command again, with any number of ranks, runs only the rest\n");
     distribute(items, work, done);
     say_on_termination({});
   }
@@ -323,8 +324,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     write_report(*options.report, table, summaries, finished, options.command_line);
     out << "report: " << (*options.report / "README.md").string() << "\n";
   }
-  out << "results: " << (options.out / "results.jsonl").string() << " (every finished cell of every run into "
-      << options.out.string() << ")\n";
+  out << "results: " << (options.out / "results.jsonl").string() << " (every finished cell of every run into " << options.out.string() << ")\n";
   return summaries;
 }
 

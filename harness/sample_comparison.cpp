@@ -53,8 +53,7 @@ SampleComparison compare_with_sample(const datasets::SampleStep& step, const Col
     if (truth.contains(pair)) {
       ++comparison.vertex_face_found;
     } else if (comparison.missing.size() < 20) {
-      comparison.missing.push_back("VF query " + std::to_string(i) + ": vertex " + std::to_string(pair.v) + ", face " +
-                                   std::to_string(pair.f));
+      comparison.missing.push_back("VF query " + std::to_string(i) + ": vertex " + std::to_string(pair.v) + ", face " + std::to_string(pair.f));
     }
   }
   const VertexByCoordinates vertices(step);

@@ -33,9 +33,8 @@ std::vector<StressRow> run_stress(const std::vector<datasets::ExtremeQuery>& sui
       const double thickness = std::string(pass) == "zero" ? 0.0 : query.positive_thickness;
       const bool truth = reference::decide(reference_kind(query.kind), query.rows, thickness).collides;
       for (const auto& variant : variants) {
-        const narrowphase::NarrowPhaseResult answer = query.kind == datasets::QueryKind::vertex_face
-                                                          ? variant->vertex_face(query.rows, thickness)
-                                                          : variant->edge_edge(query.rows, thickness);
+        const narrowphase::NarrowPhaseResult answer =
+            query.kind == datasets::QueryKind::vertex_face ? variant->vertex_face(query.rows, thickness) : variant->edge_edge(query.rows, thickness);
         for (StressRow* row : {&by_family[{query.family, variant->name()}], &totals[variant->name()]}) {
           row->family = row == &totals[variant->name()] ? "(all)" : query.family;
           row->method = variant->name();
@@ -65,8 +64,8 @@ void print_stress(const std::vector<StressRow>& rows, std::ostream& out) {
   using Align = Table::Align;
   Table table({{"family"}, {"method"}, {"δ"}, {"queries", Align::right}, {"positive", Align::right}, {"FN", Align::right}, {"FP", Align::right}});
   for (const StressRow& row : rows) {
-    table.add_row({row.family, row.method, row.thickness == "zero" ? "0" : "positive", std::to_string(row.queries),
-                   std::to_string(row.positives), std::to_string(row.false_negatives), std::to_string(row.false_positives)});
+    table.add_row({row.family, row.method, row.thickness == "zero" ? "0" : "positive", std::to_string(row.queries), std::to_string(row.positives),
+                   std::to_string(row.false_negatives), std::to_string(row.false_positives)});
   }
   table.print(out);
 }

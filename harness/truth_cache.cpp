@@ -54,9 +54,9 @@ void check_vertex_face(const std::filesystem::path& path, const Scene& scene, st
   const MeshTopology& topology = scene.topology();
   const std::string where = pair_where("vertex-face", index);
   if (pair.v >= topology.num_vertices() || pair.f >= topology.num_faces()) {
-    throw InputError(path, where, "vertex " + std::to_string(pair.v) + " or face " + std::to_string(pair.f) +
-                                      " out of range (" + std::to_string(topology.num_vertices()) + " vertices, " +
-                                      std::to_string(topology.num_faces()) + " faces)");
+    throw InputError(path, where,
+                     "vertex " + std::to_string(pair.v) + " or face " + std::to_string(pair.f) + " out of range (" +
+                         std::to_string(topology.num_vertices()) + " vertices, " + std::to_string(topology.num_faces()) + " faces)");
   }
   const Face& face = topology.face(pair.f);
   if (!topology.is_used(pair.v) || pair.v == face[0] || pair.v == face[1] || pair.v == face[2] ||
@@ -83,17 +83,15 @@ void check_edge_edge(const std::filesystem::path& path, const Scene& scene, std:
 
 void check_face_shape(const std::filesystem::path& path, const Scene& scene, std::uint64_t index, const FaceShapePair& pair) {
   const std::string where = pair_where("face-shape", index);
-  if (pair.f >= scene.topology().num_faces() || pair.shape >= scene.objects().size() ||
-      scene.object(pair.shape).kind != ObjectKind::shape || !scene.may_collide(scene.object_of_face(pair.f), pair.shape)) {
+  if (pair.f >= scene.topology().num_faces() || pair.shape >= scene.objects().size() || scene.object(pair.shape).kind != ObjectKind::shape ||
+      !scene.may_collide(scene.object_of_face(pair.f), pair.shape)) {
     throw InputError(path, where, "not a face-shape pair this scene can have");
   }
 }
 
 }  // namespace
 
-std::string reference_version() {
-  return std::string("reference sources ") + CCDBENCH_REFERENCE_SOURCE_DIGEST + ", CGAL " + CGAL_VERSION_STR;
-}
+std::string reference_version() { return std::string("reference sources ") + CCDBENCH_REFERENCE_SOURCE_DIGEST + ", CGAL " + CGAL_VERSION_STR; }
 
 void hash_scene_structure(datasets::ContentHash& hash, const Scene& scene) {
   const MeshTopology& topology = scene.topology();
@@ -181,15 +179,14 @@ CachedTruth read_truth_file(const std::filesystem::path& path, const Scene& scen
     if (fs == 0) throw InputError(path, "header", "the face-shape flag is set with no face-shape pairs");
   }
   const std::size_t time_bytes = with_toi ? kToiBytes : 0;
-  const std::size_t vf_bytes = kVertexFaceBytes + time_bytes, ee_bytes = kEdgeEdgeBytes + time_bytes,
-                    fs_bytes = kFaceShapeBytes + time_bytes;
+  const std::size_t vf_bytes = kVertexFaceBytes + time_bytes, ee_bytes = kEdgeEdgeBytes + time_bytes, fs_bytes = kFaceShapeBytes + time_bytes;
   // Counts first against the bytes that back them, so that no corrupt count is ever allocated.
   const std::uintmax_t body = size - kHeaderBytes - count_bytes - kChecksumBytes;
-  if (vf > body / vf_bytes || ee > (body - vf * vf_bytes) / ee_bytes ||
-      fs > (body - vf * vf_bytes - ee * ee_bytes) / fs_bytes || vf * vf_bytes + ee * ee_bytes + fs * fs_bytes != body) {
-    throw InputError(path, "header", std::to_string(vf) + " vertex-face, " + std::to_string(ee) + " edge-edge and " +
-                                         std::to_string(fs) + " face-shape pairs do not match the file's " +
-                                         std::to_string(size) + " bytes");
+  if (vf > body / vf_bytes || ee > (body - vf * vf_bytes) / ee_bytes || fs > (body - vf * vf_bytes - ee * ee_bytes) / fs_bytes ||
+      vf * vf_bytes + ee * ee_bytes + fs * fs_bytes != body) {
+    throw InputError(path, "header",
+                     std::to_string(vf) + " vertex-face, " + std::to_string(ee) + " edge-edge and " + std::to_string(fs) +
+                         " face-shape pairs do not match the file's " + std::to_string(size) + " bytes");
   }
   std::vector<unsigned char> bytes(header, header + kHeaderBytes);
   if (count_bytes) put_u64(bytes, fs);
@@ -224,13 +221,24 @@ CachedTruth read_truth_file(const std::filesystem::path& path, const Scene& scen
       previous = pair;
     }
   };
-  read_pairs(vf, kVertexFaceBytes, "vertex-face", [](const unsigned char* q) { return VertexFacePair{get_u32(q), get_u32(q + 4)}; },
-             check_vertex_face);
-  read_pairs(ee, kEdgeEdgeBytes, "edge-edge", [](const unsigned char* q) {
-    return EdgeEdgePair{{get_u32(q), get_u32(q + 4)}, {get_u32(q + 8), get_u32(q + 12)}};
-  }, check_edge_edge);
-  read_pairs(fs, kFaceShapeBytes, "face-shape", [](const unsigned char* q) { return FaceShapePair{get_u32(q), get_u32(q + 4)}; },
-             check_face_shape);
+  read_pairs(
+      vf, kVertexFaceBytes, "vertex-face",
+      [](const unsigned char* q) {
+        return VertexFacePair{get_u32(q), get_u32(q + 4)};
+      },
+      check_vertex_face);
+  read_pairs(
+      ee, kEdgeEdgeBytes, "edge-edge",
+      [](const unsigned char* q) {
+        return EdgeEdgePair{{get_u32(q), get_u32(q + 4)}, {get_u32(q + 8), get_u32(q + 12)}};
+      },
+      check_edge_edge);
+  read_pairs(
+      fs, kFaceShapeBytes, "face-shape",
+      [](const unsigned char* q) {
+        return FaceShapePair{get_u32(q), get_u32(q + 4)};
+      },
+      check_face_shape);
   cached.collisions.normalize();
   return cached;
 }
@@ -239,8 +247,7 @@ std::filesystem::path TruthCache::file_for(const Scene& scene, std::span<const V
   return directory_ / (truth_key(scene, x0, x1) + ".truth");
 }
 
-CollisionSet TruthCache::truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed,
-                               bool with_toi) const {
+CollisionSet TruthCache::truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed, bool with_toi) const {
   const std::filesystem::path file = file_for(scene, x0, x1);
   if (std::filesystem::exists(file)) {
     try {
@@ -250,8 +257,7 @@ CollisionSet TruthCache::truth(const Scene& scene, std::span<const Vec3> x0, std
         return std::move(cached.collisions);
       }
     } catch (const InputError& error) {
-      (warnings_ ? *warnings_ : std::cerr) << "ccdbench: warning: " << error.what()
-                                           << "; the cached truth is not used, it is computed again\n";
+      (warnings_ ? *warnings_ : std::cerr) << "ccdbench: warning: " << error.what() << "; the cached truth is not used, it is computed again\n";
     }
   }
   reference::TruthRequest request;

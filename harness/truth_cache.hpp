@@ -50,13 +50,11 @@ CachedTruth read_truth_file(const std::filesystem::path& path, const Scene& scen
 class TruthCache {
  public:
   /// `warnings` receives one line per cached file that was bad and recomputed (nullptr: std::cerr).
-  explicit TruthCache(std::filesystem::path directory, std::ostream* warnings = nullptr)
-      : directory_(std::move(directory)), warnings_(warnings) {}
+  explicit TruthCache(std::filesystem::path directory, std::ostream* warnings = nullptr) : directory_(std::move(directory)), warnings_(warnings) {}
 
   /// The truth of the step, from the cache or computed by the reference (and then stored). `computed` tells which.
   /// With `with_toi`, every contact carries its exact TOI's floor (a cached file without TOIs is computed again).
-  CollisionSet truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed,
-                     bool with_toi = false) const;
+  CollisionSet truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, bool& computed, bool with_toi = false) const;
 
   /// Where the truth of this step is (or would be) kept.
   std::filesystem::path file_for(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1) const;

@@ -21,8 +21,8 @@
 
 #include <tbb/task_arena.h>
 
-#include <csignal>
 #include <unistd.h>
+#include <csignal>
 
 #if CCDBENCH_WITH_MPI
 #include <mpi.h>
@@ -334,8 +334,7 @@ volatile std::sig_atomic_t g_termination_length = 0;
 extern "C" void on_terminate_signal(int signal) {
   // Only async-signal-safe calls here: write and _exit.
   if (g_termination_length > 0) {
-    [[maybe_unused]] const auto written =
-        ::write(STDERR_FILENO, g_termination_message, static_cast<std::size_t>(g_termination_length));
+    [[maybe_unused]] const auto written = ::write(STDERR_FILENO, g_termination_message, static_cast<std::size_t>(g_termination_length));
   }
   ::_exit(128 + signal);
 }
@@ -358,8 +357,8 @@ void distribute(const std::vector<WorkItem>& items, const WorkFunction& work, co
   if (g_ranks.size > 1) {
     // OpenMPI binds each rank to one core unless told otherwise, and TBB then runs one thread in it.
     if (tbb::this_task_arena::max_concurrency() == 1 && ::sysconf(_SC_NPROCESSORS_ONLN) > 1) {
-      std::cerr << "ccdbench: warning: rank " << g_ranks.rank << " may use one core of "
-                << ::sysconf(_SC_NPROCESSORS_ONLN) << " (mpirun binds ranks to cores by default): launch with "
+      std::cerr << "ccdbench: warning: rank " << g_ranks.rank << " may use one core of " << ::sysconf(_SC_NPROCESSORS_ONLN)
+                << " (mpirun binds ranks to cores by default): launch with "
                 << "--bind-to none to give each rank its --threads\n";
     }
     if (g_ranks.rank == 0) {

@@ -10,9 +10,7 @@
 #include <cmath>
 
 namespace ccd::reference {
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 // Rounding down twice (to 53 bits, then to a double, which may be subnormal) stays <= q, and likewise upwards.
 Interval enclosing_interval(const mpq_class& q) {
@@ -63,13 +61,10 @@ SignCondition<Interval> condition_over(PairKind kind, int index, const Positions
 /// |d| and δ are enclosed by outward-rounded intervals, so the comparison is certified.
 class SeparationCheck {
  public:
-  SeparationCheck(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness)
-      : kind_(kind), rows_(rows), thickness_(thickness) {}
+  SeparationCheck(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness) : kind_(kind), rows_(rows), thickness_(thickness) {}
 
   /// True when the pair is farther apart than δ on every piece of [0, 1] after at most `depth` halvings.
-  bool apart(int depth) const {
-    return apart(0.0, positions_over(rows_, Interval(0.0)), 1.0, positions_over(rows_, Interval(1.0)), depth);
-  }
+  bool apart(int depth) const { return apart(0.0, positions_over(rows_, Interval(0.0)), 1.0, positions_over(rows_, Interval(1.0)), depth); }
 
  private:
   using Direction = Vector3<double>;
@@ -135,8 +130,7 @@ class SeparationCheck {
     for (int k = 0; k < 4; ++k) {
       const IntervalPoint& a = rows_[k];
       const IntervalPoint& b = rows_[k + 4];
-      x[k] = {middle_of(a.x) + t * (middle_of(b.x) - middle_of(a.x)),
-              middle_of(a.y) + t * (middle_of(b.y) - middle_of(a.y)),
+      x[k] = {middle_of(a.x) + t * (middle_of(b.x) - middle_of(a.x)), middle_of(a.y) + t * (middle_of(b.y) - middle_of(a.y)),
               middle_of(a.z) + t * (middle_of(b.z) - middle_of(a.z))};
     }
     Directions out;
@@ -194,8 +188,7 @@ Region classify(const SignCondition<Interval>& c) {
 
 class ConditionExplorer {
  public:
-  ConditionExplorer(PairKind kind, int index, const std::array<IntervalPoint, 8>& rows, Interval delta_squared,
-                    int max_depth)
+  ConditionExplorer(PairKind kind, int index, const std::array<IntervalPoint, 8>& rows, Interval delta_squared, int max_depth)
       : kind_(kind), index_(index), rows_(rows), delta_squared_(delta_squared), max_depth_(max_depth) {}
 
   Region explore(double t0, double t1, int depth) const {
@@ -218,9 +211,7 @@ class ConditionExplorer {
   }
 
  private:
-  SignCondition<Interval> at(const Interval& time) const {
-    return condition_over(kind_, index_, positions_over(rows_, time), delta_squared_);
-  }
+  SignCondition<Interval> at(const Interval& time) const { return condition_over(kind_, index_, positions_over(rows_, time), delta_squared_); }
 
   PairKind kind_;
   int index_;
@@ -236,8 +227,7 @@ bool certainly_apart(PairKind kind, const std::array<IntervalPoint, 8>& rows, In
   return SeparationCheck(kind, rows, thickness).apart(depth);
 }
 
-FilterVerdict filter_decide(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness,
-                            const FilterSettings& settings) {
+FilterVerdict filter_decide(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness, const FilterSettings& settings) {
   if (settings.separation_depth >= 0 && certainly_apart(kind, rows, thickness, settings.separation_depth)) {
     return FilterVerdict::certainly_no;
   }

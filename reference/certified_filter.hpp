@@ -38,8 +38,7 @@ struct FilterSettings {
 /// an enclosure proves one of its requirements false everywhere on T; it certainly holds when enclosures prove
 /// all requirements at a point, or when the guard and the inside requirements hold on all of T and the signed
 /// distance s changes sign between T's ends (then s = 0 somewhere in T, where distance = -δ²·guard <= 0).
-FilterVerdict filter_decide(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness,
-                            const FilterSettings& settings = {});
+FilterVerdict filter_decide(PairKind kind, const std::array<IntervalPoint, 8>& rows, Interval thickness, const FilterSettings& settings = {});
 
 /// The filter's first stage on its own: true when the pair is certainly farther apart than δ over the whole step,
 /// proved along a fixed direction on each of at most 2^depth time pieces (see SeparationCheck in the source for

@@ -25,8 +25,8 @@ namespace {
 
 /// The filter first when asked, then the exact path; `exact_inputs()` builds the rationals only when needed.
 template <class ExactInputs>
-Decision filter_then_exact(PairKind kind, const std::array<IntervalPoint, 8>& intervals, Interval thickness,
-                           const DecisionRequest& request, ExactInputs exact_inputs) {
+Decision filter_then_exact(PairKind kind, const std::array<IntervalPoint, 8>& intervals, Interval thickness, const DecisionRequest& request,
+                           ExactInputs exact_inputs) {
   if (request.use_filter) {
     const FilterVerdict verdict = filter_decide(kind, intervals, thickness);
     if (verdict == FilterVerdict::certainly_no) return {false, DecidedBy::filter, std::nullopt, std::nullopt};
@@ -46,9 +46,8 @@ Decision decide(const ExactPair& pair, const mpq_class& thickness, const Decisio
 
 Decision decide(PairKind kind, const std::array<Vec3, 8>& rows, double thickness, const DecisionRequest& request) {
   if (!std::isfinite(thickness) || thickness < 0) throw std::invalid_argument("reference: δ must be finite and >= 0");
-  return filter_then_exact(kind, interval_rows(rows), Interval(thickness), request, [&] {
-    return std::pair<ExactPair, mpq_class>(exact_pair_from_doubles(kind, rows), mpq_class(thickness));
-  });
+  return filter_then_exact(kind, interval_rows(rows), Interval(thickness), request,
+                           [&] { return std::pair<ExactPair, mpq_class>(exact_pair_from_doubles(kind, rows), mpq_class(thickness)); });
 }
 
 }  // namespace ccd::reference

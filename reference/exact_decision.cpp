@@ -88,11 +88,8 @@ std::optional<AlgebraicReal> earliest_time(const ExactCondition& condition) {
     }
     for (auto& root : found) roots.push_back(root.first);
   }
-  std::sort(roots.begin(), roots.end(), [&](const AlgebraicReal& a, const AlgebraicReal& b) {
-    return compare(a, b) == CGAL::SMALLER;
-  });
-  roots.erase(std::unique(roots.begin(), roots.end(),
-                          [&](const AlgebraicReal& a, const AlgebraicReal& b) { return compare(a, b) == CGAL::EQUAL; }),
+  std::sort(roots.begin(), roots.end(), [&](const AlgebraicReal& a, const AlgebraicReal& b) { return compare(a, b) == CGAL::SMALLER; });
+  roots.erase(std::unique(roots.begin(), roots.end(), [&](const AlgebraicReal& a, const AlgebraicReal& b) { return compare(a, b) == CGAL::EQUAL; }),
               roots.end());
 
   // Test points in increasing order: 0, then alternately an open stretch and a root, and finally 1.
@@ -104,9 +101,8 @@ std::optional<AlgebraicReal> earliest_time(const ExactCondition& condition) {
   if (compare(construct(1), breakpoints.back()) == CGAL::LARGER) breakpoints.push_back(construct(1));
 
   auto holds_at = [&](const AlgebraicReal& t) {
-    return std::all_of(condition.polynomials.begin(), condition.polynomials.end(), [&](const auto& entry) {
-      return satisfied(sign_at(entry.first, t), entry.second);
-    });
+    return std::all_of(condition.polynomials.begin(), condition.polynomials.end(),
+                       [&](const auto& entry) { return satisfied(sign_at(entry.first, t), entry.second); });
   };
   for (std::size_t i = 0; i < breakpoints.size(); ++i) {
     if (holds_at(breakpoints[i])) return breakpoints[i];
@@ -127,8 +123,7 @@ double floor_to_double(const AlgebraicReal& t) {
   const auto bounds = kernel.approximate_relative_1_object()(t, 64);
   double floor = std::clamp(to_mpq(bounds.first).get_d(), 0.0, 1.0);  // get_d truncates towards zero
   while (floor > 0 && compare(t, as_bound(floor)) == CGAL::SMALLER) floor = std::nextafter(floor, 0.0);
-  for (double next = std::nextafter(floor, 2.0); next <= 1 && compare(t, as_bound(next)) != CGAL::SMALLER;
-       next = std::nextafter(floor, 2.0)) {
+  for (double next = std::nextafter(floor, 2.0); next <= 1 && compare(t, as_bound(next)) != CGAL::SMALLER; next = std::nextafter(floor, 2.0)) {
     floor = next;
   }
   return floor;
@@ -159,9 +154,9 @@ ExactResult decide_exactly(const ExactPair& pair, const mpq_class& thickness, un
   std::optional<AlgebraicReal> earliest;
   const int count = pair.kind == PairKind::vertex_face ? kVertexFaceConditionCount : kEdgeEdgeConditionCount;
   for (int index = 0; index < count; ++index) {
-    const SignCondition<RationalPolynomial> condition =
-        pair.kind == PairKind::vertex_face ? vertex_face_condition(index, x[0], x[1], x[2], x[3], delta_squared)
-                                           : edge_edge_condition(index, x[0], x[1], x[2], x[3], delta_squared);
+    const SignCondition<RationalPolynomial> condition = pair.kind == PairKind::vertex_face
+                                                            ? vertex_face_condition(index, x[0], x[1], x[2], x[3], delta_squared)
+                                                            : edge_edge_condition(index, x[0], x[1], x[2], x[3], delta_squared);
     const auto t = earliest_time(expand(condition));
     if (t && (!earliest || compare(*t, *earliest) == CGAL::SMALLER)) earliest = t;
     if (earliest && toi_bits == 0) break;  // the answer is known; no TOI wanted

@@ -43,8 +43,7 @@ void merge(Decision& into, const Decision& part) {
 
 }  // namespace
 
-bool triangle_meets_box(const std::array<RationalPoint, 3>& triangle, const RationalPoint& centre,
-                        const RationalPoint& half_extents) {
+bool triangle_meets_box(const std::array<RationalPoint, 3>& triangle, const RationalPoint& centre, const RationalPoint& half_extents) {
   const std::array<RationalPoint, 3> v{minus(triangle[0], centre), minus(triangle[1], centre), minus(triangle[2], centre)};
   // Along `axis` the triangle projects onto [min, max] and the box onto [-r, r], r = Σ h_k |axis_k|. A zero axis
   // projects everything onto 0 and separates nothing.

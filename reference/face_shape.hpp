@@ -17,12 +17,10 @@ namespace ccd::reference {
 /// Decides whether the face and the shape come within δ at some t in [0, 1]. The TOI, with request.want_toi, is
 /// the earliest over the elementary decisions (0 when the face meets the solid box at t = 0).
 /// @throws std::invalid_argument for a non-finite coordinate, radius or half extent, or a negative δ.
-Decision decide_face_shape(const Shape& shape, const FaceShapeRows& rows, double thickness,
-                           const DecisionRequest& request = {});
+Decision decide_face_shape(const Shape& shape, const FaceShapeRows& rows, double thickness, const DecisionRequest& request = {});
 
 /// Whether the triangle (exact rational corners) meets the closed axis-aligned box of that centre and those half
 /// extents: no one of the 13 axes of the separating-axis test separates them (strict inequalities).
-bool triangle_meets_box(const std::array<RationalPoint, 3>& triangle, const RationalPoint& centre,
-                        const RationalPoint& half_extents);
+bool triangle_meets_box(const std::array<RationalPoint, 3>& triangle, const RationalPoint& centre, const RationalPoint& half_extents);
 
 }  // namespace ccd::reference

@@ -67,8 +67,7 @@ inline constexpr int kEdgeEdgeConditionCount = 9;
 
 /// Point p against the closed segment [u, v].
 template <class S>
-SignCondition<S> point_segment_condition(const Vector3<S>& p, const Vector3<S>& u, const Vector3<S>& v,
-                                         const S& delta_squared) {
+SignCondition<S> point_segment_condition(const Vector3<S>& p, const Vector3<S>& u, const Vector3<S>& v, const S& delta_squared) {
   SignCondition<S> c;
   const Vector3<S> e = v - u;
   c.has_guard = true;
@@ -89,8 +88,8 @@ SignCondition<S> point_point_condition(const Vector3<S>& p, const Vector3<S>& q,
 
 /// Condition `index` (0..6, see the file comment) of point p against triangle (a, b, c).
 template <class S>
-SignCondition<S> vertex_face_condition(int index, const Vector3<S>& p, const Vector3<S>& a, const Vector3<S>& b,
-                                       const Vector3<S>& c, const S& delta_squared) {
+SignCondition<S> vertex_face_condition(int index, const Vector3<S>& p, const Vector3<S>& a, const Vector3<S>& b, const Vector3<S>& c,
+                                       const S& delta_squared) {
   if (index == 0) {
     SignCondition<S> f;
     const Vector3<S> n = cross(b - a, c - a);
@@ -113,8 +112,8 @@ SignCondition<S> vertex_face_condition(int index, const Vector3<S>& p, const Vec
 
 /// Condition `index` (0..8, see the file comment) of segment [a0, a1] against segment [b0, b1].
 template <class S>
-SignCondition<S> edge_edge_condition(int index, const Vector3<S>& a0, const Vector3<S>& a1, const Vector3<S>& b0,
-                                     const Vector3<S>& b1, const S& delta_squared) {
+SignCondition<S> edge_edge_condition(int index, const Vector3<S>& a0, const Vector3<S>& a1, const Vector3<S>& b0, const Vector3<S>& b1,
+                                     const S& delta_squared) {
   switch (index) {
     case 0: {
       SignCondition<S> c;

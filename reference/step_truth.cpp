@@ -47,8 +47,7 @@ constexpr double kSliceRounding = 0x1p-49;
 /// (>= δ/2) on every side: positions move linearly, so the box of the slice's two end positions holds the whole
 /// slice. min/max are exact; the slice's end positions are widened by their rounding bound (none at t = 0 and 1),
 /// and every rounded subtraction or addition is moved one more ulp outward, which covers its own rounding.
-std::vector<CertifiedBox> vertex_boxes(std::span<const Vec3> x0, std::span<const Vec3> x1, double half,
-                                       std::size_t slice, std::size_t slices) {
+std::vector<CertifiedBox> vertex_boxes(std::span<const Vec3> x0, std::span<const Vec3> x1, double half, std::size_t slice, std::size_t slices) {
   std::vector<CertifiedBox> boxes(x0.size());
   const bool whole_step = slices == 1;
   tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
@@ -86,9 +85,7 @@ std::size_t slice_count(const MeshTopology& topology, std::span<const Vec3> x0, 
   return slices;
 }
 
-bool overlap_on(const CertifiedBox& a, const CertifiedBox& b, int axis) {
-  return a.lower[axis] <= b.upper[axis] && b.lower[axis] <= a.upper[axis];
-}
+bool overlap_on(const CertifiedBox& a, const CertifiedBox& b, int axis) { return a.lower[axis] <= b.upper[axis] && b.lower[axis] <= a.upper[axis]; }
 
 /// A box in the sweep: `kind` 0 or 1 tells the two families apart (vertex/face, or edge/edge where both are 0).
 struct SweepEntry {
@@ -164,8 +161,8 @@ SlicePairs slice_pairs(const Scene& scene, const std::vector<CertifiedBox>& boxe
   }
 
   SlicePairs found;
-  found.vertex_face = sweep<VertexFacePair>(
-      std::move(vf_entries), axis, [&](const SweepEntry& a, const SweepEntry& b, std::vector<VertexFacePair>& sink) {
+  found.vertex_face =
+      sweep<VertexFacePair>(std::move(vf_entries), axis, [&](const SweepEntry& a, const SweepEntry& b, std::vector<VertexFacePair>& sink) {
         if (a.kind == b.kind) return;
         const VertexId v = a.kind == 0 ? a.id : b.id;
         const FaceId f = a.kind == 0 ? b.id : a.id;
@@ -174,14 +171,13 @@ SlicePairs slice_pairs(const Scene& scene, const std::vector<CertifiedBox>& boxe
         if (!scene.may_collide(scene.object_of_vertex(v), scene.object_of_face(f))) return;
         sink.push_back({v, f});
       });
-  found.edge_edge = sweep<EdgeEdgePair>(
-      std::move(ee_entries), axis, [&](const SweepEntry& a, const SweepEntry& b, std::vector<EdgeEdgePair>& sink) {
-        const Edge& ea = topology.edge(a.id);
-        const Edge& eb = topology.edge(b.id);
-        if (shares_vertex(ea, eb)) return;
-        if (!scene.may_collide(scene.object_of_vertex(ea.v0), scene.object_of_vertex(eb.v0))) return;
-        sink.push_back(make_edge_edge_pair(ea, eb));
-      });
+  found.edge_edge = sweep<EdgeEdgePair>(std::move(ee_entries), axis, [&](const SweepEntry& a, const SweepEntry& b, std::vector<EdgeEdgePair>& sink) {
+    const Edge& ea = topology.edge(a.id);
+    const Edge& eb = topology.edge(b.id);
+    if (shares_vertex(ea, eb)) return;
+    if (!scene.may_collide(scene.object_of_vertex(ea.v0), scene.object_of_vertex(eb.v0))) return;
+    sink.push_back(make_edge_edge_pair(ea, eb));
+  });
   return found;
 }
 
@@ -217,8 +213,7 @@ std::vector<FaceShapePair> slice_face_shape_pairs(const Scene& scene, const std:
 
 }  // namespace
 
-StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                             const TruthRequest& request) {
+StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, const TruthRequest& request) {
   const MeshTopology& topology = scene.topology();
   StepTruth truth;
   const auto enumeration_start = std::chrono::steady_clock::now();
@@ -280,18 +275,13 @@ StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
         if (i < vf_pairs.size()) {
           const VertexFacePair& pair = vf_pairs[i];
-          record(local,
-                 decide(PairKind::vertex_face, pair_rows(scene.topology(), x0, x1, pair), request.thickness, decision_request),
-                 pair);
+          record(local, decide(PairKind::vertex_face, pair_rows(scene.topology(), x0, x1, pair), request.thickness, decision_request), pair);
         } else if (i < vf_pairs.size() + ee_pairs.size()) {
           const EdgeEdgePair& pair = ee_pairs[i - vf_pairs.size()];
-          record(local, decide(PairKind::edge_edge, pair_rows(scene.topology(), x0, x1, pair), request.thickness, decision_request),
-                 pair);
+          record(local, decide(PairKind::edge_edge, pair_rows(scene.topology(), x0, x1, pair), request.thickness, decision_request), pair);
         } else {
           const FaceShapePair& pair = fs_pairs[i - vf_pairs.size() - ee_pairs.size()];
-          record(local,
-                 decide_face_shape(*scene.object(pair.shape).shape, face_shape_rows(scene, x0, x1, pair), request.thickness,
-                                   decision_request),
+          record(local, decide_face_shape(*scene.object(pair.shape).shape, face_shape_rows(scene, x0, x1, pair), request.thickness, decision_request),
                  pair);
         }
       }

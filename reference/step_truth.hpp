@@ -56,7 +56,6 @@ struct StepTruth {
 /// objects only for collidable ones. Face-shape pairs: each shape's centre box grown by its size (outward), against
 /// the faces of every object the shape may collide with. Every candidate is decided by the certified
 /// filter and, where it is inconclusive, exactly. The result does not depend on the thread count.
-StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                             const TruthRequest& request);
+StepTruth compute_step_truth(const Scene& scene, std::span<const Vec3> x0, std::span<const Vec3> x1, const TruthRequest& request);
 
 }  // namespace ccd::reference

@@ -54,8 +54,8 @@ struct PrimitiveBoxes {
 /// pair (they are counted as culled). Every primitive's box lies in its face's box, so a candidate whose face boxes
 /// are apart has none.
 template <class VertexFace, class EdgeEdge>
-void for_each_elementary_pair(const MeshTopology& topology, std::span<const AssignmentMask> masks, const PrimitiveBoxes& boxes,
-                              FaceId a, FaceId b, VertexFace&& vertex_face, EdgeEdge&& edge_edge) {
+void for_each_elementary_pair(const MeshTopology& topology, std::span<const AssignmentMask> masks, const PrimitiveBoxes& boxes, FaceId a, FaceId b,
+                              VertexFace&& vertex_face, EdgeEdge&& edge_edge) {
   if (!boxes_overlap(boxes.face[a], boxes.face[b])) return;
   for (const auto& [owner, other] : {std::pair{a, b}, std::pair{b, a}}) {
     const Face& face = topology.face(other);
@@ -83,9 +83,8 @@ void for_each_elementary_pair(const MeshTopology& topology, std::span<const Assi
 
 }  // namespace
 
-ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks,
-                                  std::span<const bvh::TrianglePair> candidates, const StepView& step,
-                                  const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit,
+ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks, std::span<const bvh::TrianglePair> candidates,
+                                  const StepView& step, const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit,
                                   bool separation_filter, StageTimes& stages, std::string_view narrow_stage) {
   const auto& x0 = step.x0;
   const auto& x1 = step.x1;
@@ -218,8 +217,8 @@ CollisionSet normalize_in_parallel(std::vector<CollisionSet*> sets) {
 }
 
 void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::span<const AssignmentMask> masks,
-                      std::span<const bvh::TrianglePair> candidates, const StepView& step,
-                      const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit, bool separation_filter) {
+                      std::span<const bvh::TrianglePair> candidates, const StepView& step, const narrowphase::NarrowPhase& narrow_phase,
+                      double thickness, bool audit, bool separation_filter) {
   ElementaryOutcome outcome =
       test_candidates(topology, masks, candidates, step, narrow_phase, thickness, audit, separation_filter, result.stages, "narrow phase");
   if (separation_filter) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(outcome.filtered));

@@ -33,17 +33,16 @@ struct ElementaryOutcome {
 /// `narrow_stage`. Results are sorted and do not depend on the thread count. With `separation_filter`, pairs that
 /// provably_apart() rejects are culled before the narrow phase (counted in `filtered`, not tested), in a pass of
 /// their own timed as "distance heuristic".
-ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks,
-                                  std::span<const bvh::TrianglePair> candidates, const StepView& step,
-                                  const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit,
+ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks, std::span<const bvh::TrianglePair> candidates,
+                                  const StepView& step, const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit,
                                   bool separation_filter, StageTimes& stages, std::string_view narrow_stage);
 
 /// The last stage of a strategy that hands its candidate triangle pairs to a narrow phase: test_candidates, timed as
 /// "narrow phase" (and "distance heuristic"), with its collisions, tested pairs, candidate count and test count
 /// stored in `result`. With `separation_filter`, also the counter distance_filtered.
 void run_narrow_phase(StepResult& result, const MeshTopology& topology, std::span<const AssignmentMask> masks,
-                      std::span<const bvh::TrianglePair> candidates, const StepView& step,
-                      const narrowphase::NarrowPhase& narrow_phase, double thickness, bool audit, bool separation_filter = false);
+                      std::span<const bvh::TrianglePair> candidates, const StepView& step, const narrowphase::NarrowPhase& narrow_phase,
+                      double thickness, bool audit, bool separation_filter = false);
 
 /// One normalized set of several threads' sets (each left emptied): each put in order on its own, in parallel, then
 /// merged pairwise in rounds. The same set as appending them all and normalizing once, which takes one core.

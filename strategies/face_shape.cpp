@@ -260,12 +260,11 @@ FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, dou
   const std::optional<ScaledShapePair> pair = scale(shape, rows, thickness);
   if (!pair) return FaceShapeCull::uncertified;
   if (use_gjk && gjk_intersects(*pair)) return FaceShapeCull::gjk_overlap;
-  return certified_apart(pair->relative, pair->shape, pair->thickness) ? FaceShapeCull::certified_apart
-                                                                        : FaceShapeCull::uncertified;
+  return certified_apart(pair->relative, pair->shape, pair->thickness) ? FaceShapeCull::certified_apart : FaceShapeCull::uncertified;
 }
 
-narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::NarrowPhase& narrow, const Shape& shape,
-                                                       const FaceShapeRows& rows, double thickness, bool box_prefilter) {
+narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::NarrowPhase& narrow, const Shape& shape, const FaceShapeRows& rows,
+                                                       double thickness, bool box_prefilter) {
   const narrowphase::RoundToNearest nearest;
   const auto& f0 = rows.face_t0;
   const auto& f1 = rows.face_t1;
@@ -306,8 +305,7 @@ narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::Narrow
   return result;
 }
 
-void run_face_shape_stage(StepResult& result, const Scene& scene, const StepView& step, const narrowphase::NarrowPhase& narrow,
-                          bool audit) {
+void run_face_shape_stage(StepResult& result, const Scene& scene, const StepView& step, const narrowphase::NarrowPhase& narrow, bool audit) {
   if (scene.shape_objects().empty()) return;
   ScopedStageTimer timer(result.stages, "face-shape");
   struct Local {
@@ -327,22 +325,22 @@ void run_face_shape_stage(StepResult& result, const Scene& scene, const StepView
       if (o == s || object.num_faces == 0 || !scene.may_collide(o, s)) continue;
       tbb::parallel_for(tbb::blocked_range<FaceId>(object.first_face, static_cast<FaceId>(object.first_face + object.num_faces), 256),
                         [&](const auto& range) {
-        Local& local = locals.local();
-        for (FaceId f = range.begin(); f != range.end(); ++f) {
-          if (!bvh::swept_face_box(scene.topology().face(f), step.x0, step.x1, thickness / 2).intersects(shape_box)) continue;
-          ++local.boxes;
-          const FaceShapePair pair{f, s};
-          const FaceShapeRows rows = face_shape_rows(scene, step.x0, step.x1, pair);
-          if (cull_face_shape(shape, rows, thickness, shape.kind == ShapeKind::box) == FaceShapeCull::certified_apart) {
-            ++local.culled;
-            continue;
-          }
-          ++local.tests;
-          if (audit) local.tested.push_back(pair);
-          const narrowphase::NarrowPhaseResult answer = narrow_phase_face_shape(narrow, shape, rows, thickness);
-          if (answer.collides) local.collisions.add(pair, answer.toi);
-        }
-      });
+                          Local& local = locals.local();
+                          for (FaceId f = range.begin(); f != range.end(); ++f) {
+                            if (!bvh::swept_face_box(scene.topology().face(f), step.x0, step.x1, thickness / 2).intersects(shape_box)) continue;
+                            ++local.boxes;
+                            const FaceShapePair pair{f, s};
+                            const FaceShapeRows rows = face_shape_rows(scene, step.x0, step.x1, pair);
+                            if (cull_face_shape(shape, rows, thickness, shape.kind == ShapeKind::box) == FaceShapeCull::certified_apart) {
+                              ++local.culled;
+                              continue;
+                            }
+                            ++local.tests;
+                            if (audit) local.tested.push_back(pair);
+                            const narrowphase::NarrowPhaseResult answer = narrow_phase_face_shape(narrow, shape, rows, thickness);
+                            if (answer.collides) local.collisions.add(pair, answer.toi);
+                          }
+                        });
     }
   }
   std::size_t boxes = 0, culled = 0, tests = 0;

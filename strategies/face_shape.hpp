@@ -43,8 +43,8 @@ FaceShapeCull cull_face_shape(const Shape& shape, const FaceShapeRows& rows, dou
 /// may meet the solid box at t = 0). With `box_prefilter` (the default), a box's 80 elementary pairs are tested
 /// only where their sides' swept boxes, widened by half the grown δ, meet; false skips that, for
 /// benchmarks/face_shape_benchmark.cpp to attribute it.
-narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::NarrowPhase& narrow, const Shape& shape,
-                                                       const FaceShapeRows& rows, double thickness, bool box_prefilter = true);
+narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::NarrowPhase& narrow, const Shape& shape, const FaceShapeRows& rows,
+                                                       double thickness, bool box_prefilter = true);
 
 /// The face-shape stage of a step, shared by `full`, `apccd` and the OpenCL strategies (on the host): for each shape
 /// object and each face of an object that may collide with it, a box test (the face's swept box widened by δ/2
@@ -53,8 +53,7 @@ narrowphase::NarrowPhaseResult narrow_phase_face_shape(const narrowphase::Narrow
 /// (normalized again), its time to the stage "face-shape", and the counters face_shape_boxes (pairs past the box
 /// test), face_shape_culled (certified apart) and face_shape_tests (narrow-phase decisions). With `audit`, the
 /// pairs that reached the narrow phase go to result.tested. Does nothing in a scene without shapes.
-void run_face_shape_stage(StepResult& result, const Scene& scene, const StepView& step, const narrowphase::NarrowPhase& narrow,
-                          bool audit);
+void run_face_shape_stage(StepResult& result, const Scene& scene, const StepView& step, const narrowphase::NarrowPhase& narrow, bool audit);
 
 /// R + δ rounded up: the smallest double >= the exact sum (round-to-nearest sum, then one step up when the sum
 /// rounded down, found exactly by TwoSum).

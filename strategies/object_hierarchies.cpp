@@ -20,8 +20,7 @@ void ObjectHierarchies::refit(const StepView& step, double inflation) {
   }
 }
 
-void ObjectHierarchies::refit(ObjectId object, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                              std::span<const double> inflation) {
+void ObjectHierarchies::refit(ObjectId object, std::span<const Vec3> x0, std::span<const Vec3> x1, std::span<const double> inflation) {
   trees_[object].refit(scene_->topology(), x0, x1, inflation);
 }
 
@@ -50,8 +49,7 @@ std::vector<bvh::TrianglePair> ObjectHierarchies::self_candidates() const {
   return all;  // each object's pairs are sorted and object ranges ascend, so the whole is sorted
 }
 
-std::vector<bvh::TrianglePair> ObjectHierarchies::pair_candidates(
-    const std::function<Box3(ObjectId, ObjectId)>& offset) const {
+std::vector<bvh::TrianglePair> ObjectHierarchies::pair_candidates(const std::function<Box3(ObjectId, ObjectId)>& offset) const {
   std::vector<bvh::TrianglePair> all;
   for (const auto& [a, b] : scene_->collidable_pairs()) {
     const auto pairs = bvh::pair_overlaps(trees_[a], trees_[b], offset(a, b));

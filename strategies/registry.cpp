@@ -131,9 +131,9 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
     } else if (owns(narrow.keys, key)) {
       narrow_keys[key] = value;
     } else {
-      throw std::invalid_argument(entry.name + "+" + narrow.name + " has no parameter '" + key + "' (" + entry.name + "'s: " +
-                                  narrowphase::key_names(entry.keys) + "; narrow phase " + narrow.name + "'s: " +
-                                  narrowphase::key_names(narrow.keys) + ")");
+      throw std::invalid_argument(entry.name + "+" + narrow.name + " has no parameter '" + key + "' (" + entry.name +
+                                  "'s: " + narrowphase::key_names(entry.keys) + "; narrow phase " + narrow.name +
+                                  "'s: " + narrowphase::key_names(narrow.keys) + ")");
     }
   }
   const narrowphase::SpecReader keys(entry.name, entry.keys, own);

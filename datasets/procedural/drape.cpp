@@ -12,8 +12,8 @@ namespace {
 Setup drape(CommonParameters& c, const SceneParameters& p) {
   const double width = p.at("table_width"), depth = p.at("table_depth");
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const ShapeMesh cloth = placed_cloth(c.n, 1.4 * width, (unit(c.random) - 0.5) * 0.3,
-                                       Vec3((unit(c.random) - 0.5) * 0.1, (unit(c.random) - 0.5) * 0.1, 0.1));
+  const ShapeMesh cloth =
+      placed_cloth(c.n, 1.4 * width, (unit(c.random) - 0.5) * 0.3, Vec3((unit(c.random) - 0.5) * 0.1, (unit(c.random) - 0.5) * 0.1, 0.1));
   Setup setup;
   setup.thickness = thickness_of(cloth);
   setup.simulator = std::make_unique<ClothSimulator>(settings_for(cloth, c.n));
@@ -25,7 +25,8 @@ Setup drape(CommonParameters& c, const SceneParameters& p) {
   if (shape_obstacles(p)) {
     // Centre and half extents are exact here (halves of the table's sizes), so the box's corners are the mesh's.
     const Vec3 centre = 0.5 * (lower + upper), half = 0.5 * (upper - lower);
-    setup.objects.push_back(shape_object("table", box_shape(half), [centre](double) { return centre; }, true));
+    setup.objects.push_back(shape_object(
+        "table", box_shape(half), [centre](double) { return centre; }, true));
   } else {
     setup.objects.push_back(static_object("table", box(lower, upper)));
   }

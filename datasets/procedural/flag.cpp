@@ -17,8 +17,8 @@ Setup flag(CommonParameters& c, const SceneParameters& p) {
   for (std::size_t i = 0; i < c.n; ++i) {
     for (std::size_t j = 0; j < c.n; ++j) {
       // Hung in the x-z plane from the pole at x = 0; a tiny seeded ripple breaks the symmetry.
-      cloth.positions[i * c.n + j] = Vec3(static_cast<double>(j) * spacing, 1e-3 * spacing * (unit(c.random) - 0.5),
-                                          1.5 - static_cast<double>(i) * spacing);
+      cloth.positions[i * c.n + j] =
+          Vec3(static_cast<double>(j) * spacing, 1e-3 * spacing * (unit(c.random) - 0.5), 1.5 - static_cast<double>(i) * spacing);
     }
   }
   Setup setup;
@@ -42,8 +42,10 @@ Setup flag(CommonParameters& c, const SceneParameters& p) {
     if (frame == 0) initial = x[0];
     double drift = 0.0, moved = 0.0;
     for (std::size_t k = 0; k < x[0].size(); ++k) {
-      if (k % n == 0) drift = std::max(drift, (x[0][k] - initial[k]).norm());
-      else moved += (x[0][k] - initial[k]).norm();
+      if (k % n == 0)
+        drift = std::max(drift, (x[0][k] - initial[k]).norm());
+      else
+        moved += (x[0][k] - initial[k]).norm();
     }
     return Metrics{{"pinned_drift", drift}, {"mean_free_displacement", moved / static_cast<double>(x[0].size() - n)}};
   };
@@ -53,9 +55,7 @@ Setup flag(CommonParameters& c, const SceneParameters& p) {
 }  // namespace
 
 SceneDefinition flag_scene() {
-  return {{"flag", "cloth pinned along one side, blown by gusty wind",
-           with_common({{"wind", 8.0, "mean wind speed along +x (m/s)"}})},
-          flag};
+  return {{"flag", "cloth pinned along one side, blown by gusty wind", with_common({{"wind", 8.0, "mean wind speed along +x (m/s)"}})}, flag};
 }
 
 }  // namespace ccd::datasets::procedural

@@ -51,21 +51,21 @@ Setup fold(CommonParameters& c, const SceneParameters& p) {
     // The blade as a thin box around the same plate, and a ball driven down through the left part's other half:
     // face-shape contacts of both kinds at δ = 0.
     const Vec3 half(width / 2, 0.1 * spacing, height / 2);
-    setup.objects.push_back(shape_object("blade", box_shape(half), [=](double t) {
-      return Vec3(blade_x + width / 2, blade_y, travel * (0.5 - t / last_time));
-    }, false));
+    setup.objects.push_back(shape_object(
+        "blade", box_shape(half), [=](double t) { return Vec3(blade_x + width / 2, blade_y, travel * (0.5 - t / last_time)); }, false));
     const double ball_radius = 0.15 * (hinge + 0.5), ball_x = -0.5 + 0.5 * (hinge + 0.5), ball_y = 0.25;
-    setup.objects.push_back(shape_object("ball", sphere_shape(ball_radius), [=](double t) {
-      return Vec3(ball_x, ball_y, (travel + 2 * ball_radius) * (0.5 - t / last_time));
-    }, false));
+    setup.objects.push_back(shape_object(
+        "ball", sphere_shape(ball_radius), [=](double t) { return Vec3(ball_x, ball_y, (travel + 2 * ball_radius) * (0.5 - t / last_time)); },
+        false));
     setup.collidable = {{"sheet", "blade"}, {"sheet", "ball"}};
-  } else setup.objects.push_back({"blade", ObjectKind::rigid, false, plate.faces, plate.positions.size(),
-                           [plate = plate.positions, blade_x, blade_y, width, height, travel, last_time](const ClothSimulator&, double t) {
-                             const double centre = travel * (0.5 - t / last_time);
-                             std::vector<Vec3> x;
-                             for (const Vec3& q : plate) x.emplace_back(blade_x + (q.x() + 0.5) * width, blade_y, centre + q.y() * height);
-                             return x;
-                           }});
+  } else
+    setup.objects.push_back({"blade", ObjectKind::rigid, false, plate.faces, plate.positions.size(),
+                             [plate = plate.positions, blade_x, blade_y, width, height, travel, last_time](const ClothSimulator&, double t) {
+                               const double centre = travel * (0.5 - t / last_time);
+                               std::vector<Vec3> x;
+                               for (const Vec3& q : plate) x.emplace_back(blade_x + (q.x() + 0.5) * width, blade_y, centre + q.y() * height);
+                               return x;
+                             }});
   if (!shape_obstacles(p)) setup.collidable = {{"sheet", "blade"}};
   setup.report = [fold_angle, travel, last_time](std::size_t, double t, const std::vector<std::vector<Vec3>>&) {
     return Metrics{{"fold_angle_deg", fold_angle(t) * 180 / std::numbers::pi}, {"blade_centre_z", travel * (0.5 - t / last_time)}};

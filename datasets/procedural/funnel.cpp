@@ -27,8 +27,7 @@ Setup funnel(CommonParameters& c, const SceneParameters& p) {
       return Vec3(start.x(), start.y(), std::max(start.z() - pull * t, z_bottom - 0.6));
     });
   }
-  setup.simulator->add_obstacle(funnel_obstacle(r_bottom - 0.5 * setup.thickness, z_bottom,
-                                                                 r_top - 0.5 * setup.thickness, z_top, p.at("friction")));
+  setup.simulator->add_obstacle(funnel_obstacle(r_bottom - 0.5 * setup.thickness, z_bottom, r_top - 0.5 * setup.thickness, z_top, p.at("friction")));
   setup.objects.push_back(cloth_object("cloth", cloth, first));
   setup.objects.push_back(static_object("funnel", frustum(r_bottom, z_bottom, r_top, z_top, 48)));
   setup.collidable = {{"cloth", "funnel"}};
@@ -48,8 +47,7 @@ Setup funnel(CommonParameters& c, const SceneParameters& p) {
 
 SceneDefinition funnel_scene() {
   return {{"funnel", "cloth pulled by its centre down through a funnel",
-           with_common({{"pull_speed", 0.6, "downward speed of the pulled centre (m/s)"},
-                        {"friction", 0.3, "cloth-funnel friction"}})},
+           with_common({{"pull_speed", 0.6, "downward speed of the pulled centre (m/s)"}, {"friction", 0.3, "cloth-funnel friction"}})},
           funnel};
 }
 

@@ -7,8 +7,7 @@ namespace ccd::datasets::procedural {
 namespace {
 
 /// Removes the motion of a projected particle relative to the surface, tangentially, by `friction` (1 sticks).
-void apply_friction(Vec3& q, const Vec3& previous, const Vec3& normal, const Vec3& surface_velocity, double dt,
-                    double friction) {
+void apply_friction(Vec3& q, const Vec3& previous, const Vec3& normal, const Vec3& surface_velocity, double dt, double friction) {
   const Vec3 relative = (q - previous) - surface_velocity * dt;
   q -= friction * (relative - relative.dot(normal) * normal);
 }

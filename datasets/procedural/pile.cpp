@@ -32,7 +32,8 @@ Setup pile(CommonParameters& c, const SceneParameters& p) {
     // A thin box under the ground plane whose top face is the ground mesh's square: its centre and half extents
     // are powers of two, so the top face lies exactly at z = 0.
     const Vec3 half(1.5, 1.5, kGroundBoxHalfThickness), centre(0, 0, -kGroundBoxHalfThickness);
-    setup.objects.push_back(shape_object("ground", box_shape(half), [centre](double) { return centre; }, true));
+    setup.objects.push_back(shape_object(
+        "ground", box_shape(half), [centre](double) { return centre; }, true));
   } else {
     ShapeMesh ground{{{-1.5, -1.5, 0}, {1.5, -1.5, 0}, {1.5, 1.5, 0}, {-1.5, 1.5, 0}}, {{0, 1, 2}, {0, 2, 3}}};
     setup.objects.push_back(static_object("ground", std::move(ground)));

@@ -21,8 +21,8 @@ std::vector<SceneParameter> with_common(std::vector<SceneParameter> own) {
 }
 
 extern const SceneParameter kObstaclesParameter;
-const SceneParameter kObstaclesParameter{"obstacles", 0, "mesh or shape: obstacles as triangle meshes or as analytic shapes (a sphere, a box)",
-                                         {"mesh", "shape"}};
+const SceneParameter kObstaclesParameter{
+    "obstacles", 0, "mesh or shape: obstacles as triangle meshes or as analytic shapes (a sphere, a box)", {"mesh", "shape"}};
 
 Vec3 rotate_z(const Vec3& p, double angle) {
   const double c = std::cos(angle), s = std::sin(angle);
@@ -49,25 +49,29 @@ SimulatorSettings settings_for(const ShapeMesh& cloth, std::size_t n) {
 
 OutputObject cloth_object(std::string name, const ShapeMesh& mesh, std::size_t first) {
   const std::size_t count = mesh.positions.size();
-  return {std::move(name), ObjectKind::deformable, true, mesh.faces, count,
-          [first, count](const ClothSimulator& simulator, double) {
+  return {std::move(name), ObjectKind::deformable, true, mesh.faces, count, [first, count](const ClothSimulator& simulator, double) {
             const auto& x = simulator.positions();
-            return std::vector<Vec3>(x.begin() + static_cast<std::ptrdiff_t>(first),
-                                     x.begin() + static_cast<std::ptrdiff_t>(first + count));
+            return std::vector<Vec3>(x.begin() + static_cast<std::ptrdiff_t>(first), x.begin() + static_cast<std::ptrdiff_t>(first + count));
           }};
 }
 
 OutputObject static_object(std::string name, ShapeMesh mesh) {
   const std::size_t count = mesh.positions.size();
   auto positions = mesh.positions;
-  return {std::move(name), ObjectKind::static_object, false, std::move(mesh.faces), count,
-          [positions](const ClothSimulator&, double) { return positions; }};
+  return {std::move(name), ObjectKind::static_object,
+          false,           std::move(mesh.faces),
+          count,           [positions](const ClothSimulator&, double) { return positions; }};
 }
 
 OutputObject shape_object(std::string name, Shape shape, std::function<Vec3(double)> centre, bool still) {
-  return {std::move(name), ObjectKind::shape, false, {}, 1,
+  return {std::move(name),
+          ObjectKind::shape,
+          false,
+          {},
+          1,
           [centre = std::move(centre)](const ClothSimulator&, double t) { return std::vector<Vec3>{centre(t)}; },
-          shape, still};
+          shape,
+          still};
 }
 
 Shape sphere_shape(double radius) { return {ShapeKind::sphere, radius, Vec3::Zero()}; }

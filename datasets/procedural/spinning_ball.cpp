@@ -13,8 +13,7 @@ Setup spinning_ball(CommonParameters& c, const SceneParameters& p) {
   const double radius = p.at("radius"), spin = p.at("spin"), spin_start = p.at("spin_start");
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double angle = unit(c.random) * std::numbers::pi / 2;
-  const Vec3 offset((unit(c.random) - 0.5) * 0.1 * radius, (unit(c.random) - 0.5) * 0.1 * radius,
-                    radius + p.at("drop"));
+  const Vec3 offset((unit(c.random) - 0.5) * 0.1 * radius, (unit(c.random) - 0.5) * 0.1 * radius, radius + p.at("drop"));
   const ShapeMesh cloth = placed_cloth(c.n, 3.2 * radius, angle, offset);
   Setup setup;
   setup.thickness = thickness_of(cloth);
@@ -28,16 +27,17 @@ Setup spinning_ball(CommonParameters& c, const SceneParameters& p) {
   const ShapeMesh ball = uv_sphere(radius, 24, 48);
   if (shape_obstacles(p)) {
     // The sphere's spin leaves it unchanged: a still centre at the origin.
-    setup.objects.push_back(shape_object("ball", sphere_shape(radius), [](double) { return Vec3::Zero().eval(); }, true));
-  } else setup.objects.push_back({"ball", ObjectKind::rigid, false, ball.faces, ball.positions.size(),
-                           [base = ball.positions, turned](const ClothSimulator&, double t) {
-                             std::vector<Vec3> x(base.size());
-                             for (std::size_t i = 0; i < base.size(); ++i) x[i] = rotate_z(base[i], turned(t));
-                             return x;
-                           }});
+    setup.objects.push_back(shape_object(
+        "ball", sphere_shape(radius), [](double) { return Vec3::Zero().eval(); }, true));
+  } else
+    setup.objects.push_back(
+        {"ball", ObjectKind::rigid, false, ball.faces, ball.positions.size(), [base = ball.positions, turned](const ClothSimulator&, double t) {
+           std::vector<Vec3> x(base.size());
+           for (std::size_t i = 0; i < base.size(); ++i) x[i] = rotate_z(base[i], turned(t));
+           return x;
+         }});
   setup.collidable = {{"cloth", "ball"}};
-  setup.report = [radius, turned, initial = std::vector<Vec3>()](std::size_t frame, double t,
-                                                                  const std::vector<std::vector<Vec3>>& x) mutable {
+  setup.report = [radius, turned, initial = std::vector<Vec3>()](std::size_t frame, double t, const std::vector<std::vector<Vec3>>& x) mutable {
     const auto& cloth_x = x[0];
     if (frame == 0) initial = cloth_x;
     double nearest = std::numeric_limits<double>::infinity(), rotation = 0.0;

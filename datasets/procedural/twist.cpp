@@ -29,8 +29,7 @@ Setup twist(CommonParameters& c, const SceneParameters& p) {
       setup.simulator->set_kinematic(first + i * c.n + j, [=](double t) {
         const double angle = direction * rate * t;
         const double x = rest.x() * (1.0 - squeeze * std::min(1.0, t));
-        return Vec3(x, rest.y() * std::cos(angle) - rest.z() * std::sin(angle),
-                    rest.y() * std::sin(angle) + rest.z() * std::cos(angle));
+        return Vec3(x, rest.y() * std::cos(angle) - rest.z() * std::sin(angle), rest.y() * std::sin(angle) + rest.z() * std::cos(angle));
       });
     }
   }

@@ -62,8 +62,7 @@ double segment_segment(const Vector3& a, const Vector3& b, const Vector3& c, con
 class MyCCD {
  public:
   bool point_triangle_ccd(const Vector3& p_t0, const Vector3& t0_t0, const Vector3& t1_t0, const Vector3& t2_t0, const Vector3& p_t1,
-                          const Vector3& t0_t1, const Vector3& t1_t1, const Vector3& t2_t1, double& toi, double min_distance,
-                          double tmax) const {
+                          const Vector3& t0_t1, const Vector3& t1_t1, const Vector3& t2_t1, double& toi, double min_distance, double tmax) const {
     return first_contact(toi, min_distance, tmax, [&](double t) {
       return point_triangle(lerp(p_t0, p_t1, t), lerp(t0_t0, t0_t1, t), lerp(t1_t0, t1_t1, t), lerp(t2_t0, t2_t1, t));
     });

@@ -13,11 +13,22 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-typedef struct { float x, y, z; } vec;
+typedef struct {
+  float x, y, z;
+} vec;
 
-static vec sub(vec a, vec b) { vec r = {a.x - b.x, a.y - b.y, a.z - b.z}; return r; }
-static vec add(vec a, vec b) { vec r = {a.x + b.x, a.y + b.y, a.z + b.z}; return r; }
-static vec scale(vec a, float s) { vec r = {a.x * s, a.y * s, a.z * s}; return r; }
+static vec sub(vec a, vec b) {
+  vec r = {a.x - b.x, a.y - b.y, a.z - b.z};
+  return r;
+}
+static vec add(vec a, vec b) {
+  vec r = {a.x + b.x, a.y + b.y, a.z + b.z};
+  return r;
+}
+static vec scale(vec a, float s) {
+  vec r = {a.x * s, a.y * s, a.z * s};
+  return r;
+}
 static float dot(vec a, vec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 static float clamp01(float v) { return v < 0 ? 0 : (v > 1 ? 1 : v); }
 
@@ -59,28 +70,43 @@ static float point_triangle(vec p, vec a, vec b, vec c) {
 static float segment_segment(vec p1, vec q1, vec p2, vec q2) {
   vec d1 = sub(q1, p1), d2 = sub(q2, p2), r = sub(p1, p2);
   float a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r), s, t;
-  if (a <= 1e-30f && e <= 1e-30f) { s = t = 0; }
-  else if (a <= 1e-30f) { s = 0; t = clamp01(f / e); }
-  else {
+  if (a <= 1e-30f && e <= 1e-30f) {
+    s = t = 0;
+  } else if (a <= 1e-30f) {
+    s = 0;
+    t = clamp01(f / e);
+  } else {
     float c = dot(d1, r);
-    if (e <= 1e-30f) { t = 0; s = clamp01(-c / a); }
-    else {
+    if (e <= 1e-30f) {
+      t = 0;
+      s = clamp01(-c / a);
+    } else {
       float b = dot(d1, d2), denom = a * e - b * b;
       s = denom != 0 ? clamp01((b * f - c * e) / denom) : 0;
       t = (b * s + f) / e;
-      if (t < 0) { t = 0; s = clamp01(-c / a); }
-      else if (t > 1) { t = 1; s = clamp01((b - c) / a); }
+      if (t < 0) {
+        t = 0;
+        s = clamp01(-c / a);
+      } else if (t > 1) {
+        t = 1;
+        s = clamp01((b - c) / a);
+      }
     }
   }
   vec d = sub(add(p1, scale(d1, s)), add(p2, scale(d2, t)));
   return dot(d, d);
 }
 
-typedef struct { int samples; } context;
+typedef struct {
+  int samples;
+} context;
 
 static void* create(const char* const* values, char* error) {
   context* c = malloc(sizeof *c);
-  if (!c) { snprintf(error, CCDBENCH_MESSAGE_SIZE, "out of memory"); return NULL; }
+  if (!c) {
+    snprintf(error, CCDBENCH_MESSAGE_SIZE, "out of memory");
+    return NULL;
+  }
   c->samples = atoi(values[0]);
   return c;
 }
@@ -109,13 +135,21 @@ static const ccdbench_key keys[] = {
 };
 
 static const ccdbench_plugin table = {
-    sizeof(ccdbench_plugin), CCDBENCH_PLUGIN_ABI_VERSION,
-    "naive-float", "1.0", "distance in float at a few sample times: misses what passes between them, and reports late TOIs",
+    sizeof(ccdbench_plugin),
+    CCDBENCH_PLUGIN_ABI_VERSION,
+    "naive-float",
+    "1.0",
+    "distance in float at a few sample times: misses what passes between them, and reports late TOIs",
     CCDBENCH_THREAD_SAFE | CCDBENCH_REPORTS_TOI,
-    keys, sizeof keys / sizeof keys[0],
-    create, destroy,
-    vertex_face, edge_edge,
-    NULL, NULL, NULL,
+    keys,
+    sizeof keys / sizeof keys[0],
+    create,
+    destroy,
+    vertex_face,
+    edge_edge,
+    NULL,
+    NULL,
+    NULL,
 };
 
 CCDBENCH_PLUGIN_EXPORT const ccdbench_plugin* CCDBENCH_PLUGIN_ENTRY(uint32_t host_abi_version) {

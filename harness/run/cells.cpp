@@ -43,8 +43,8 @@ std::size_t peak_resident_bytes() {
 
 }  // namespace
 
-json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps,
-             const std::string& cell_name, const CellProgress& progress) {
+json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps, const std::string& cell_name,
+              const CellProgress& progress) {
   const Scene& scene = data.sequence.scene();
   std::vector<std::vector<double>> step_ms(steps);
   std::map<std::string, std::vector<double>> stage_ms;
@@ -122,8 +122,9 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
       if (nondeterministic_step) {
         audited.clear();
         for (std::size_t k = 0; k < steps; ++k) verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, nullptr, options.toi);
-        miss_causes = {{"unexplained (its answers changed between two runs)", std::accumulate(verdicts.begin(), verdicts.end(), std::size_t{0},
-                                                                                               [](std::size_t n, const Verdict& v) { return n + v.missed; })}};
+        miss_causes = {
+            {"unexplained (its answers changed between two runs)",
+             std::accumulate(verdicts.begin(), verdicts.end(), std::size_t{0}, [](std::size_t n, const Verdict& v) { return n + v.missed; })}};
       } else {
         std::optional<std::filesystem::path> directory;
         if (options.misses) directory = *options.misses / safe_path_component(data.label) / std::filesystem::path(cell_name).stem();
@@ -132,8 +133,8 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
     }
   }
   const std::filesystem::path fault_root = options.faults ? *options.faults : options.out / "faults";
-  const json faults = record_faults(scene, data.frames, first_pass,
-                                    fault_root / safe_path_component(data.label) / std::filesystem::path(cell_name).stem());
+  const json faults =
+      record_faults(scene, data.frames, first_pass, fault_root / safe_path_component(data.label) / std::filesystem::path(cell_name).stem());
   if (options.write_answers) {
     // DIR/STRATEGY/SCENE (answers:DIR/STRATEGY reads it back), STRATEGY@δ when the run has several δ: a folder of
     // answers is for one δ.

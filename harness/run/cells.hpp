@@ -30,7 +30,7 @@ using CellProgress = std::function<void(int pass, std::size_t step, const std::s
 
 /// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.
 /// Returns {"summary": ..., "steps": [...]} (DESIGN.md §5 fields).
-nlohmann::json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps,
-                        const std::string& cell_name, const CellProgress& progress = {});
+nlohmann::json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps, const std::string& cell_name,
+                        const CellProgress& progress = {});
 
 }  // namespace ccd::harness

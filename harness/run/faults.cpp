@@ -14,8 +14,8 @@
 
 namespace ccd::harness {
 
-nlohmann::json record_faults(const Scene& scene, const std::vector<std::vector<Vec3>>& frames,
-                             const std::vector<strategies::StepResult>& results, const std::filesystem::path& directory) {
+nlohmann::json record_faults(const Scene& scene, const std::vector<std::vector<Vec3>>& frames, const std::vector<strategies::StepResult>& results,
+                             const std::filesystem::path& directory) {
   harness_pass("fault records");
   std::size_t count = 0;
   for (const strategies::StepResult& result : results) count += result.fault_count;
@@ -52,8 +52,8 @@ nlohmann::json record_faults(const Scene& scene, const std::vector<std::vector<V
       const std::vector<Face>& faces = scene.topology().faces();
       datasets::write_ply(step / "frame_0.ply", {frames[k], faces, {}});
       datasets::write_ply(step / "frame_1.ply", {frames[k + 1], faces, {}});
-      notes << "  replay: ccdbench run --frames " << (step / "frame_0.ply").string() << " " << (step / "frame_1.ply").string()
-            << " --thickness " << scene.thickness() << " --strategy ...\n";
+      notes << "  replay: ccdbench run --frames " << (step / "frame_0.ply").string() << " " << (step / "frame_1.ply").string() << " --thickness "
+            << scene.thickness() << " --strategy ...\n";
     }
   }
   datasets::AtomicFile file(directory / "FAULTS.txt", std::ios::out);

@@ -18,8 +18,8 @@ namespace ccd::harness {
 /// unlabelled: `ccdbench queries FILE --allow-unlabelled --method ...` replays them), and step_K/frame_0.ply and
 /// frame_1.ply for a fault of a whole step (`ccdbench run --frames ... --thickness δ` replays it). Atomic per file.
 /// Returns {"errors": count over the steps, "errors_written": directory} ({"errors": 0} when none).
-nlohmann::json record_faults(const Scene& scene, const std::vector<std::vector<Vec3>>& frames,
-                             const std::vector<strategies::StepResult>& results, const std::filesystem::path& directory);
+nlohmann::json record_faults(const Scene& scene, const std::vector<std::vector<Vec3>>& frames, const std::vector<strategies::StepResult>& results,
+                             const std::filesystem::path& directory);
 
 /// Writes each step's answers as DIRECTORY/step_0000.csv, ... in the format answers:DIR reads (one `vf,V,F,TOI` or
 /// `ee,A0,A1,B0,B1,TOI` line per pair, TOI empty when none; README "Answer files"), atomically per file.

@@ -46,8 +46,8 @@ std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::files
     static const std::vector<std::string> kKeys = {"scene", "strategy", "thickness", "max_missed", "steps", "colliding", "max_toi_late"};
     for (const auto& item : entry.items()) {
       if (std::find(kKeys.begin(), kKeys.end(), item.key()) == kKeys.end()) {
-        throw InputError(file, where, "unknown key '" + item.key() +
-                                          "' (allowed: scene, strategy, thickness, max_missed, steps, colliding, max_toi_late)");
+        throw InputError(file, where,
+                         "unknown key '" + item.key() + "' (allowed: scene, strategy, thickness, max_missed, steps, colliding, max_toi_late)");
       }
     }
     BaselineEntry parsed;
@@ -65,7 +65,8 @@ std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::files
       throw InputError(file, where + ".thickness", "must be \"scene\" or a finite number >= 0");
     }
     if (!entry.contains("max_missed") || !entry["max_missed"].is_number_unsigned()) {
-      throw InputError(file, where + ".max_missed", "must be an integer >= 0, got " + (entry.contains("max_missed") ? entry["max_missed"].dump() : std::string("nothing")));
+      throw InputError(file, where + ".max_missed",
+                       "must be an integer >= 0, got " + (entry.contains("max_missed") ? entry["max_missed"].dump() : std::string("nothing")));
     }
     parsed.max_missed = entry["max_missed"].get<std::uint64_t>();
     for (auto [name, field] : {std::pair{"steps", &parsed.steps}, {"colliding", &parsed.colliding}, {"max_toi_late", &parsed.max_toi_late}}) {
@@ -110,8 +111,8 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
     const json& result = *result_pointer;
     const std::string where = "entry " + std::to_string(i);
     if (!result.is_object() || !result.contains("scene") || !result["scene"].is_string() || !result.contains("strategy") ||
-        !result["strategy"].is_string() || !result.contains("thickness") || !result["thickness"].is_number() ||
-        !result.contains("thickness_from") || !result["thickness_from"].is_string()) {
+        !result["strategy"].is_string() || !result.contains("thickness") || !result["thickness"].is_number() || !result.contains("thickness_from") ||
+        !result["thickness_from"].is_string()) {
       throw InputError(results_file, where, "not a summary of `ccdbench run --json` (scene, strategy, thickness, thickness_from)");
     }
     const GateKey key{result["scene"], result["strategy"], result["thickness"].get<double>()};
@@ -123,15 +124,19 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
       const bool same_thickness = gate.thickness ? *gate.thickness == *key.thickness : scene_thickness;
       // By the resolved name, or by the spec as the run was given it: a plugin's resolved name holds its absolute
       // path and its file's digest, which a baseline kept in a plugin's own repository cannot know.
-      const bool same_strategy = gate.strategy == key.strategy || (result.contains("spec") && result["spec"].is_string() && gate.strategy == result["spec"]);
+      const bool same_strategy =
+          gate.strategy == key.strategy || (result.contains("spec") && result["spec"].is_string() && gate.strategy == result["spec"]);
       if (gate.scene == key.scene && same_strategy && same_thickness) {
         entry = &entries[e];
         ++matches[e];
         ++entries_matched;
       }
     }
-    const std::string name = key.scene + " / " + key.strategy + " / δ " + (scene_thickness ? "scene's " : "") +
-                             [&] { std::ostringstream t; t << std::setprecision(17) << *key.thickness; return t.str(); }();
+    const std::string name = key.scene + " / " + key.strategy + " / δ " + (scene_thickness ? "scene's " : "") + [&] {
+      std::ostringstream t;
+      t << std::setprecision(17) << *key.thickness;
+      return t.str();
+    }();
     if (!entry) {
       out << "FAIL " << name << ": not in the baseline (every gated cell needs an entry)\n";
       ok = false;
@@ -168,9 +173,8 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
       out << "FAIL " << name << ": no colliding pair in any step, so it cannot miss: this cell gates nothing\n";
       ok = false;
     } else if (missed > entry->max_missed) {
-      out << "FAIL " << name << ": missed " << missed << " of " << colliding << " (culled "
-          << result.value("missed_culled", json(0)).dump() << ", tested " << result.value("missed_tested", json(0)).dump()
-          << "), baseline allows " << entry->max_missed << "\n";
+      out << "FAIL " << name << ": missed " << missed << " of " << colliding << " (culled " << result.value("missed_culled", json(0)).dump()
+          << ", tested " << result.value("missed_tested", json(0)).dump() << "), baseline allows " << entry->max_missed << "\n";
       ok = false;
     } else {
       out << "ok   " << name << ": missed " << missed << " of " << colliding << " <= " << entry->max_missed << "\n";

@@ -43,8 +43,7 @@ std::vector<SceneSource> suite_scenes(const std::string& suite) {
     // spinning-ball does (cloth against the ball's mesh), and the kinematic fold makes real crossings of the sheet
     // with itself and with a blade, found by apccd inside its sessions as well as at their starts. The fold with
     // obstacles=shape drives a box (the blade) and a sphere through the sheet: face-shape contacts at δ = 0 too.
-    return {generated("spinning-ball", {{"resolution", 8}, {"frames", 5}}),
-            generated("fold", {{"resolution", 8}, {"frames", 24}}),
+    return {generated("spinning-ball", {{"resolution", 8}, {"frames", 5}}), generated("fold", {{"resolution", 8}, {"frames", 24}}),
             generated("fold", {{"resolution", 8}, {"frames", 24}, {"obstacles", 1}})};
   }
   if (suite == "default") {
@@ -61,12 +60,9 @@ std::vector<SceneSource> suite_scenes(const std::string& suite) {
     return scenes;
   }
   if (suite == "paper") {
-    return {generated("spinning-ball", {{"resolution", 100}, {"frames", 100}}),
-            generated("drape", {{"resolution", 100}, {"frames", 100}}),
-            generated("flag", {{"resolution", 100}, {"frames", 100}}),
-            generated("twist", {{"resolution", 80}, {"frames", 100}}),
-            generated("funnel", {{"resolution", 100}, {"frames", 100}}),
-            generated("pile", {{"resolution", 64}, {"frames", 100}})};
+    return {generated("spinning-ball", {{"resolution", 100}, {"frames", 100}}), generated("drape", {{"resolution", 100}, {"frames", 100}}),
+            generated("flag", {{"resolution", 100}, {"frames", 100}}),          generated("twist", {{"resolution", 80}, {"frames", 100}}),
+            generated("funnel", {{"resolution", 100}, {"frames", 100}}),        generated("pile", {{"resolution", 64}, {"frames", 100}})};
   }
   if (suite == "large") {
     // Beyond the paper's scale: the spinning ball at about 1M triangles, frames 6-9 (3 steps of the cloth settling

@@ -56,8 +56,14 @@ void attach_speedups(std::vector<json>& summaries) {
 
 Table summary_table(const std::vector<json>& summaries) {
   using Align = Table::Align;
-  Table table({{"scene"}, {"δ", Align::right}, {"strategy"}, {"ms/step", Align::right}, {"vs full", Align::right},
-               {"colliding", Align::right}, {"missed (culled/tested)", Align::right}, {"false alarms", Align::right}});
+  Table table({{"scene"},
+               {"δ", Align::right},
+               {"strategy"},
+               {"ms/step", Align::right},
+               {"vs full", Align::right},
+               {"colliding", Align::right},
+               {"missed (culled/tested)", Align::right},
+               {"false alarms", Align::right}});
   const bool with_toi = std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s.contains("toi_late"); });
   // An error is its own outcome (an answer a plugin or an answer file could not give): a column when any cell has one.
   const bool with_errors = std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s.value("errors", 0) > 0; });
@@ -76,21 +82,24 @@ Table summary_table(const std::vector<json>& summaries) {
         s["scene"].get<std::string>() + (s.value("resumed", false) ? " (resumed)" : ""),
         significant(s["thickness"].get<double>(), 3) + (s.value("thickness_from", "") == "scene" ? " (scene's)" : ""),
         s.value("spec", s["strategy"].get<std::string>()) + (s.value("judged_by", "") == "triangle pairs" ? kTrianglePairMark : ""),
-        fixed(s["ms_per_step"].get<double>(), 3), speedup, count("colliding"),
-        verified ? count("missed") + " (" + count("missed_culled") + "/" + count("missed_tested") + ")" : "-", count("false_alarms")};
+        fixed(s["ms_per_step"].get<double>(), 3),
+        speedup,
+        count("colliding"),
+        verified ? count("missed") + " (" + count("missed_culled") + "/" + count("missed_tested") + ")" : "-",
+        count("false_alarms")};
     if (with_errors) row.push_back(std::to_string(s.value("errors", 0)));
     if (with_toi) {
-      row.push_back(s.contains("toi_late") ? std::to_string(s["toi_late"].get<std::size_t>()) + " of " +
-                                                 std::to_string(s["toi_checked"].get<std::size_t>()) + " (" +
-                                                 significant(s["toi_error_max"].get<double>(), 3) + " / " +
-                                                 significant(s["toi_error_mean"].get<double>(), 3) + ")"
-                                           : "-");
+      row.push_back(s.contains("toi_late")
+                        ? std::to_string(s["toi_late"].get<std::size_t>()) + " of " + std::to_string(s["toi_checked"].get<std::size_t>()) + " (" +
+                              significant(s["toi_error_max"].get<double>(), 3) + " / " + significant(s["toi_error_mean"].get<double>(), 3) + ")"
+                        : "-");
     }
     // Memory by kind (a cell kept from before these fields existed shows "-").
     auto mib = [&](const char* field) { return s.contains(field) ? fixed(s[field].get<double>() / (1024.0 * 1024.0), 0) : std::string("-"); };
     const std::string memory = mib("kept_bytes") + "/" + mib("device_bytes") + "/" + mib("host_peak_bytes");
-    for (const std::string& cell : {fixed(s["candidate_pairs"].get<double>(), 0), fixed(s["elementary_tests"].get<double>(), 0),
-                                    std::to_string(s["triangles"].get<std::size_t>()), std::to_string(s["steps"].get<std::size_t>()), memory, stages}) {
+    for (const std::string& cell :
+         {fixed(s["candidate_pairs"].get<double>(), 0), fixed(s["elementary_tests"].get<double>(), 0),
+          std::to_string(s["triangles"].get<std::size_t>()), std::to_string(s["steps"].get<std::size_t>()), memory, stages}) {
       row.push_back(cell);
     }
     table.add_row(std::move(row));
@@ -116,8 +125,8 @@ std::string summary_notes(const Table& table) {
   return "";
 }
 
-void write_report(const std::filesystem::path& directory, const Table& table, const std::vector<json>& summaries,
-                  const std::vector<json>& cells, const std::string& command) {
+void write_report(const std::filesystem::path& directory, const Table& table, const std::vector<json>& summaries, const std::vector<json>& cells,
+                  const std::string& command) {
   json steps = json::array();
   for (const json& cell : cells) {
     for (const json& step : cell["steps"]) steps.push_back(step);
@@ -132,10 +141,11 @@ void write_report(const std::filesystem::path& directory, const Table& table, co
   out << '\n' << summary_notes(table);
   if (const std::string names = resolved_names(summaries); !names.empty()) out << "\n```\n" << names << "```\n";
   const json env = environment();
-  out << "\nMachine: " << env["machine"].get<std::string>() << "; build " << env["build_type"].get<std::string>() << ", "
-      << env["threads"] << " threads, revision " << env["git_revision"].get<std::string>() << ".\n\nProvenance (every record in "
+  out << "\nMachine: " << env["machine"].get<std::string>() << "; build " << env["build_type"].get<std::string>() << ", " << env["threads"]
+      << " threads, revision " << env["git_revision"].get<std::string>() << ".\n\nProvenance (every record in "
       << "`summaries.json` and `steps.json` carries it, with the OpenCL platform, device and driver of OpenCL cells):";
-  for (const auto& [name, value] : env["provenance"].items()) out << " " << name << " " << (value.is_string() ? value.get<std::string>() : value.dump()) << ";";
+  for (const auto& [name, value] : env["provenance"].items())
+    out << " " << name << " " << (value.is_string() ? value.get<std::string>() : value.dump()) << ";";
   out << "\n\n"
       << "How to read it: `vs full` is a cell's speed-up over `full` with the same narrow phase on the same scene at the same\n"
       << "δ (> 1: faster); `missed` counts truth pairs the strategy did not report (culled: never tested; tested: its test\n"

@@ -53,8 +53,7 @@ bool in_sorted(const std::vector<Pair>& pairs, const Pair& p) {
 }
 
 /// A reported triangle pair is a false alarm when none of its elementary pairs is in the truth.
-std::size_t triangle_pair_false_alarms(const Scene& scene, const CollisionSet& truth,
-                                       const std::vector<bvh::TrianglePair>& triangle_pairs) {
+std::size_t triangle_pair_false_alarms(const Scene& scene, const CollisionSet& truth, const std::vector<bvh::TrianglePair>& triangle_pairs) {
   std::size_t false_alarms = 0;
   for (const auto& [a, b] : triangle_pairs) {
     strategies::TestedPairs contained;
@@ -84,15 +83,19 @@ std::string miss_cause(const Pair& pair, const strategies::StrategyEntry& strate
   if (strategy.explain_miss) return strategy.explain_miss(rows, std::is_same_v<Pair, VertexFacePair>);
   if (!tested) return "missed";
   const auto& list = [&]() -> const auto& {
-    if constexpr (std::is_same_v<Pair, VertexFacePair>) return tested->vertex_face; else return tested->edge_edge;
-  }();
+    if constexpr (std::is_same_v<Pair, VertexFacePair>)
+      return tested->vertex_face;
+    else
+      return tested->edge_edge;
+  }
+  ();
   return in_sorted(list, pair) ? "tested" : "culled";
 }
 
 }  // namespace
 
-Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::StepResult& result,
-              strategies::Judging judging, const strategies::TestedPairs* tested, bool toi) {
+Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::StepResult& result, strategies::Judging judging,
+              const strategies::TestedPairs* tested, bool toi) {
   harness_pass("verification");
   Verdict verdict;
   const CollisionSet& reported = result.collisions;
@@ -104,9 +107,8 @@ Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::S
   const CollisionSet missed = set_difference(truth, reported);
   verdict.missed = missed.size();
   verdict.missed_face_shape = missed.face_shape().size();
-  verdict.false_alarms = judging == strategies::Judging::triangle_pairs
-                             ? triangle_pair_false_alarms(scene, truth, result.triangle_pairs)
-                             : set_difference(reported, truth).size();
+  verdict.false_alarms = judging == strategies::Judging::triangle_pairs ? triangle_pair_false_alarms(scene, truth, result.triangle_pairs)
+                                                                        : set_difference(reported, truth).size();
   if (tested) {
     for (const auto& c : missed.vertex_face()) (in_sorted(tested->vertex_face, c.pair) ? verdict.tested : verdict.culled) += 1;
     for (const auto& c : missed.edge_edge()) (in_sorted(tested->edge_edge, c.pair) ? verdict.tested : verdict.culled) += 1;

@@ -61,8 +61,7 @@ bool crossing_is_plausible(const MeshTopology&, std::span<const Vec3> x, const E
   const double m2 = m.squaredNorm();
   if (!(m2 > 0)) return false;
   const double s = r.cross(eb).dot(m), u = r.cross(ea).dot(m);
-  return s >= -kCrossingSlack * m2 && s <= (1 + kCrossingSlack) * m2 && u >= -kCrossingSlack * m2 &&
-         u <= (1 + kCrossingSlack) * m2;
+  return s >= -kCrossingSlack * m2 && s <= (1 + kCrossingSlack) * m2 && u >= -kCrossingSlack * m2 && u <= (1 + kCrossingSlack) * m2;
 }
 
 /// Orientation of an elementary pair at the end of the step: which side of the face plane the vertex is on, or
@@ -243,7 +242,7 @@ void ApccdSession::limit_session_by_inflation(const std::vector<double>& budget)
     mean_budget /= static_cast<double>(object.num_vertices);
     // A still object (zero budget) allows any session length unless inflation_max is 0; frames is compared with
     // nf_max before the conversion, so that no huge quotient is converted to int.
-    const double frames = mean_budget > 0 ? settings_.inflation_max * mean_edge_[id] / mean_budget
+    const double frames = mean_budget > 0               ? settings_.inflation_max * mean_edge_[id] / mean_budget
                           : settings_.inflation_max > 0 ? std::numeric_limits<double>::infinity()
                                                         : 0.0;
     if (frames < settings_.nf_max) allowed = std::min(allowed, 1 + static_cast<int>(frames));
@@ -257,8 +256,7 @@ SessionEnd ApccdSession::advance(std::size_t dangling_vertices, std::size_t admi
     frame_ = 0;
     return SessionEnd::skip_off;
   }
-  const double fraction =
-      static_cast<double>(dangling_vertices) / static_cast<double>(std::max<std::size_t>(1, scene_->topology().num_vertices()));
+  const double fraction = static_cast<double>(dangling_vertices) / static_cast<double>(std::max<std::size_t>(1, scene_->topology().num_vertices()));
   worst_dangling_ = std::max(worst_dangling_, fraction);
   ++frame_;
   const bool too_costly = static_cast<double>(pending) > settings_.pending_max * static_cast<double>(std::max<std::size_t>(admissible, 1));
@@ -294,8 +292,7 @@ void add_session_end_counters(SessionEnd end, std::vector<std::pair<std::string,
   for (const SessionEnd reason : kSessionEnds) counters.emplace_back(session_end_counter(reason), reason == end ? 1.0 : 0.0);
 }
 
-std::size_t ProximityHistory::apply(const MeshTopology& topology, std::span<const Vec3> x1, const TestedPairs& tested,
-                                    CollisionSet& collisions) {
+std::size_t ProximityHistory::apply(const MeshTopology& topology, std::span<const Vec3> x1, const TestedPairs& tested, CollisionSet& collisions) {
   std::size_t catches = 0;
   auto track = [&](const auto& pairs, auto& table) {
     using Table = std::remove_reference_t<decltype(table)>;

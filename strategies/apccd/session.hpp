@@ -90,8 +90,8 @@ enum class SessionEnd {
   skip_off,
 };
 /// Every reason a session ends, in the counters' order.
-inline constexpr SessionEnd kSessionEnds[] = {SessionEnd::nf_max, SessionEnd::nf_adapted, SessionEnd::inflation_cap, SessionEnd::dangling,
-                                              SessionEnd::pending, SessionEnd::skip_off};
+inline constexpr SessionEnd kSessionEnds[] = {SessionEnd::nf_max,   SessionEnd::nf_adapted, SessionEnd::inflation_cap,
+                                              SessionEnd::dangling, SessionEnd::pending,    SessionEnd::skip_off};
 /// The counter of a reason: "session_end_nf_max", ...
 std::string session_end_counter(SessionEnd end);
 /// Appends the step's session_end_* counters (one per reason in kSessionEnds, 1 for `end`).

@@ -19,8 +19,7 @@ Box3 swept_face_box(const Face& face, std::span<const Vec3> x0, std::span<const 
   return widened(box, inflation);
 }
 
-void TriangleBvh::build(const MeshTopology& topology, FaceId first_face, std::size_t face_count,
-                        std::span<const Vec3> x) {
+void TriangleBvh::build(const MeshTopology& topology, FaceId first_face, std::size_t face_count, std::span<const Vec3> x) {
   first_face_ = first_face;
   nodes_.clear();
   bottom_up_.clear();
@@ -97,8 +96,7 @@ void TriangleBvh::enlarge_leaf(FaceId f, const Box3& box) {
 }
 
 template <class Inflation>
-void TriangleBvh::refit_with(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                             Inflation inflation) {
+void TriangleBvh::refit_with(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1, Inflation inflation) {
   tbb::parallel_for(std::size_t{0}, nodes_.size(), [&](std::size_t n) {
     Node& node = nodes_[n];
     if (!node.is_leaf()) return;
@@ -110,13 +108,11 @@ void TriangleBvh::refit_with(const MeshTopology& topology, std::span<const Vec3>
   }
 }
 
-void TriangleBvh::refit(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                        double inflation) {
+void TriangleBvh::refit(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1, double inflation) {
   refit_with(topology, x0, x1, [inflation](FaceId) { return inflation; });
 }
 
-void TriangleBvh::refit(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1,
-                        std::span<const double> inflation) {
+void TriangleBvh::refit(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1, std::span<const double> inflation) {
   refit_with(topology, x0, x1, [&](FaceId f) { return inflation[f - first_face_]; });
 }
 
@@ -250,9 +246,8 @@ std::vector<TrianglePair> self_overlaps(const TriangleBvh& tree) {
   std::vector<std::size_t> offsets(chunks + 1, 0);
   for (std::size_t c = 0; c < chunks; ++c) offsets[c + 1] = offsets[c] + lists[c].size();
   std::vector<TrianglePair> pairs(offsets[chunks]);
-  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-    std::copy(lists[c].begin(), lists[c].end(), pairs.begin() + static_cast<std::ptrdiff_t>(offsets[c]));
-  });
+  tbb::parallel_for(std::size_t{0}, chunks,
+                    [&](std::size_t c) { std::copy(lists[c].begin(), lists[c].end(), pairs.begin() + static_cast<std::ptrdiff_t>(offsets[c])); });
   return pairs;
 }
 
@@ -268,8 +263,7 @@ std::vector<TrianglePair> pair_overlaps(const TriangleBvh& a, const TriangleBvh&
   return traverse(Traversal{a, b, b_offset}, {false, 0, 0});
 }
 
-std::vector<TrianglePair> subset_overlaps(std::span<const FaceId> subset, std::span<const Box3> subset_boxes,
-                                          const TriangleBvh& tree) {
+std::vector<TrianglePair> subset_overlaps(std::span<const FaceId> subset, std::span<const Box3> subset_boxes, const TriangleBvh& tree) {
   if (tree.empty() || subset.empty()) return {};
   tbb::enumerable_thread_specific<Sink> sinks;
   tbb::parallel_for(std::size_t{0}, subset.size(), [&](std::size_t i) {

@@ -27,8 +27,7 @@ inline constexpr double kBoxRoundingMargin = 0x1p-50;
 /// Widens `box` by widening[k] on both sides along axis k, with the rounding room above.
 inline Box3 widened(const Box3& box, const Vec3& widening) {
   const auto room = [&](const Vec3& corner) {
-    return Vec3((corner.cwiseAbs().array() + widening.array()) * kBoxRoundingMargin + widening.array() +
-                std::numeric_limits<double>::denorm_min());
+    return Vec3((corner.cwiseAbs().array() + widening.array()) * kBoxRoundingMargin + widening.array() + std::numeric_limits<double>::denorm_min());
   };
   return Box3(box.min() - room(box.min()), box.max() + room(box.max()));
 }
@@ -60,8 +59,7 @@ class TriangleBvh {
   /// Leaf boxes become the faces' swept boxes over x0 -> x1 widened by `inflation`, internal nodes their union.
   void refit(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1, double inflation);
   /// The same with a per-face widening (`inflation[f - first_face]`), for strategies that inflate by local motion.
-  void refit(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1,
-             std::span<const double> inflation);
+  void refit(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1, std::span<const double> inflation);
 
   /// Grows the leaf box of global face f to also hold `box`, and its ancestors with it: the hierarchy stays valid
   /// for a face that moved beyond the box it was fitted with.
@@ -104,12 +102,10 @@ std::vector<TrianglePair> self_overlaps(const TriangleBvh& tree);
 std::vector<TrianglePair> self_overlaps_tree_pairs(const TriangleBvh& tree);
 /// Every pair (face of a, face of b) whose boxes overlap, as (smaller id, larger id), sorted. With `b_offset`,
 /// b's boxes are first swept by that box of translations (b's frame moved relative to a's).
-std::vector<TrianglePair> pair_overlaps(const TriangleBvh& a, const TriangleBvh& b,
-                                        const Box3& b_offset = Box3(Vec3::Zero(), Vec3::Zero()));
+std::vector<TrianglePair> pair_overlaps(const TriangleBvh& a, const TriangleBvh& b, const Box3& b_offset = Box3(Vec3::Zero(), Vec3::Zero()));
 
 /// Pairs (f, g), f in `subset` with box `subset_boxes[i]`, g a face of `tree` whose leaf box overlaps it, f != g:
 /// the partial traversal of a strategy that re-checks only some faces. (smaller, larger), sorted, no duplicates.
-std::vector<TrianglePair> subset_overlaps(std::span<const FaceId> subset, std::span<const Box3> subset_boxes,
-                                          const TriangleBvh& tree);
+std::vector<TrianglePair> subset_overlaps(std::span<const FaceId> subset, std::span<const Box3> subset_boxes, const TriangleBvh& tree);
 
 }  // namespace ccd::bvh

@@ -12,9 +12,7 @@ namespace {
 
 using Intersect = fcl::detail::Intersect<double>;
 
-bool fcl_answer(const narrowphase::PairRows& rows, bool vertex_face) {
-  return vertex_face ? fcl_vertex_face(rows) : fcl_edge_edge(rows);
-}
+bool fcl_answer(const narrowphase::PairRows& rows, bool vertex_face) { return vertex_face ? fcl_vertex_face(rows) : fcl_edge_edge(rows); }
 
 // FCL 0.7's near-zero threshold (intersect-inl.h: getNearZeroThreshold, private there).
 constexpr double kFclNearZero = 1e-7;

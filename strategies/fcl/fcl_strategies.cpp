@@ -36,11 +36,11 @@
 #include "strategies/fcl/fcl_elementary.hpp"
 
 // utility.h declares fcl::fit, which BVH_model-inl.h uses without including it.
-#include <fcl/math/bv/utility.h>
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/math/bv/AABB.h>
 #include <fcl/math/bv/OBBRSS.h>
 #include <fcl/math/bv/kDOP.h>
+#include <fcl/math/bv/utility.h>
 #include <fcl/narrowphase/detail/traversal/collision/mesh_continuous_collision_traversal_node.h>
 #include <fcl/narrowphase/detail/traversal/collision_node.h>
 
@@ -154,8 +154,10 @@ bvh::TrianglePair global_pair(FaceId first_a, int a, FaceId first_b, int b) {
 
 void refuse_thickness(const Scene& scene, const std::string& name) {
   if (scene.thickness() > 0) {
-    throw std::invalid_argument(name + " works at δ = 0 only: FCL has no thickness and its volumes are not inflated, "
-                                "but this scene's δ is " + std::to_string(scene.thickness()) + " (run with --thickness 0)");
+    throw std::invalid_argument(name +
+                                " works at δ = 0 only: FCL has no thickness and its volumes are not inflated, "
+                                "but this scene's δ is " +
+                                std::to_string(scene.thickness()) + " (run with --thickness 0)");
   }
   // FCL's continuous collision of shapes (fcl::Sphere, fcl::Box) moves whole rigid objects; a deforming cloth
   // against them would need one rigid model per face and step, which no peer does. These baselines stay with
@@ -356,7 +358,9 @@ std::vector<StrategyEntry> fcl_strategies_entries() {
   fcl_bvh.help = "FCL's BVH as the broad phase, then this project's expansion and narrow phase (δ = 0)";
   fcl_bvh.keys = {bv};
 #if CCDBENCH_WITH_FCL
-  fcl.explain_miss = [](const narrowphase::PairRows& rows, bool vertex_face) { return std::string(to_string(explain_fcl_answer(rows, vertex_face))); };
+  fcl.explain_miss = [](const narrowphase::PairRows& rows, bool vertex_face) {
+    return std::string(to_string(explain_fcl_answer(rows, vertex_face)));
+  };
   fcl.elementary_test = [](const narrowphase::PairRows& rows, bool vertex_face) { return vertex_face ? fcl_vertex_face(rows) : fcl_edge_edge(rows); };
   fcl.make = [](StrategyRequest request) { return with_bounding_volume<FclContinuous>(request.keys.choice("bv")); };
   fcl_bvh.make = [](StrategyRequest request) {

@@ -59,8 +59,8 @@ class Advancement final : public NarrowPhase {
     for (long iteration = 0; iteration < settings_.max_iterations; ++iteration) {
       std::array<Vec3, 4> x;
       for (int k = 0; k < 4; ++k) x[k] = x0[k] + t * dx[k];
-      const double distance = std::sqrt(vertex_face ? point_triangle_squared_distance(x[0], x[1], x[2], x[3])
-                                                    : segment_segment_squared_distance(x[0], x[1], x[2], x[3]));
+      const double distance =
+          std::sqrt(vertex_face ? point_triangle_squared_distance(x[0], x[1], x[2], x[3]) : segment_segment_squared_distance(x[0], x[1], x[2], x[3]));
       if (distance <= stop) {
         result.collides = true;
         result.toi = t;
@@ -85,16 +85,18 @@ class Advancement final : public NarrowPhase {
 
 std::vector<NarrowPhaseEntry> advancement_entries() {
   const AdvancementSettings defaults;
-  return {{"advancement",
-           "conservative advancement by minimum separation, in plain doubles: not conservative, it can miss or be late by the rounding of its distances",
-           {KeySpec::number("eta", defaults.eta, kFractionOfPairRange, "distance at which it stops and reports a contact, a fraction of the pair's box diagonal"),
-            KeySpec::integer("max_iterations", defaults.max_iterations, kIterationRange,
-                             "advancement steps before giving up (and answering \"collides\")")},
-           false,
-           {{"eta", {"0", "1e-8", "1e-6", "1e-4", "1e-2"}}},
-           [](const SpecReader& keys) -> std::unique_ptr<NarrowPhase> {
-             return std::make_unique<Advancement>(AdvancementSettings{keys.number("eta"), keys.integer("max_iterations")});
-           }}};
+  return {
+      {"advancement",
+       "conservative advancement by minimum separation, in plain doubles: not conservative, it can miss or be late by the rounding of its distances",
+       {KeySpec::number("eta", defaults.eta, kFractionOfPairRange,
+                        "distance at which it stops and reports a contact, a fraction of the pair's box diagonal"),
+        KeySpec::integer("max_iterations", defaults.max_iterations, kIterationRange,
+                         "advancement steps before giving up (and answering \"collides\")")},
+       false,
+       {{"eta", {"0", "1e-8", "1e-6", "1e-4", "1e-2"}}},
+       [](const SpecReader& keys) -> std::unique_ptr<NarrowPhase> {
+         return std::make_unique<Advancement>(AdvancementSettings{keys.number("eta"), keys.integer("max_iterations")});
+       }}};
 }
 
 }  // namespace ccd::narrowphase

@@ -60,7 +60,8 @@ template <class T>
 NarrowPhaseEntry cubic_entry(std::string name, std::string help) {
   return {std::move(name),
           std::move(help),
-          {KeySpec::number("eta", CubicSettings{}.eta, kFractionOfPairRange, "distance tolerance at the candidate times, a fraction of the pair's box diagonal")},
+          {KeySpec::number("eta", CubicSettings{}.eta, kFractionOfPairRange,
+                           "distance tolerance at the candidate times, a fraction of the pair's box diagonal")},
           false,
           {{"eta", {"0", "1e-8", "1e-6", "1e-4", "1e-2"}}},
           [](const SpecReader& keys) -> std::unique_ptr<NarrowPhase> { return std::make_unique<Cubic<T>>(CubicSettings{keys.number("eta")}); }};

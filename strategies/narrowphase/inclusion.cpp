@@ -5,8 +5,8 @@
 /// the iteration cap was hit (reported). Its TOI is never later than the exact earliest contact, and no earlier than
 /// a proven contact by more than toi_tolerance.
 
-#include "strategies/narrowphase/round_to_nearest.hpp"
 #include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase/round_to_nearest.hpp"
 #include "strategies/narrowphase/shared.hpp"
 
 #include <vector>
@@ -33,9 +33,9 @@ struct InclusionSettings {
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("arch=x86-64-v3", "default"), flatten))
 #endif
-shared::f64::ccd_conservative_outcome conservative_search(const shared::f64::ccd_v3 rows[8], double thickness, bool vertex_face,
-                                                          double tolerance, double toi_tolerance, long max_iterations, shared::f64::ccd_sub_box* storage,
-                                                          int capacity) {
+shared::f64::ccd_conservative_outcome
+conservative_search(const shared::f64::ccd_v3 rows[8], double thickness, bool vertex_face, double tolerance, double toi_tolerance,
+                    long max_iterations, shared::f64::ccd_sub_box* storage, int capacity) {
   return shared::f64::ccd_conservative_test(rows, thickness, vertex_face, tolerance, toi_tolerance, max_iterations, 0, storage, capacity);
 }
 
@@ -67,8 +67,8 @@ class InclusionTest final : public NarrowPhase {
     shared::f64::ccd_sub_box* storage = inline_boxes;
     int capacity = kInlineBoxes;
     while (true) {
-      const shared::f64::ccd_conservative_outcome outcome =
-          conservative_search(rows.data(), thickness, vertex_face, settings_.tolerance, settings_.toi_tolerance, settings_.max_iterations, storage, capacity);
+      const shared::f64::ccd_conservative_outcome outcome = conservative_search(rows.data(), thickness, vertex_face, settings_.tolerance,
+                                                                                settings_.toi_tolerance, settings_.max_iterations, storage, capacity);
       if (!outcome.overflow) return {outcome.collides != 0, outcome.toi, outcome.hit_iteration_cap != 0, outcome.achieved_tolerance, {}};
       capacity *= 4;
       more.resize(static_cast<std::size_t>(capacity));
@@ -97,7 +97,8 @@ std::vector<NarrowPhaseEntry> inclusion_entries() {
            true,
            {{"tolerance", {"1e-2", "1e-4", "1e-6", "1e-8", "1e-10", "1e-12"}}, {"toi_tolerance", {"1e-2", "1e-4", "1e-8", "1e-10"}}},
            [](const SpecReader& keys) -> std::unique_ptr<NarrowPhase> {
-             return std::make_unique<InclusionTest>(InclusionSettings{keys.number("tolerance"), keys.number("toi_tolerance"), keys.integer("max_iterations")});
+             return std::make_unique<InclusionTest>(
+                 InclusionSettings{keys.number("tolerance"), keys.number("toi_tolerance"), keys.integer("max_iterations")});
            }}};
 }
 

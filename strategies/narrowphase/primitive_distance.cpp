@@ -8,8 +8,7 @@ namespace ccd::narrowphase {
 // text the OpenCL kernels compile.
 
 template <class T>
-ClosestPoints<T> point_triangle_closest_points(const Vector3<T>& p, const Vector3<T>& a, const Vector3<T>& b,
-                                               const Vector3<T>& c) {
+ClosestPoints<T> point_triangle_closest_points(const Vector3<T>& p, const Vector3<T>& a, const Vector3<T>& b, const Vector3<T>& c) {
   using namespace shared;
   const auto closest = [&] {
     if constexpr (sizeof(T) == 4) {
@@ -22,8 +21,7 @@ ClosestPoints<T> point_triangle_closest_points(const Vector3<T>& p, const Vector
 }
 
 template <class T>
-ClosestPoints<T> segment_segment_closest_points(const Vector3<T>& p0, const Vector3<T>& p1, const Vector3<T>& q0,
-                                               const Vector3<T>& q1) {
+ClosestPoints<T> segment_segment_closest_points(const Vector3<T>& p0, const Vector3<T>& p1, const Vector3<T>& q0, const Vector3<T>& q1) {
   using namespace shared;
   const auto closest = [&] {
     if constexpr (sizeof(T) == 4) {
@@ -35,13 +33,13 @@ ClosestPoints<T> segment_segment_closest_points(const Vector3<T>& p0, const Vect
   return {from_shared(closest.first), from_shared(closest.second)};
 }
 
-template ClosestPoints<float> point_triangle_closest_points(const Vector3<float>&, const Vector3<float>&,
-                                                           const Vector3<float>&, const Vector3<float>&);
-template ClosestPoints<double> point_triangle_closest_points(const Vector3<double>&, const Vector3<double>&,
-                                                            const Vector3<double>&, const Vector3<double>&);
-template ClosestPoints<float> segment_segment_closest_points(const Vector3<float>&, const Vector3<float>&,
-                                                            const Vector3<float>&, const Vector3<float>&);
-template ClosestPoints<double> segment_segment_closest_points(const Vector3<double>&, const Vector3<double>&,
-                                                             const Vector3<double>&, const Vector3<double>&);
+template ClosestPoints<float> point_triangle_closest_points(const Vector3<float>&, const Vector3<float>&, const Vector3<float>&,
+                                                            const Vector3<float>&);
+template ClosestPoints<double> point_triangle_closest_points(const Vector3<double>&, const Vector3<double>&, const Vector3<double>&,
+                                                             const Vector3<double>&);
+template ClosestPoints<float> segment_segment_closest_points(const Vector3<float>&, const Vector3<float>&, const Vector3<float>&,
+                                                             const Vector3<float>&);
+template ClosestPoints<double> segment_segment_closest_points(const Vector3<double>&, const Vector3<double>&, const Vector3<double>&,
+                                                              const Vector3<double>&);
 
 }  // namespace ccd::narrowphase

@@ -20,13 +20,11 @@ struct ClosestPoints {
 
 /// p against the closed triangle (a, b, c); degenerate triangles fall back to their edges.
 template <class T>
-ClosestPoints<T> point_triangle_closest_points(const Vector3<T>& p, const Vector3<T>& a, const Vector3<T>& b,
-                                               const Vector3<T>& c);
+ClosestPoints<T> point_triangle_closest_points(const Vector3<T>& p, const Vector3<T>& a, const Vector3<T>& b, const Vector3<T>& c);
 
 /// The closed segments [p0, p1] and [q0, q1]; zero-length segments are points.
 template <class T>
-ClosestPoints<T> segment_segment_closest_points(const Vector3<T>& p0, const Vector3<T>& p1, const Vector3<T>& q0,
-                                               const Vector3<T>& q1);
+ClosestPoints<T> segment_segment_closest_points(const Vector3<T>& p0, const Vector3<T>& p1, const Vector3<T>& q0, const Vector3<T>& q1);
 
 /// Squared distance from p to the closed triangle (a, b, c): of its computed closest points.
 template <class T>
@@ -37,19 +35,18 @@ T point_triangle_squared_distance(const Vector3<T>& p, const Vector3<T>& a, cons
 
 /// Squared distance between the closed segments [p0, p1] and [q0, q1]: of their computed closest points.
 template <class T>
-T segment_segment_squared_distance(const Vector3<T>& p0, const Vector3<T>& p1, const Vector3<T>& q0,
-                                   const Vector3<T>& q1) {
+T segment_segment_squared_distance(const Vector3<T>& p0, const Vector3<T>& p1, const Vector3<T>& q0, const Vector3<T>& q1) {
   const ClosestPoints<T> closest = segment_segment_closest_points(p0, p1, q0, q1);
   return (closest.first - closest.second).squaredNorm();
 }
 
-extern template ClosestPoints<float> point_triangle_closest_points(const Vector3<float>&, const Vector3<float>&,
-                                                                  const Vector3<float>&, const Vector3<float>&);
-extern template ClosestPoints<double> point_triangle_closest_points(const Vector3<double>&, const Vector3<double>&,
-                                                                   const Vector3<double>&, const Vector3<double>&);
-extern template ClosestPoints<float> segment_segment_closest_points(const Vector3<float>&, const Vector3<float>&,
-                                                                   const Vector3<float>&, const Vector3<float>&);
-extern template ClosestPoints<double> segment_segment_closest_points(const Vector3<double>&, const Vector3<double>&,
-                                                                    const Vector3<double>&, const Vector3<double>&);
+extern template ClosestPoints<float> point_triangle_closest_points(const Vector3<float>&, const Vector3<float>&, const Vector3<float>&,
+                                                                   const Vector3<float>&);
+extern template ClosestPoints<double> point_triangle_closest_points(const Vector3<double>&, const Vector3<double>&, const Vector3<double>&,
+                                                                    const Vector3<double>&);
+extern template ClosestPoints<float> segment_segment_closest_points(const Vector3<float>&, const Vector3<float>&, const Vector3<float>&,
+                                                                    const Vector3<float>&);
+extern template ClosestPoints<double> segment_segment_closest_points(const Vector3<double>&, const Vector3<double>&, const Vector3<double>&,
+                                                                     const Vector3<double>&);
 
 }  // namespace ccd::narrowphase

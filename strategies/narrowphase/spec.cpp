@@ -48,9 +48,7 @@ KeySpec KeySpec::on_off(std::string name, bool default_value, std::string help) 
                 {{"true", "on"}, {"1", "on"}, {"false", "off"}, {"0", "off"}});
 }
 
-KeySpec KeySpec::text(std::string name, std::string help) {
-  return {std::move(name), Kind::text, {0, 0}, {}, {}, "", std::move(help)};
-}
+KeySpec KeySpec::text(std::string name, std::string help) { return {std::move(name), Kind::text, {0, 0}, {}, {}, "", std::move(help)}; }
 
 std::string KeySpec::allowed() const {
   std::ostringstream text;

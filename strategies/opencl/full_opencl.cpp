@@ -74,8 +74,8 @@ class FullOpenCl final : public Strategy {
     run_face_shape_stage(result, pipeline_.scene(), step, *pipeline_.narrow_phase().host, audit);
     result.counters.candidate_triangle_pairs = candidates;
     result.counters.elementary_tests = tests;
-    result.counters.device_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() +
-                                    candidates_.buffer.bytes() + elementary_.buffer.bytes() + kept_.buffer.bytes();
+    result.counters.device_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() + candidates_.buffer.bytes() +
+                                   elementary_.buffer.bytes() + kept_.buffer.bytes();
     opencl::add_launch_and_wait(result, started);
     return result;
   }
@@ -94,8 +94,8 @@ class FullOpenCl final : public Strategy {
 std::vector<OpenClDeviceSummary> opencl_devices() {
   std::vector<OpenClDeviceSummary> summaries;
   for (const opencl::DeviceInfo& d : opencl::list_devices()) {
-    OpenClDeviceSummary s{d.index, d.platform, d.name, d.version, d.driver, d.is_gpu, d.compute_units, d.global_memory, d.fp64, d.fp64_denormals,
-                          d.int64_atomics, ""};
+    OpenClDeviceSummary s{d.index,         d.platform,      d.name, d.version,        d.driver,        d.is_gpu,
+                          d.compute_units, d.global_memory, d.fp64, d.fp64_denormals, d.int64_atomics, ""};
     try {
       opencl::require_double_precision(d);
     } catch (const std::invalid_argument& refusal) {
@@ -117,13 +117,15 @@ std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPh
 #else
 
 std::vector<OpenClDeviceSummary> opencl_devices() {
-  throw std::invalid_argument("OpenCL is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
-                              "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
+  throw std::invalid_argument(
+      "OpenCL is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
+      "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }
 
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const BackendChoice&, bool) {
-  throw std::invalid_argument("backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
-                              "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
+  throw std::invalid_argument(
+      "backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
+      "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }
 
 #endif

@@ -150,8 +150,8 @@ void DevicePipeline::build_hierarchies(const Scene& scene, std::span<const Vec3>
       moving_node.push_back(object.kind != ObjectKind::static_object);
       if (node.is_leaf()) leaf_node_[node.face] = static_cast<cl_uint>(base) + static_cast<cl_uint>(n);
       if (local_depth[n] + 1 >= kTraversalStack) {
-        throw std::invalid_argument(label_ + ": object " + object.name + "'s hierarchy is deeper than the " +
-                                    std::to_string(kTraversalStack) + " levels its traversal stack holds");
+        throw std::invalid_argument(label_ + ": object " + object.name + "'s hierarchy is deeper than the " + std::to_string(kTraversalStack) +
+                                    " levels its traversal stack holds");
       }
     }
   }
@@ -288,15 +288,16 @@ void DevicePipeline::refit_levels(const RefitPlan& plan, const Buffer& node_boxe
   launch_run(offsets.size() - 1);
 }
 
-std::size_t DevicePipeline::traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out,
-                                     StageEvents& events, const char* stage) {
+std::size_t DevicePipeline::traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out, StageEvents& events,
+                                     const char* stage) {
   if (out.capacity == 0) out.capacity = list_start(std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024));
   const cl_mem offset_memory = offsets != nullptr ? offsets->get() : nullptr;
-  const std::size_t candidates = fill_list("traverse", queries.count, out, sizeof(cl_uint2), events, stage, [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
-    set_arguments(kernel, static_cast<cl_uint>(queries.count), queries.leaf.get(), queries.face.get(), queries.root.get(), queries.mode.get(),
-                  queries.offset_index.get(), offset_memory, node_boxes.get(), children_.get(), node_face_.get(), max_face_.get(), capacity,
-                  counter.get(), out.buffer.get());
-  });
+  const std::size_t candidates =
+      fill_list("traverse", queries.count, out, sizeof(cl_uint2), events, stage, [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+        set_arguments(kernel, static_cast<cl_uint>(queries.count), queries.leaf.get(), queries.face.get(), queries.root.get(), queries.mode.get(),
+                      queries.offset_index.get(), offset_memory, node_boxes.get(), children_.get(), node_face_.get(), max_face_.get(), capacity,
+                      counter.get(), out.buffer.get());
+      });
   return candidates;
 }
 
@@ -328,9 +329,10 @@ std::size_t DevicePipeline::filter(const Buffer& elementary, std::size_t count, 
   set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), keep_.get());
   launch(context, kernel, count, narrow_group(kernel), events.add("distance heuristic"));
   if (out.capacity == 0) out.capacity = initial_elementary_capacity_;
-  return fill_list("compact_kept", count, out, sizeof(cl_uint4), events, "distance heuristic", [&](cl_kernel compact, cl_uint capacity, const Buffer& counter) {
-    set_arguments(compact, static_cast<cl_uint>(count), elementary.get(), keep_.get(), capacity, counter.get(), out.buffer.get());
-  });
+  return fill_list("compact_kept", count, out, sizeof(cl_uint4), events, "distance heuristic",
+                   [&](cl_kernel compact, cl_uint capacity, const Buffer& counter) {
+                     set_arguments(compact, static_cast<cl_uint>(count), elementary.get(), keep_.get(), capacity, counter.get(), out.buffer.get());
+                   });
 }
 
 std::size_t DevicePipeline::narrow_group(cl_kernel kernel) const {
@@ -348,8 +350,8 @@ void DevicePipeline::launch_conservative(const Buffer& pairs, std::size_t count,
   cl_kernel kernel = context_->kernel("narrow_conservative");
   const cl_double tolerance = narrow_phase_.form.accuracy, toi_tolerance = narrow_phase_.form.toi_tolerance;
   const cl_long max_iterations = narrow_phase_.form.max_iterations, give_up_after = limit;
-  set_arguments(kernel, static_cast<cl_uint>(count), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), tolerance, toi_tolerance, max_iterations,
-                give_up_after, status.get(), toi.get());
+  set_arguments(kernel, static_cast<cl_uint>(count), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), tolerance, toi_tolerance,
+                max_iterations, give_up_after, status.get(), toi.get());
   launch(*context_, kernel, count, narrow_group(kernel), events.add("narrow phase"));
 }
 
@@ -383,17 +385,18 @@ void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const
   } else {
     cl_kernel kernel = context.kernel("narrow_cubic");
     const cl_double eta = narrow_phase_.form.accuracy;
-    set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), eta,
-                  status_.get(), toi_.get());
+    set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), eta, status_.get(),
+                  toi_.get());
     launch(context, kernel, count, narrow_group(kernel), events.add("narrow phase"));
   }
   // The compaction of what collides (or needs another pass).
-  const std::size_t kept = fill_list("compact", count, out_, sizeof(cl_uint4), events, "narrow phase", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
-    out_status_.reserve(context, std::max<std::size_t>(out_.capacity, 1));
-    out_toi_.reserve(context, std::max<std::size_t>(out_.capacity, 1) * sizeof(double));
-    set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), status_.get(), toi_.get(), capacity, counter.get(), out_.buffer.get(),
-                  out_status_.get(), out_toi_.get());
-  });
+  const std::size_t kept =
+      fill_list("compact", count, out_, sizeof(cl_uint4), events, "narrow phase", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+        out_status_.reserve(context, std::max<std::size_t>(out_.capacity, 1));
+        out_toi_.reserve(context, std::max<std::size_t>(out_.capacity, 1) * sizeof(double));
+        set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), status_.get(), toi_.get(), capacity, counter.get(), out_.buffer.get(),
+                      out_status_.get(), out_toi_.get());
+      });
   std::vector<cl_uint4> pairs(kept);
   std::vector<cl_uchar> status(kept);
   std::vector<double> toi(kept);
@@ -437,8 +440,9 @@ void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const
       const std::size_t i = on_host[j];
       const cl_uint4& p = pairs[i];
       const narrowphase::NarrowPhaseResult r =
-          p.s[2] == kVertexFace ? host.vertex_face(pair_rows(scene_->topology(), step.x0, step.x1, VertexFacePair{p.s[0], p.s[1]}), scene_->thickness())
-                                : host.edge_edge(pair_rows(scene_->topology(), step.x0, step.x1, edge_pair(p)), scene_->thickness());
+          p.s[2] == kVertexFace
+              ? host.vertex_face(pair_rows(scene_->topology(), step.x0, step.x1, VertexFacePair{p.s[0], p.s[1]}), scene_->thickness())
+              : host.edge_edge(pair_rows(scene_->topology(), step.x0, step.x1, edge_pair(p)), scene_->thickness());
       status[i] = r.collides ? 1 : 0;
       toi[i] = r.toi;
     });
@@ -489,9 +493,10 @@ strategies::TestedPairs DevicePipeline::tested_pairs(const Buffer& elementary, s
 
 std::size_t DevicePipeline::bytes() const {
   std::size_t total = 0;
-  for (const Buffer* b : {&keep_, &faces_, &face_edges_, &edges_, &masks_, &children_, &node_face_, &max_face_, &leaf_node_buffer_, &all_.leaves, &moving_.leaves,
-                          &all_.levels, &moving_.levels, &all_.offsets, &moving_.offsets, &vertex_boxes_, &counter_, &status_, &toi_, &out_.buffer, &out_status_, &out_toi_,
-                          &retry_pairs_, &retry_status_, &retry_toi_}) {
+  for (const Buffer* b :
+       {&keep_,       &faces_,         &face_edges_, &edges_,         &masks_,       &children_,       &node_face_,    &max_face_, &leaf_node_buffer_,
+        &all_.leaves, &moving_.leaves, &all_.levels, &moving_.levels, &all_.offsets, &moving_.offsets, &vertex_boxes_, &counter_,  &status_,
+        &toi_,        &out_.buffer,    &out_status_, &out_toi_,       &retry_pairs_, &retry_status_,   &retry_toi_}) {
     total += b->bytes();
   }
   return total;

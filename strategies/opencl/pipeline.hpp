@@ -108,7 +108,9 @@ class DevicePipeline {
   const DeviceInfo& device() const { return device_; }
   /// The device as results record it: platform, device, its OpenCL version and driver.
   std::vector<std::pair<std::string, std::string>> provenance() const {
-    return {{"opencl_platform", device_.platform}, {"opencl_device", device_.name}, {"opencl_version", device_.version},
+    return {{"opencl_platform", device_.platform},
+            {"opencl_device", device_.name},
+            {"opencl_version", device_.version},
             {"opencl_driver", device_.driver}};
   }
 
@@ -144,8 +146,8 @@ class DevicePipeline {
   /// Runs a list-filling kernel: resets the counter, launches over `items` with the list's room, reads the total;
   /// when the list did not fit, grows it to the total and runs again. Returns the total (also in list.count).
   template <class SetArguments>
-  std::size_t fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes, StageEvents& events,
-                        const char* stage, SetArguments set);
+  std::size_t fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes, StageEvents& events, const char* stage,
+                        SetArguments set);
 
   /// Candidate triangle pairs of `queries` against `node_boxes` (offsets: 6 doubles per collidable pair, or none).
   std::size_t traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out, StageEvents& events,
@@ -198,8 +200,8 @@ class DevicePipeline {
 };
 
 template <class SetArguments>
-std::size_t DevicePipeline::fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes,
-                                      StageEvents& events, const char* stage, SetArguments set) {
+std::size_t DevicePipeline::fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes, StageEvents& events,
+                                      const char* stage, SetArguments set) {
   Context& context = *context_;
   cl_kernel kernel = context.kernel(kernel_name);
   while (true) {

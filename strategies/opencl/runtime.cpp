@@ -255,9 +255,8 @@ void Buffer::reserve(Context& context, std::size_t bytes) {
   if (bytes <= bytes_ && memory_ != nullptr) return;
   const std::size_t grown = std::max<std::size_t>({bytes, bytes_ + bytes_ / 2, 64});
   if (grown > context.device().max_allocation) {
-    throw OpenClError("OpenCL: a buffer of " + std::to_string(grown) + " bytes is more than device " +
-                      std::to_string(context.device().index) + " (" + context.device().name + ") allocates at once (" +
-                      std::to_string(context.device().max_allocation) + ")");
+    throw OpenClError("OpenCL: a buffer of " + std::to_string(grown) + " bytes is more than device " + std::to_string(context.device().index) + " (" +
+                      context.device().name + ") allocates at once (" + std::to_string(context.device().max_allocation) + ")");
   }
   if (memory_ != nullptr) clReleaseMemObject(memory_);
   memory_ = nullptr;

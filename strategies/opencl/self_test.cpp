@@ -83,7 +83,8 @@ void check_device_arithmetic(Context& context) {
   const cl_uint count = static_cast<cl_uint>(kPairs);
   const cl_double tolerance = kTolerance, toi_tolerance = kToiTolerance, eta = kEta;
   const cl_long max_iterations = kMaxIterations;
-  set_arguments(pairs, count, rows_buffer.get(), kinds_buffer.get(), thickness_buffer.get(), tolerance, toi_tolerance, max_iterations, eta, out_buffer.get());
+  set_arguments(pairs, count, rows_buffer.get(), kinds_buffer.get(), thickness_buffer.get(), tolerance, toi_tolerance, max_iterations, eta,
+                out_buffer.get());
   launch(context, pairs, kPairs, 64, nullptr);
   std::vector<double> device(kPairs * 6);
   download(context, out_buffer, device.data(), device.size());
@@ -97,18 +98,18 @@ void check_device_arithmetic(Context& context) {
       r[k] = narrowphase::shared::f64::ccd_v3_make(rows[at], rows[at + 1], rows[at + 2]);
     }
     const auto c = narrowphase::shared::f64::ccd_conservative_test(r, thickness[i], kinds[i], kTolerance, kToiTolerance, kMaxIterations, 0,
-                                                                    storage.data(), static_cast<int>(storage.size()));
+                                                                   storage.data(), static_cast<int>(storage.size()));
     const auto q = narrowphase::shared::f64::ccd_cubic_test(r, thickness[i], kEta, kinds[i]);
     const double host[6] = {static_cast<double>(c.collides), c.toi, c.achieved_tolerance, static_cast<double>(q.collides), q.toi, q.reach};
-    const char* field[6] = {"conservative's answer", "conservative's TOI", "conservative's tolerance", "cubic64's answer",
-                            "cubic64's TOI", "cubic64's reach"};
+    const char* field[6] = {"conservative's answer", "conservative's TOI", "conservative's tolerance",
+                            "cubic64's answer",      "cubic64's TOI",      "cubic64's reach"};
     for (int k = 0; k < 6; ++k) {
       const double d = device[6 * i + static_cast<std::size_t>(k)];
       if (k < 3 && device[6 * i] < 0) continue;  // the device ran out of sub-boxes: the host decides such pairs
       const bool both_nan = std::isnan(d) && std::isnan(host[k]);
       if (!both_nan && !same_bits(d, host[k])) {
-        refuse(context, std::string(field[k]) + " differs on self-test pair " + std::to_string(i) + " of seed " +
-                            std::to_string(kSelfTestSeed) + " (device " + hex(d) + ", host " + hex(host[k]) + ")");
+        refuse(context, std::string(field[k]) + " differs on self-test pair " + std::to_string(i) + " of seed " + std::to_string(kSelfTestSeed) +
+                            " (device " + hex(d) + ", host " + hex(host[k]) + ")");
       }
     }
   }

@@ -57,8 +57,9 @@ CollisionSet read_step_file(const std::filesystem::path& path, ContactCheck& che
     if (!vertex_face && fields[0] != "ee") throw InputError(path, where, "'" + fields[0] + "' is neither vf nor ee");
     const std::size_t ids = vertex_face ? 2 : 4;
     if (fields.size() != ids + 1 && fields.size() != ids + 2) {
-      throw InputError(path, where, fields[0] + " takes " + std::to_string(ids) + " indices and an optional TOI, not " +
-                                        std::to_string(fields.size() - 1) + " fields");
+      throw InputError(
+          path, where,
+          fields[0] + " takes " + std::to_string(ids) + " indices and an optional TOI, not " + std::to_string(fields.size() - 1) + " fields");
     }
     std::uint64_t id[4] = {};
     for (std::size_t k = 0; k < ids; ++k) {
@@ -106,12 +107,14 @@ class AnswersStrategy final : public strategies::Strategy {
     }
     const std::filesystem::path folder = folder_ / label_;
     if (label_.empty() || !std::filesystem::is_directory(folder)) {
-      throw InputError(folder, {}, "no answer folder for scene '" + label_ + "' (answers:DIR reads DIR/SCENE/" + step_file_name(0) +
-                                       ", one file per step; README \"Answer files\")");
+      throw InputError(folder, {},
+                       "no answer folder for scene '" + label_ + "' (answers:DIR reads DIR/SCENE/" + step_file_name(0) +
+                           ", one file per step; README \"Answer files\")");
     }
     ContactCheck check(scene, ContactCheck::Toi::optional);
     steps_.clear();
-    for (std::size_t k = 0; std::filesystem::exists(folder / step_file_name(k)); ++k) steps_.push_back(read_step_file(folder / step_file_name(k), check));
+    for (std::size_t k = 0; std::filesystem::exists(folder / step_file_name(k)); ++k)
+      steps_.push_back(read_step_file(folder / step_file_name(k), check));
     folder_of_scene_ = folder;
   }
 
@@ -153,7 +156,8 @@ strategies::StrategyEntry answers_entry(const std::string& name) {
     const std::string digest = content_digest(folder);
     const std::string given_digest = request.keys.text("digest");
     if (!given_digest.empty() && given_digest != digest) {
-      throw std::invalid_argument("answers " + folder.string() + ": its files changed (digest " + digest + ", the spec asks for " + given_digest + ")");
+      throw std::invalid_argument("answers " + folder.string() + ": its files changed (digest " + digest + ", the spec asks for " + given_digest +
+                                  ")");
     }
     return std::make_unique<AnswersStrategy>(folder, digest);
   };

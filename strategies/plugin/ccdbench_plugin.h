@@ -67,9 +67,9 @@ enum ccdbench_outcome { CCDBENCH_APART = 0, CCDBENCH_CONTACT = 1, CCDBENCH_UNDEC
 
 #define CCDBENCH_MESSAGE_SIZE 256
 typedef struct ccdbench_answer {
-  int outcome;                          /* enum ccdbench_outcome */
-  double toi;                           /* CONTACT with CCDBENCH_REPORTS_TOI: the time of impact in [0, 1] */
-  char message[CCDBENCH_MESSAGE_SIZE];  /* UNDECIDED or ERROR: why (ccdbench shows it) */
+  int outcome;                         /* enum ccdbench_outcome */
+  double toi;                          /* CONTACT with CCDBENCH_REPORTS_TOI: the time of impact in [0, 1] */
+  char message[CCDBENCH_MESSAGE_SIZE]; /* UNDECIDED or ERROR: why (ccdbench shows it) */
 } ccdbench_answer;
 
 /* The mesh a whole-step plugin works on, handed over once before the first step (`begin`). Vertex, face and edge
@@ -82,7 +82,7 @@ typedef struct ccdbench_scene {
   size_t edge_count;
   const uint32_t* edges; /* 2 vertex indices per edge */
   size_t object_count;
-  const uint32_t* face_object;         /* the object of each face */
+  const uint32_t* face_object;          /* the object of each face */
   const uint8_t* object_self_collision; /* 1 when the object collides with itself */
   size_t collidable_count;
   const uint32_t* collidable; /* 2 object indices per collidable pair of distinct objects */
@@ -108,9 +108,9 @@ typedef struct ccdbench_plugin {
   size_t size;
   uint32_t abi_version;
 
-  const char* name;    /* a short name ("naive-float") */
-  const char* version; /* the method's own version */
-  const char* help;    /* one line: what it computes and what it claims */
+  const char* name;      /* a short name ("naive-float") */
+  const char* version;   /* the method's own version */
+  const char* help;      /* one line: what it computes and what it claims */
   uint32_t capabilities; /* CCDBENCH_THREAD_SAFE | CCDBENCH_REPORTS_TOI | CCDBENCH_CONSERVATIVE */
   const ccdbench_key* keys;
   size_t key_count;

@@ -66,8 +66,8 @@ void ask(const CCD& ccd, const double* r, double thickness, bool vertex_face, cc
     double toi = 1.0;
     const bool hit = vertex_face ? ccd.point_triangle_ccd(point<V>(r, 0), point<V>(r, 1), point<V>(r, 2), point<V>(r, 3), point<V>(r, 4),
                                                           point<V>(r, 5), point<V>(r, 6), point<V>(r, 7), toi, thickness, 1.0)
-                                 : ccd.edge_edge_ccd(point<V>(r, 0), point<V>(r, 1), point<V>(r, 2), point<V>(r, 3), point<V>(r, 4),
-                                                     point<V>(r, 5), point<V>(r, 6), point<V>(r, 7), toi, thickness, 1.0);
+                                 : ccd.edge_edge_ccd(point<V>(r, 0), point<V>(r, 1), point<V>(r, 2), point<V>(r, 3), point<V>(r, 4), point<V>(r, 5),
+                                                     point<V>(r, 6), point<V>(r, 7), toi, thickness, 1.0);
     answer->outcome = hit ? CCDBENCH_CONTACT : CCDBENCH_APART;
     answer->toi = toi;
   } catch (const std::exception& error) {
@@ -83,8 +83,11 @@ void ask(const CCD& ccd, const double* r, double thickness, bool vertex_face, cc
 template <class CCD, class V>
 class WholeStep {
  public:
-  explicit WholeStep(const ccdbench_scene& s) : vertex_count_(s.vertex_count), faces_(s.faces, s.faces + 3 * s.face_count), face_object_(s.face_object, s.face_object + s.face_count),
-                                                self_(s.object_self_collision, s.object_self_collision + s.object_count) {
+  explicit WholeStep(const ccdbench_scene& s)
+      : vertex_count_(s.vertex_count),
+        faces_(s.faces, s.faces + 3 * s.face_count),
+        face_object_(s.face_object, s.face_object + s.face_count),
+        self_(s.object_self_collision, s.object_self_collision + s.object_count) {
     for (std::size_t k = 0; k < s.collidable_count; ++k) {
       collidable_.insert(key(std::min(s.collidable[2 * k], s.collidable[2 * k + 1]), std::max(s.collidable[2 * k], s.collidable[2 * k + 1])));
     }
@@ -192,7 +195,8 @@ class WholeStep {
     ccdbench_answer answer{};
     ask<CCD, V>(ccd, rows.data(), st.thickness, true, &answer);
     if (answer.outcome == CCDBENCH_CONTACT) out.vertex_face(out.host, v, f, answer.toi);
-    if (answer.outcome == CCDBENCH_ERROR && failure_.empty()) failure_ = "vertex " + std::to_string(v) + ", face " + std::to_string(f) + ": " + answer.message;
+    if (answer.outcome == CCDBENCH_ERROR && failure_.empty())
+      failure_ = "vertex " + std::to_string(v) + ", face " + std::to_string(f) + ": " + answer.message;
   }
   void edge_edge(const CCD& ccd, const ccdbench_step& st, std::pair<std::uint32_t, std::uint32_t> a, std::pair<std::uint32_t, std::uint32_t> b,
                  std::vector<double>& rows, const ccdbench_contacts& out) {
@@ -236,55 +240,67 @@ struct Context {
 }  // namespace ccdbench
 
 /* The plugin's table and entry point, from CLASS (see above). */
-#define CCDBENCH_PLUGIN_FROM_CCD_CLASS(CLASS, VECTOR, NAME, VERSION, HELP, CAPABILITIES)                                       \
-  namespace {                                                                                                                 \
-  using ccdbench_context_type = ::ccdbench::detail::Context<CLASS, VECTOR>;                                                   \
-  void* ccdbench_create(const char* const*, char* error) {                                                                    \
-    try {                                                                                                                     \
-      return new ccdbench_context_type();                                                                                     \
-    } catch (const std::exception& e) {                                                                                       \
-      std::snprintf(error, CCDBENCH_MESSAGE_SIZE, "%s", e.what());                                                            \
-      return nullptr;                                                                                                         \
-    }                                                                                                                         \
-  }                                                                                                                           \
-  void ccdbench_destroy(void* c) { delete static_cast<ccdbench_context_type*>(c); }                                           \
-  void ccdbench_vertex_face(void* c, const double* rows, double thickness, ccdbench_answer* answer) {                         \
-    ::ccdbench::detail::ask<CLASS, VECTOR>(static_cast<ccdbench_context_type*>(c)->ccd, rows, thickness, true, answer);        \
-  }                                                                                                                           \
-  void ccdbench_edge_edge(void* c, const double* rows, double thickness, ccdbench_answer* answer) {                           \
-    ::ccdbench::detail::ask<CLASS, VECTOR>(static_cast<ccdbench_context_type*>(c)->ccd, rows, thickness, false, answer);       \
-  }                                                                                                                           \
-  int ccdbench_begin(void* c, const ccdbench_scene* scene, char* error) {                                                     \
-    auto* context = static_cast<ccdbench_context_type*>(c);                                                                   \
-    try {                                                                                                                     \
-      delete context->whole;                                                                                                  \
-      context->whole = new ::ccdbench::detail::WholeStep<CLASS, VECTOR>(*scene);                                               \
-      return 0;                                                                                                               \
-    } catch (const std::exception& e) {                                                                                       \
-      std::snprintf(error, CCDBENCH_MESSAGE_SIZE, "%s", e.what());                                                            \
-      return 1;                                                                                                               \
-    }                                                                                                                         \
-  }                                                                                                                           \
-  int ccdbench_step(void* c, const ccdbench_step* step, const ccdbench_contacts* contacts, char* error) {                      \
-    auto* context = static_cast<ccdbench_context_type*>(c);                                                                   \
-    try {                                                                                                                     \
-      return context->whole->step(context->ccd, *step, *contacts, error);                                                     \
-    } catch (const std::exception& e) {                                                                                       \
-      std::snprintf(error, CCDBENCH_MESSAGE_SIZE, "%s", e.what());                                                            \
-      return 1;                                                                                                               \
-    }                                                                                                                         \
-  }                                                                                                                           \
-  void ccdbench_end(void* c) {                                                                                                \
-    auto* context = static_cast<ccdbench_context_type*>(c);                                                                   \
-    delete context->whole;                                                                                                    \
-    context->whole = nullptr;                                                                                                 \
-  }                                                                                                                           \
-  const ccdbench_plugin ccdbench_table = {sizeof(ccdbench_plugin), CCDBENCH_PLUGIN_ABI_VERSION, NAME, VERSION, HELP,          \
-                                          CAPABILITIES, nullptr, 0, ccdbench_create, ccdbench_destroy, ccdbench_vertex_face,   \
-                                          ccdbench_edge_edge, ccdbench_begin, ccdbench_step, ccdbench_end};                    \
-  }                                                                                                                           \
-  extern "C" CCDBENCH_PLUGIN_EXPORT const ccdbench_plugin* CCDBENCH_PLUGIN_ENTRY(uint32_t host_abi_version) { \
-    return host_abi_version == CCDBENCH_PLUGIN_ABI_VERSION ? &ccdbench_table : nullptr;                                       \
+#define CCDBENCH_PLUGIN_FROM_CCD_CLASS(CLASS, VECTOR, NAME, VERSION, HELP, CAPABILITIES)                                 \
+  namespace {                                                                                                            \
+  using ccdbench_context_type = ::ccdbench::detail::Context<CLASS, VECTOR>;                                              \
+  void* ccdbench_create(const char* const*, char* error) {                                                               \
+    try {                                                                                                                \
+      return new ccdbench_context_type();                                                                                \
+    } catch (const std::exception& e) {                                                                                  \
+      std::snprintf(error, CCDBENCH_MESSAGE_SIZE, "%s", e.what());                                                       \
+      return nullptr;                                                                                                    \
+    }                                                                                                                    \
+  }                                                                                                                      \
+  void ccdbench_destroy(void* c) { delete static_cast<ccdbench_context_type*>(c); }                                      \
+  void ccdbench_vertex_face(void* c, const double* rows, double thickness, ccdbench_answer* answer) {                    \
+    ::ccdbench::detail::ask<CLASS, VECTOR>(static_cast<ccdbench_context_type*>(c)->ccd, rows, thickness, true, answer);  \
+  }                                                                                                                      \
+  void ccdbench_edge_edge(void* c, const double* rows, double thickness, ccdbench_answer* answer) {                      \
+    ::ccdbench::detail::ask<CLASS, VECTOR>(static_cast<ccdbench_context_type*>(c)->ccd, rows, thickness, false, answer); \
+  }                                                                                                                      \
+  int ccdbench_begin(void* c, const ccdbench_scene* scene, char* error) {                                                \
+    auto* context = static_cast<ccdbench_context_type*>(c);                                                              \
+    try {                                                                                                                \
+      delete context->whole;                                                                                             \
+      context->whole = new ::ccdbench::detail::WholeStep<CLASS, VECTOR>(*scene);                                         \
+      return 0;                                                                                                          \
+    } catch (const std::exception& e) {                                                                                  \
+      std::snprintf(error, CCDBENCH_MESSAGE_SIZE, "%s", e.what());                                                       \
+      return 1;                                                                                                          \
+    }                                                                                                                    \
+  }                                                                                                                      \
+  int ccdbench_step(void* c, const ccdbench_step* step, const ccdbench_contacts* contacts, char* error) {                \
+    auto* context = static_cast<ccdbench_context_type*>(c);                                                              \
+    try {                                                                                                                \
+      return context->whole->step(context->ccd, *step, *contacts, error);                                                \
+    } catch (const std::exception& e) {                                                                                  \
+      std::snprintf(error, CCDBENCH_MESSAGE_SIZE, "%s", e.what());                                                       \
+      return 1;                                                                                                          \
+    }                                                                                                                    \
+  }                                                                                                                      \
+  void ccdbench_end(void* c) {                                                                                           \
+    auto* context = static_cast<ccdbench_context_type*>(c);                                                              \
+    delete context->whole;                                                                                               \
+    context->whole = nullptr;                                                                                            \
+  }                                                                                                                      \
+  const ccdbench_plugin ccdbench_table = {sizeof(ccdbench_plugin),                                                       \
+                                          CCDBENCH_PLUGIN_ABI_VERSION,                                                   \
+                                          NAME,                                                                          \
+                                          VERSION,                                                                       \
+                                          HELP,                                                                          \
+                                          CAPABILITIES,                                                                  \
+                                          nullptr,                                                                       \
+                                          0,                                                                             \
+                                          ccdbench_create,                                                               \
+                                          ccdbench_destroy,                                                              \
+                                          ccdbench_vertex_face,                                                          \
+                                          ccdbench_edge_edge,                                                            \
+                                          ccdbench_begin,                                                                \
+                                          ccdbench_step,                                                                 \
+                                          ccdbench_end};                                                                 \
+  }                                                                                                                      \
+  extern "C" CCDBENCH_PLUGIN_EXPORT const ccdbench_plugin* CCDBENCH_PLUGIN_ENTRY(uint32_t host_abi_version) {            \
+    return host_abi_version == CCDBENCH_PLUGIN_ABI_VERSION ? &ccdbench_table : nullptr;                                  \
   }
 
 #endif /* CCDBENCH_PLUGIN_HPP */

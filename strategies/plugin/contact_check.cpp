@@ -60,15 +60,13 @@ std::optional<VertexFacePair> ContactCheck::vertex_face(std::uint64_t v, std::ui
   return pair;
 }
 
-std::optional<EdgeEdgePair> ContactCheck::edge_edge(std::uint64_t a0, std::uint64_t a1, std::uint64_t b0, std::uint64_t b1,
-                                                    double& toi, std::string& why) {
+std::optional<EdgeEdgePair> ContactCheck::edge_edge(std::uint64_t a0, std::uint64_t a1, std::uint64_t b0, std::uint64_t b1, double& toi,
+                                                    std::string& why) {
   const MeshTopology& topology = scene_.topology();
-  const std::string name = "(" + std::to_string(a0) + ", " + std::to_string(a1) + ") and (" + std::to_string(b0) + ", " +
-                           std::to_string(b1) + ")";
+  const std::string name = "(" + std::to_string(a0) + ", " + std::to_string(a1) + ") and (" + std::to_string(b0) + ", " + std::to_string(b1) + ")";
   for (std::uint64_t v : {a0, a1, b0, b1}) {
     if (v >= topology.num_vertices()) {
-      why = "edges " + name + ": vertex " + std::to_string(v) + " is out of range (the mesh has " +
-            std::to_string(topology.num_vertices()) + ")";
+      why = "edges " + name + ": vertex " + std::to_string(v) + " is out of range (the mesh has " + std::to_string(topology.num_vertices()) + ")";
       return std::nullopt;
     }
   }

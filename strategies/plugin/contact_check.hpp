@@ -26,8 +26,7 @@ class ContactCheck {
   void reset();
   /// The pair as ccdbench names it, or why it is refused. A TOI that is not an answer becomes kNoToi.
   std::optional<VertexFacePair> vertex_face(std::uint64_t v, std::uint64_t f, double& toi, std::string& why);
-  std::optional<EdgeEdgePair> edge_edge(std::uint64_t a0, std::uint64_t a1, std::uint64_t b0, std::uint64_t b1, double& toi,
-                                        std::string& why);
+  std::optional<EdgeEdgePair> edge_edge(std::uint64_t a0, std::uint64_t a1, std::uint64_t b0, std::uint64_t b1, double& toi, std::string& why);
 
  private:
   bool check_toi(double& toi, std::string& why) const;

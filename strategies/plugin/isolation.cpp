@@ -151,8 +151,8 @@ int serve_plugin(int argc, char** argv) {
           !read_array(face_object) || !read_array(self) || !read_array(collidable)) {
         return 1;
       }
-      scene = {vertices, faces.size() / 3, faces.data(), edges.size() / 2, edges.data(), self.size(), face_object.data(), self.data(),
-               collidable.size() / 2, collidable.data()};
+      scene = {vertices,    faces.size() / 3,   faces.data(), edges.size() / 2,      edges.data(),
+               self.size(), face_object.data(), self.data(),  collidable.size() / 2, collidable.data()};
       char message[CCDBENCH_MESSAGE_SIZE] = {};
       const int status = library.table().begin ? library.table().begin(context, &scene, message) : 0;
       message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';

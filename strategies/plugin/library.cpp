@@ -108,7 +108,8 @@ Library::Library(const std::filesystem::path& given) {
         if (!(key.minimum <= key.maximum)) throw refuse("key '" + std::string(key.name) + "': its minimum exceeds its maximum");
         spec = integer ? narrowphase::KeySpec::integer(key.name, 0, {key.minimum, key.maximum}, help)
                        : narrowphase::KeySpec::number(key.name, 0, {key.minimum, key.maximum}, help);
-        const double value = narrowphase::parse_spec_number("plugin " + std::string(table_->name), key.name, text_or(key.default_value, ""), spec.range);
+        const double value =
+            narrowphase::parse_spec_number("plugin " + std::string(table_->name), key.name, text_or(key.default_value, ""), spec.range);
         spec.default_value = integer ? std::to_string(static_cast<long>(value)) : narrowphase::format_spec_number(value);
         break;
       }
@@ -122,7 +123,10 @@ Library::Library(const std::filesystem::path& given) {
         }
         break;
       }
-      case CCDBENCH_KEY_TEXT: spec = narrowphase::KeySpec::text(key.name, help); spec.default_value = text_or(key.default_value, ""); break;
+      case CCDBENCH_KEY_TEXT:
+        spec = narrowphase::KeySpec::text(key.name, help);
+        spec.default_value = text_or(key.default_value, "");
+        break;
       default: throw refuse("key '" + std::string(key.name) + "': unknown kind " + std::to_string(key.kind));
     }
     keys_.push_back(std::move(spec));
@@ -156,7 +160,8 @@ std::vector<narrowphase::KeySpec> host_keys() {
   using narrowphase::KeySpec;
   const HostSettings defaults;
   return {KeySpec::text("digest", "the plugin file's digest (filled in; a cell kept for another build of the plugin is never reused)"),
-          KeySpec::choice("errors", {"miss", "hit"}, "miss", "how an error or undecided answer counts for verdicts and the gate (it is also counted apart)"),
+          KeySpec::choice("errors", {"miss", "hit"}, "miss",
+                          "how an error or undecided answer counts for verdicts and the gate (it is also counted apart)"),
           KeySpec::on_off("isolate", defaults.isolate, "run the plugin in a child process: a crash or a hang is an error, not the end of the run"),
           KeySpec::number("timeout", defaults.timeout_seconds, kTimeoutRange, "with isolate=on: seconds a query or a step may take")};
 }
@@ -210,8 +215,8 @@ Context::Context(std::shared_ptr<const Library> library, const std::vector<std::
   handle_ = library_->table().create(pointers.data(), error);
   if (handle_ == nullptr) {
     error[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-    throw std::invalid_argument("plugin " + std::string(library_->table().name) + ": its configuration was refused: " +
-                                (error[0] ? error : "no reason given"));
+    throw std::invalid_argument("plugin " + std::string(library_->table().name) +
+                                ": its configuration was refused: " + (error[0] ? error : "no reason given"));
   }
 }
 

@@ -25,8 +25,8 @@ struct SceneTables {
     for (FaceId f = 0; f < topology.num_faces(); ++f) face_object.push_back(s.object_of_face(f));
     for (const SceneObject& object : s.objects()) self_collision.push_back(object.self_collision ? 1 : 0);
     for (const auto& [a, b] : s.collidable_pairs()) collidable.insert(collidable.end(), {a, b});
-    scene = {topology.num_vertices(), topology.num_faces(), faces.data(), topology.edges().size(), edges.data(),
-             s.objects().size(), face_object.data(), self_collision.data(), s.collidable_pairs().size(), collidable.data()};
+    scene = {topology.num_vertices(), topology.num_faces(), faces.data(),          topology.edges().size(),     edges.data(),
+             s.objects().size(),      face_object.data(),   self_collision.data(), s.collidable_pairs().size(), collidable.data()};
   }
 };
 
@@ -119,9 +119,11 @@ class WholeStepPlugin final : public strategies::Strategy {
       if (auto pair = check_->vertex_face(c.v, c.f, c.toi, why)) {
         result.collisions.add(*pair, c.toi);
       } else {
-        add_fault(result, why, c.v < topology.num_vertices() && c.f < topology.num_faces()
-                                   ? std::optional(pair_rows(topology, view.x0, view.x1, VertexFacePair{c.v, c.f}))
-                                   : std::nullopt, true);
+        add_fault(result, why,
+                  c.v < topology.num_vertices() && c.f < topology.num_faces()
+                      ? std::optional(pair_rows(topology, view.x0, view.x1, VertexFacePair{c.v, c.f}))
+                      : std::nullopt,
+                  true);
       }
     }
     for (Reported::EdgeEdge c : reported.edge_edge) {
@@ -130,8 +132,8 @@ class WholeStepPlugin final : public strategies::Strategy {
       } else {
         const std::size_t n = topology.num_vertices();
         const bool in_range = c.a0 < n && c.a1 < n && c.b0 < n && c.b1 < n;
-        add_fault(result, why, in_range ? std::optional(pair_rows(topology, view.x0, view.x1, EdgeEdgePair{{c.a0, c.a1}, {c.b0, c.b1}}))
-                                        : std::nullopt, false);
+        add_fault(result, why,
+                  in_range ? std::optional(pair_rows(topology, view.x0, view.x1, EdgeEdgePair{{c.a0, c.a1}, {c.b0, c.b1}})) : std::nullopt, false);
       }
     }
     result.collisions.normalize();
@@ -176,8 +178,8 @@ strategies::StrategyEntry whole_step_entry(const std::string& name) {
   const std::string path = name.substr(std::strlen(narrowphase::kPluginHead) + 1);
   std::shared_ptr<const Library> library = load_library(path);
   if (!library->answers_steps()) {
-    throw std::invalid_argument("plugin " + library->path() + " answers queries, not whole steps: run it as a narrow phase (--strategy full+" +
-                                name + ", or apccd+" + name + ")");
+    throw std::invalid_argument("plugin " + library->path() + " answers queries, not whole steps: run it as a narrow phase (--strategy full+" + name +
+                                ", or apccd+" + name + ")");
   }
   strategies::StrategyEntry entry;
   entry.name = name;

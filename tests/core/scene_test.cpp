@@ -1,5 +1,5 @@
-#include "core/error.hpp"
 #include "core/scene.hpp"
+#include "core/error.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -37,8 +37,7 @@ TEST(Scene, CollisionFilterFollowsSelfFlagsAndCollidablePairs) {
 TEST(Scene, RejectsBadDeclarations) {
   EXPECT_THROW(cloth_and_table({{0, 0}}), InputError);
   EXPECT_THROW(cloth_and_table({{0, 2}}), InputError);
-  EXPECT_THROW(Scene({{"a", ObjectKind::deformable, true, 3, {{0, 1, 2}}}, {"a", ObjectKind::deformable, true, 3, {{0, 1, 2}}}},
-                     {}, 0.0),
+  EXPECT_THROW(Scene({{"a", ObjectKind::deformable, true, 3, {{0, 1, 2}}}, {"a", ObjectKind::deformable, true, 3, {{0, 1, 2}}}}, {}, 0.0),
                InputError);
   EXPECT_THROW(Scene({{"a", ObjectKind::deformable, true, 3, {{0, 1, 2}}}}, {}, -1.0), InputError);
   EXPECT_THROW(cloth_and_table().with_thickness(std::nan("")), InputError);
@@ -64,21 +63,16 @@ TEST(Scene, ShapeObjectsAreTheirShapeAndOneCentre) {
   EXPECT_EQ(scene.object(2).first_vertex, 10u);
   EXPECT_EQ(scene.object(2).shape->half_extents, Vec3(1, 2, 0.5));
   EXPECT_FALSE(scene.topology().is_used(9)) << "a centre is never a primitive";
-  auto refused = [](ObjectDescription shape) {
-    return testing::error_message<InputError>([&] { Scene({std::move(shape)}, {}, 0.0); });
-  };
+  auto refused = [](ObjectDescription shape) { return testing::error_message<InputError>([&] { Scene({std::move(shape)}, {}, 0.0); }); };
   EXPECT_NE(refused({"ball", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::sphere, 0.0, Vec3::Zero()}}).find("radius must be finite and > 0"),
             std::string::npos);
   EXPECT_NE(refused({"ball", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::sphere, std::nan(""), Vec3::Zero()}}).find("radius"),
             std::string::npos);
-  EXPECT_NE(refused({"box", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::box, 0.0, Vec3(1, 0, 1)}}).find("half extents"),
-            std::string::npos);
-  EXPECT_NE(refused({"ball", ObjectKind::shape, false, 1, {}}).find("object 'ball': an object of kind shape needs a shape"),
-            std::string::npos);
+  EXPECT_NE(refused({"box", ObjectKind::shape, false, 1, {}, Shape{ShapeKind::box, 0.0, Vec3(1, 0, 1)}}).find("half extents"), std::string::npos);
+  EXPECT_NE(refused({"ball", ObjectKind::shape, false, 1, {}}).find("object 'ball': an object of kind shape needs a shape"), std::string::npos);
   EXPECT_NE(refused({"ball", ObjectKind::shape, false, 3, {{0, 1, 2}}, ball}).find("one vertex, no faces"), std::string::npos);
   EXPECT_NE(refused({"ball", ObjectKind::shape, true, 1, {}, ball}).find("no self-collision"), std::string::npos);
-  EXPECT_NE(refused({"cloth", ObjectKind::deformable, true, 3, {{0, 1, 2}}, ball}).find("only an object of kind shape"),
-            std::string::npos);
+  EXPECT_NE(refused({"cloth", ObjectKind::deformable, true, 3, {{0, 1, 2}}, ball}).find("only an object of kind shape"), std::string::npos);
 }
 
 TEST(Scene, ObjectKindNamesRoundTrip) {

@@ -1,5 +1,5 @@
-#include "core/error.hpp"
 #include "core/topology.hpp"
+#include "core/error.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -16,9 +16,7 @@ TEST(Topology, ClosedTetrahedronHasSixEdgesAndNoBoundary) {
   EXPECT_EQ(mesh.num_unused_vertices(), 0u);
   for (EdgeId e = 0; e < mesh.num_edges(); ++e) EXPECT_EQ(mesh.edge_faces(e).size(), 2u);
   // Euler characteristic of a sphere.
-  EXPECT_EQ(static_cast<long>(mesh.num_vertices()) - static_cast<long>(mesh.num_edges()) +
-                static_cast<long>(mesh.num_faces()),
-            2);
+  EXPECT_EQ(static_cast<long>(mesh.num_vertices()) - static_cast<long>(mesh.num_edges()) + static_cast<long>(mesh.num_faces()), 2);
 }
 
 TEST(Topology, OpenGridEdgeCounts) {

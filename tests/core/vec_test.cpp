@@ -18,15 +18,15 @@ TEST(BoxesOverlap, AnswersAsEigensIntersectsOnEdgeCasesAndRandomBoxes) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double tiny = std::numeric_limits<double>::denorm_min();
   std::vector<Box3> boxes{
-      Box3(),                                                    // empty (min > max)
-      Box3(Vec3(0, 0, 0), Vec3(1, 1, 1)),                        // unit
-      Box3(Vec3(1, 1, 1), Vec3(2, 2, 2)),                        // touching the unit box at a corner
-      Box3(Vec3(1, 0, 0), Vec3(2, 1, 1)),                        // touching it along a face
+      Box3(),                                                     // empty (min > max)
+      Box3(Vec3(0, 0, 0), Vec3(1, 1, 1)),                         // unit
+      Box3(Vec3(1, 1, 1), Vec3(2, 2, 2)),                         // touching the unit box at a corner
+      Box3(Vec3(1, 0, 0), Vec3(2, 1, 1)),                         // touching it along a face
       Box3(Vec3(std::nextafter(1.0, 2.0), 0, 0), Vec3(2, 1, 1)),  // one ulp off that face
-      Box3(Vec3(0.5, 0.5, 0.5), Vec3(0.5, 0.5, 0.5)),            // a point inside
-      Box3(Vec3(-0.0, -0.0, -0.0), Vec3(0.0, 0.0, 0.0)),         // signed zeros
-      Box3(Vec3(tiny, tiny, tiny), Vec3(tiny, tiny, tiny)),      // the smallest subnormal
-      Box3(Vec3(nan, 0, 0), Vec3(1, 1, 1)),                      // NaN corners
+      Box3(Vec3(0.5, 0.5, 0.5), Vec3(0.5, 0.5, 0.5)),             // a point inside
+      Box3(Vec3(-0.0, -0.0, -0.0), Vec3(0.0, 0.0, 0.0)),          // signed zeros
+      Box3(Vec3(tiny, tiny, tiny), Vec3(tiny, tiny, tiny)),       // the smallest subnormal
+      Box3(Vec3(nan, 0, 0), Vec3(1, 1, 1)),                       // NaN corners
       Box3(Vec3(0, 0, 0), Vec3(1, nan, 1)),
       Box3(Vec3(-1e308, -1e308, -1e308), Vec3(1e308, 1e308, 1e308)),
   };

@@ -1,5 +1,5 @@
-#include "core/error.hpp"
 #include "datasets/frame_cache.hpp"
+#include "core/error.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -96,7 +96,7 @@ TEST(FrameCacheBadInput, CountsThatTheFileCannotHoldAreRefusedBeforeAllocating) 
     writer.finish();
   }
   std::fstream file(dir / "c.frames", std::ios::in | std::ios::out | std::ios::binary);
-  const std::streamoff faces_count = 8 + 4 + 4 + 8 + 1 + 8;  // magic, version, reserved, key length, key, vertices
+  const std::streamoff faces_count = 8 + 4 + 4 + 8 + 1 + 8;     // magic, version, reserved, key length, key, vertices
   const std::uint64_t wrapping = (std::uint64_t{1} << 62) + 1;  // 12 * wrapping wraps to 12
   file.seekp(faces_count);
   file.write(reinterpret_cast<const char*>(&wrapping), sizeof wrapping);

@@ -1,6 +1,6 @@
+#include "datasets/obj.hpp"
 #include "core/error.hpp"
 #include "datasets/mesh_frame.hpp"
-#include "datasets/obj.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -56,9 +56,7 @@ TEST(ObjBadInput, EveryProblemNamesTheLine) {
   EXPECT_NE(obj_error("v 0 0 x\n").find("malformed"), std::string::npos);
 }
 
-TEST(MeshFrame, UnknownExtensionIsAnError) {
-  EXPECT_THROW(read_mesh("mesh.stl"), InputError);
-}
+TEST(MeshFrame, UnknownExtensionIsAnError) { EXPECT_THROW(read_mesh("mesh.stl"), InputError); }
 
 }  // namespace
 }  // namespace ccd::datasets

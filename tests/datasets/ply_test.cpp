@@ -1,5 +1,5 @@
-#include "core/error.hpp"
 #include "datasets/ply.hpp"
+#include "core/error.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -42,8 +42,7 @@ TEST(Ply, WriteReadRoundTripIsBitExactInEveryEncoding) {
   SCOPED_TRACE("seed " + std::to_string(seed));
   const MeshFrame frame = awkward_frame(seed);
   TempDir dir;
-  for (PlyEncoding encoding :
-       {PlyEncoding::ascii, PlyEncoding::binary_little_endian, PlyEncoding::binary_big_endian}) {
+  for (PlyEncoding encoding : {PlyEncoding::ascii, PlyEncoding::binary_little_endian, PlyEncoding::binary_big_endian}) {
     const auto path = dir / ("frame" + std::to_string(static_cast<int>(encoding)) + ".ply");
     write_ply(path, frame, encoding);
     expect_bit_identical(read_ply(path), frame);
@@ -160,8 +159,7 @@ TEST(PlyBadInput, TruncatedBinaryBody) {
 TEST(PlyBadInput, MalformedHeaderAndBody) {
   EXPECT_NE(ply_error("plx\n").find("not a PLY"), std::string::npos);
   EXPECT_NE(ply_error("ply\nformat ascii 1.0\nelement vertex 1\n").find("end_header"), std::string::npos);
-  EXPECT_NE(ply_error("ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nend_header\n0\n").find("'y'"),
-            std::string::npos);
+  EXPECT_NE(ply_error("ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nend_header\n0\n").find("'y'"), std::string::npos);
   EXPECT_NE(ply_error(ascii_ply("0 0 0\n1 0 0\n0 1 0\n", "4 0 1 2 0\n")).find("triangle"), std::string::npos);
   EXPECT_NE(ply_error(ascii_ply("0 0 0\n1 0\n0 1 0\n", "3 0 1 2\n")).find("line 11"), std::string::npos);
   EXPECT_NE(ply_error(ascii_ply("0 0 0\n1 0 0 5\n0 1 0\n", "3 0 1 2\n")).find("too many"), std::string::npos);
@@ -190,9 +188,10 @@ TEST(PlyBadInput, HeaderCountsAreNotAllocatedBeforeTheBodyBacksThem) {
   EXPECT_NE(ascii.find("file ends at face 1 of 300000000"), std::string::npos) << ascii;
   const std::string vertices = ply_error(ascii_ply("0 0 0\n", "", 1000000000));
   EXPECT_NE(vertices.find("file ends at vertex 1 of 1000000000"), std::string::npos) << vertices;
-  std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 3000000000\nproperty double x\n"
-                       "property double y\nproperty double z\nelement face 1\nproperty list uchar int vertex_indices\n"
-                       "end_header\n";
+  std::string binary =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3000000000\nproperty double x\n"
+      "property double y\nproperty double z\nelement face 1\nproperty list uchar int vertex_indices\n"
+      "end_header\n";
   binary += std::string(200, '\0');
   const std::string truncated = ply_error(binary);
   EXPECT_NE(truncated.find("truncated binary PLY"), std::string::npos) << truncated;
@@ -200,13 +199,11 @@ TEST(PlyBadInput, HeaderCountsAreNotAllocatedBeforeTheBodyBacksThem) {
   const std::string no_properties = ply_error(
       "ply\nformat ascii 1.0\nelement junk 18446744073709551615\nelement vertex 0\nproperty double x\nproperty double y\n"
       "property double z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n");
-  EXPECT_NE(no_properties.find("element 'junk' has 18446744073709551615 entries but no properties"), std::string::npos)
-      << no_properties;
+  EXPECT_NE(no_properties.find("element 'junk' has 18446744073709551615 entries but no properties"), std::string::npos) << no_properties;
 }
 
 TEST(PlyBadInput, AMeshWithoutTrianglesOrAFolderIsRefused) {
-  EXPECT_NE(ply_error(ascii_ply("0 0 0\n1 0 0\n0 1 0\n", "", 3, 0)).find("bad.ply:faces: the mesh has no triangles"),
-            std::string::npos);
+  EXPECT_NE(ply_error(ascii_ply("0 0 0\n1 0 0\n0 1 0\n", "", 3, 0)).find("bad.ply:faces: the mesh has no triangles"), std::string::npos);
   TempDir dir;
   std::filesystem::create_directories(dir / "folder.ply");
   const std::string folder = testing::error_message<InputError>([&] { read_ply(dir / "folder.ply"); });

@@ -1,7 +1,7 @@
 // Every built-in scene: deterministic bytes on any thread count, what makes it that scene, and no blow-ups.
 
-#include "core/error.hpp"
 #include "datasets/procedural_scenes.hpp"
+#include "core/error.hpp"
 #include "datasets/scene_file.hpp"
 #include "reference/step_truth.hpp"
 #include "tests/support/test_support.hpp"
@@ -21,8 +21,7 @@ std::string file_bytes(const std::filesystem::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-GenerateResult generate(const std::string& name, SceneParameters parameters, const std::filesystem::path& out,
-                        int threads = 2) {
+GenerateResult generate(const std::string& name, SceneParameters parameters, const std::filesystem::path& out, int threads = 2) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
   return generate_procedural_scene({name, std::move(parameters), out, {}, {}});
 }
@@ -270,8 +269,7 @@ TEST(ProceduralScenes, FoldCrossesItselfAndTheBladeAtZeroThicknessOverManySteps)
     SCOPED_TRACE("δ = " + std::to_string(thickness));
     std::size_t self = 0, across = 0, steps_with_self = 0;
     for (std::size_t k = 0; k + 1 < f.frames.size(); ++k) {
-      const auto truth = reference::compute_step_truth(scene.with_thickness(thickness), f.frames[k], f.frames[k + 1],
-                                                       {thickness, false, {}});
+      const auto truth = reference::compute_step_truth(scene.with_thickness(thickness), f.frames[k], f.frames[k + 1], {thickness, false, {}});
       std::size_t self_here = 0;
       for (const auto& c : truth.collisions.vertex_face()) {
         (scene.object_of_vertex(c.pair.v) == scene.object_of_face(c.pair.f) ? self_here : across) += 1;
@@ -295,12 +293,14 @@ TEST(ProceduralScenes, FoldCrossesItselfAndTheBladeAtZeroThicknessOverManySteps)
 
 TEST(ProceduralScenes, ScenesThatCannotFitOrDivergeNameTheParameter) {
   testing::TempDir dir;
-  const std::string huge = testing::error_message<std::invalid_argument>(
-      [&] { generate("pile", {{"resolution", 4096}, {"count", 64}}, dir / "huge"); });
+  const std::string huge = testing::error_message<std::invalid_argument>([&] {
+    generate("pile", {{"resolution", 4096}, {"count", 64}}, dir / "huge");
+  });
   EXPECT_NE(huge.find("scene 'pile' with resolution=4096 (default 32), count=64 (default 3) needs about"), std::string::npos) << huge;
   EXPECT_NE(huge.find("GiB to simulate"), std::string::npos) << huge;
-  const std::string diverged = testing::error_message<std::invalid_argument>(
-      [&] { generate("flag", {{"resolution", 6}, {"frames", 4}, {"wind", 1e200}}, dir / "wind"); });
+  const std::string diverged = testing::error_message<std::invalid_argument>([&] {
+    generate("flag", {{"resolution", 6}, {"frames", 4}, {"wind", 1e200}}, dir / "wind");
+  });
   EXPECT_NE(diverged.find("the simulation of 'flag' diverged at frame 1"), std::string::npos) << diverged;
   EXPECT_NE(diverged.find("wind=1e+200 (default 8)"), std::string::npos) << diverged;
 }

@@ -1,5 +1,5 @@
-#include "core/error.hpp"
 #include "datasets/query_file.hpp"
+#include "core/error.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -162,10 +162,9 @@ TEST(QueryFileSharedData, CountsMatchTheDataReadme) {
   EXPECT_EQ(vf_positives, 124u);
   EXPECT_EQ(ee_queries, 74u);
   EXPECT_EQ(ee_positives, 36u);
-  for (const SharedQueryCount& expected : {SharedQueryCount{"cloth-funnel/queries/227vf.csv", 92, 27},
-                                           SharedQueryCount{"cloth-funnel/queries/227ee.csv", 263, 107},
-                                           SharedQueryCount{"rod-twist/queries/3036vf.csv", 801, 765},
-                                           SharedQueryCount{"rod-twist/queries/3036ee.csv", 4370, 4179}}) {
+  for (const SharedQueryCount& expected :
+       {SharedQueryCount{"cloth-funnel/queries/227vf.csv", 92, 27}, SharedQueryCount{"cloth-funnel/queries/227ee.csv", 263, 107},
+        SharedQueryCount{"rod-twist/queries/3036vf.csv", 801, 765}, SharedQueryCount{"rod-twist/queries/3036ee.csv", 4370, 4179}}) {
     const QueryFile file = read_query_file(data / "scalable-ccd-sample" / expected.path);
     EXPECT_EQ(file.queries.size(), expected.queries) << expected.path;
     EXPECT_EQ(file.positives(), expected.positives) << expected.path;

@@ -1,5 +1,5 @@
-#include "core/error.hpp"
 #include "datasets/sample_step.hpp"
+#include "core/error.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -18,8 +18,7 @@ struct ExpectedStep {
 // (vertices, then edges, then faces) and that our unique-edge count equals the source's.
 TEST(SampleStepSharedData, LoadsBothStepsAndIdsMatchQueryCoordinates) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
-  for (const ExpectedStep& expected : {ExpectedStep{"cloth-funnel", 9450, 18484, 92, 263},
-                                       ExpectedStep{"rod-twist", 39940, 79864, 801, 4370}}) {
+  for (const ExpectedStep& expected : {ExpectedStep{"cloth-funnel", 9450, 18484, 92, 263}, ExpectedStep{"rod-twist", 39940, 79864, 801, 4370}}) {
     SCOPED_TRACE(expected.name);
     const SampleStep step = load_sample_step(data / "scalable-ccd-sample" / expected.name);
     EXPECT_EQ(step.topology.num_vertices(), expected.vertices);

@@ -1,6 +1,6 @@
+#include "datasets/scene_file.hpp"
 #include "core/error.hpp"
 #include "datasets/mesh_frame.hpp"
-#include "datasets/scene_file.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -16,10 +16,8 @@ using testing::write_text;
 /// A cloth (3 frames, pattern), a static table (one file) and a ball (3 frames, list of files).
 void write_three_object_scene(const TempDir& dir, const std::string& scene_json) {
   for (int k = 0; k < 3; ++k) {
-    write_mesh(dir / ("cloth/frame_000" + std::to_string(k) + ".ply"),
-               {testing::grid_positions(3, 1.0 - 0.1 * k), testing::grid_faces(3), ""});
-    write_mesh(dir / ("ball" + std::to_string(k) + ".obj"),
-               {{{0, 0, 2}, {1, 0, 2}, {0, 1, 2}, {0, 0, 3.0 + k}}, testing::tetrahedron_faces(), ""});
+    write_mesh(dir / ("cloth/frame_000" + std::to_string(k) + ".ply"), {testing::grid_positions(3, 1.0 - 0.1 * k), testing::grid_faces(3), ""});
+    write_mesh(dir / ("ball" + std::to_string(k) + ".obj"), {{{0, 0, 2}, {1, 0, 2}, {0, 1, 2}, {0, 0, 3.0 + k}}, testing::tetrahedron_faces(), ""});
   }
   write_mesh(dir / "table.obj", {testing::grid_positions(2), testing::grid_faces(2), ""});
   write_text(dir / "scene.json", scene_json);
@@ -86,22 +84,22 @@ std::string with_change(const std::function<void(nlohmann::json&)>& change) {
 
 TEST(SceneFileBadInput, EachMistakeIsNamed) {
   EXPECT_NE(scene_error("{\n  \"objects\": [\n  oops\n]}").find("line 3"), std::string::npos);
-  EXPECT_NE(scene_error(with_change([](auto& s) { s["objects"][0]["self_colision"] = true; }))
-                .find("objects[0]: unknown key 'self_colision'"),
+  EXPECT_NE(scene_error(with_change([](auto& s) { s["objects"][0]["self_colision"] = true; })).find("objects[0]: unknown key 'self_colision'"),
             std::string::npos);
-  EXPECT_NE(scene_error(with_change([](auto& s) { s["objects"][1]["kind"] = "solid"; })).find("unknown kind 'solid'"),
-            std::string::npos);
-  EXPECT_NE(scene_error(with_change([](auto& s) { s["collidable"][0][1] = "floor"; })).find("no object named 'floor'"),
-            std::string::npos);
+  EXPECT_NE(scene_error(with_change([](auto& s) { s["objects"][1]["kind"] = "solid"; })).find("unknown kind 'solid'"), std::string::npos);
+  EXPECT_NE(scene_error(with_change([](auto& s) { s["collidable"][0][1] = "floor"; })).find("no object named 'floor'"), std::string::npos);
   EXPECT_NE(scene_error(with_change([](auto& s) { s["thickness"] = -1; })).find("thickness"), std::string::npos);
-  EXPECT_NE(scene_error(with_change([](auto& s) { s["objects"][0]["frames"] = {{"files", {"missing.ply"}}}; }))
-                .find("missing.ply"),
+  EXPECT_NE(scene_error(with_change([](auto& s) {
+              s["objects"][0]["frames"] = {{"files", {"missing.ply"}}};
+            })).find("missing.ply"),
             std::string::npos);
   EXPECT_NE(scene_error(with_change([](auto& s) {
               s["objects"][2]["frames"]["files"] = {"ball0.obj", "ball1.obj"};
             })).find("has 2 frames"),
             std::string::npos);
-  EXPECT_NE(scene_error(with_change([](auto& s) { s["objects"][1]["frames"]["files"] = {"table.obj", "table.obj", "table1.obj"}; }),
+  EXPECT_NE(scene_error(with_change([](auto& s) {
+                          s["objects"][1]["frames"]["files"] = {"table.obj", "table.obj", "table1.obj"};
+                        }),
                         true)
                 .find("a static object must not move"),
             std::string::npos);
@@ -111,10 +109,10 @@ TEST(SceneFileBadInput, EachMistakeIsNamed) {
 // frames' last vertices, and every mistake is named by its key.
 TEST(SceneFile, ShapeObjectsWithTracks) {
   nlohmann::json scene = nlohmann::json::parse(kScene);
-  scene["objects"][2] = {{"name", "ball"}, {"kind", "shape"}, {"shape", "sphere"}, {"radius", 0.25},
-                         {"track", {{"centres", {{0, 0, 1}, {0, 0, 0.5}, {0, 0, 0.125}}}}}};
-  scene["objects"].push_back({{"name", "block"}, {"kind", "shape"}, {"shape", "box"}, {"half_extents", {1, 2, 0.5}},
-                              {"track", {{"centres", {{3, 3, 3}}}}}});
+  scene["objects"][2] = {
+      {"name", "ball"}, {"kind", "shape"}, {"shape", "sphere"}, {"radius", 0.25}, {"track", {{"centres", {{0, 0, 1}, {0, 0, 0.5}, {0, 0, 0.125}}}}}};
+  scene["objects"].push_back(
+      {{"name", "block"}, {"kind", "shape"}, {"shape", "box"}, {"half_extents", {1, 2, 0.5}}, {"track", {{"centres", {{3, 3, 3}}}}}});
   scene["collidable"].push_back({"block", "cloth"});
   {
     TempDir dir;
@@ -135,32 +133,28 @@ TEST(SceneFile, ShapeObjectsWithTracks) {
     change(s);
     return scene_error(s.dump(2));
   };
-  EXPECT_NE(changed([](auto& s) { s["objects"][2]["radius"] = -1; }).find("objects[2]: a sphere's radius must be finite and > 0"),
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["radius"] = -1; }).find("objects[2]: a sphere's radius must be finite and > 0"), std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["shape"] = "cone"; }).find("objects[2].shape: unknown shape 'cone'"), std::string::npos);
+  EXPECT_NE(changed([](auto& s) {
+              s["objects"][3]["half_extents"] = {1, 2};
+            }).find("objects[3].half_extents: must be an array of three"),
             std::string::npos);
-  EXPECT_NE(changed([](auto& s) { s["objects"][2]["shape"] = "cone"; }).find("objects[2].shape: unknown shape 'cone'"),
-            std::string::npos);
-  EXPECT_NE(changed([](auto& s) { s["objects"][3]["half_extents"] = {1, 2}; }).find("objects[3].half_extents: must be an array of three"),
-            std::string::npos);
-  EXPECT_NE(changed([](auto& s) { s["objects"][3]["radius"] = 1; }).find("objects[3].radius: a box has half extents"),
-            std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][3]["radius"] = 1; }).find("objects[3].radius: a box has half extents"), std::string::npos);
   EXPECT_NE(changed([](auto& s) { s["objects"][2]["frames"] = s["objects"][0]["frames"]; }).find("objects[2]: unknown key 'frames'"),
             std::string::npos);
   EXPECT_NE(changed([](auto& s) { s["objects"][2].erase("track"); }).find("objects[2]: missing key 'track'"), std::string::npos);
-  EXPECT_NE(changed([](auto& s) { s["objects"][2]["track"]["centres"][1] = {0, "x", 0}; })
-                .find("objects[2].track.centres[1]: must be an array of three numbers"),
+  EXPECT_NE(changed([](auto& s) {
+              s["objects"][2]["track"]["centres"][1] = {0, "x", 0};
+            }).find("objects[2].track.centres[1]: must be an array of three numbers"),
             std::string::npos);
-  EXPECT_NE(changed([](auto& s) { s["objects"][2]["track"]["centres"] = {{0, 0, 1}, {0, 0, 1}}; }).find("has 2 frames"),
-            std::string::npos);
-  EXPECT_NE(changed([](auto& s) { s["objects"][2]["track"] = {{"cache", "missing.frames"}}; }).find("missing.frames"),
-            std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["track"]["centres"] = {{0, 0, 1}, {0, 0, 1}}; }).find("has 2 frames"), std::string::npos);
+  EXPECT_NE(changed([](auto& s) { s["objects"][2]["track"] = {{"cache", "missing.frames"}}; }).find("missing.frames"), std::string::npos);
 }
 
 TEST(SceneFile, GeneratorsAreLookedUpByName) {
-  EXPECT_NE(scene_error(R"({"generator": {"name": "no-such-scene"}})").find("unknown scene generator 'no-such-scene'"),
-            std::string::npos);
+  EXPECT_NE(scene_error(R"({"generator": {"name": "no-such-scene"}})").find("unknown scene generator 'no-such-scene'"), std::string::npos);
   TempDir dir;
-  register_scene_generator("test-single-triangle", [&dir](const nlohmann::json& parameters,
-                                                          const std::filesystem::path&) {
+  register_scene_generator("test-single-triangle", [&dir](const nlohmann::json& parameters, const std::filesystem::path&) {
     const double z = parameters.at("z").get<double>();
     write_mesh(dir / "t.obj", {{{0, 0, z}, {1, 0, z}, {0, 1, z}}, {{0, 1, 2}}, ""});
     return scene_from_frame_files({dir / "t.obj"}, 0.0);

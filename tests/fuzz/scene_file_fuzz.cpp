@@ -31,9 +31,8 @@ const std::filesystem::path& folder() {
     std::string pattern = (std::filesystem::temp_directory_path() / "ccdbench-fuzz-XXXXXX").string();
     if (::mkdtemp(pattern.data()) == nullptr) std::abort();
     for (const std::string& name : ccd::datasets::scene_generator_names()) {
-      ccd::datasets::register_scene_generator(name, [name](const nlohmann::json& block, const std::filesystem::path& file) {
-        return stub_generator(name, block, file);
-      });
+      ccd::datasets::register_scene_generator(
+          name, [name](const nlohmann::json& block, const std::filesystem::path& file) { return stub_generator(name, block, file); });
     }
     return std::filesystem::path(pattern);
   }();

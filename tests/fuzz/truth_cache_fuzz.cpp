@@ -19,8 +19,8 @@ const ccd::Scene& scene() {
         faces.push_back({a, a + 5, a + 4});
       }
     }
-    return ccd::Scene({{"lower", ccd::ObjectKind::deformable, true, 16, faces}, {"upper", ccd::ObjectKind::deformable, false, 16, faces}},
-                      {{0, 1}}, 0.0);
+    return ccd::Scene({{"lower", ccd::ObjectKind::deformable, true, 16, faces}, {"upper", ccd::ObjectKind::deformable, false, 16, faces}}, {{0, 1}},
+                      0.0);
   }();
   return fixed;
 }

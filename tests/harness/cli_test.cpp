@@ -1,10 +1,10 @@
 // End-to-end tests of the ccdbench executable: what a user types, what a script reads.
 
+#include "tests/support/cli.hpp"
 #include "ccd/config.hpp"
 #include "datasets/procedural_scenes.hpp"
 #include "strategies/narrowphase/registry.hpp"
 #include "strategies/registry.hpp"
-#include "tests/support/cli.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -112,8 +112,8 @@ TEST(Cli, EveryRecordCarriesItsProvenance) {
   for (const nlohmann::json& record : records) {
     ASSERT_TRUE(record.contains("provenance")) << record.dump();
     const nlohmann::json& provenance = record["provenance"];
-    for (const char* item : {"ccdbench", "git_revision", "build_type", "cxx_flags", "compiler", "cgal", "gmp", "mpfr", "tbb", "fcl",
-                             "libccd", "eigen", "nlohmann_json", "mpi", "opencl"}) {
+    for (const char* item : {"ccdbench", "git_revision", "build_type", "cxx_flags", "compiler", "cgal", "gmp", "mpfr", "tbb", "fcl", "libccd",
+                             "eigen", "nlohmann_json", "mpi", "opencl"}) {
       ASSERT_TRUE(provenance.contains(item) && !provenance[item].get<std::string>().empty()) << item << " in " << provenance.dump();
       EXPECT_NE(verbose.output.find(std::string(item) + ": " + provenance[item].get<std::string>()), std::string::npos) << item;
     }
@@ -128,8 +128,8 @@ TEST(Cli, EveryRecordCarriesItsProvenance) {
 TEST(Cli, InspectShowsShapesAndTheirSize) {
   testing::TempDir dir;
   ::setenv("CCDBENCH_CACHE_DIR", (dir / "cache").c_str(), 1);
-  const CommandResult generated = run_ccdbench("generate fold --resolution 4 --frames 3 --set obstacles=shape --out '" +
-                                               (dir / "fold").string() + "'");
+  const CommandResult generated =
+      run_ccdbench("generate fold --resolution 4 --frames 3 --set obstacles=shape --out '" + (dir / "fold").string() + "'");
   ASSERT_EQ(generated.exit_code, 0) << generated.output;
   const CommandResult inspected = run_ccdbench("inspect '" + (dir / "fold").string() + "'");
   ASSERT_EQ(inspected.exit_code, 0) << inspected.output;
@@ -158,8 +158,7 @@ TEST(Cli, InspectPrintsTheDataReadmeCountsForEveryFileOfTheSharedData) {
     const char* step;
     int vertices, faces, vf, vf_positives, ee, ee_positives;
   };
-  for (const Step& s : {Step{"cloth-funnel", "227", 9450, 18484, 92, 27, 263, 107},
-                        Step{"rod-twist", "3036", 39940, 79864, 801, 765, 4370, 4179}}) {
+  for (const Step& s : {Step{"cloth-funnel", "227", 9450, 18484, 92, 27, 263, 107}, Step{"rod-twist", "3036", 39940, 79864, 801, 765, 4370, 4179}}) {
     SCOPED_TRACE(s.name);
     const auto base = data / "scalable-ccd-sample" / s.name;
     const auto step = inspect_json(base);
@@ -191,17 +190,14 @@ TEST(Cli, BadInputExitsNonZeroNamingFileAndLine) {
   const CommandResult missing = run_ccdbench("inspect '" + (dir / "nothing.ply").string() + "'");
   EXPECT_NE(missing.exit_code, 0);
   testing::write_text(dir / "notes.txt", "hello");
-  EXPECT_NE(run_ccdbench("inspect '" + (dir / "notes.txt").string() + "'").output.find("not a ccdbench input"),
-            std::string::npos);
+  EXPECT_NE(run_ccdbench("inspect '" + (dir / "notes.txt").string() + "'").output.find("not a ccdbench input"), std::string::npos);
 }
-
 
 TEST(Cli, QueriesWithTheExactMethodScoreEverySharedQueryRight) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   testing::TempDir dir;
-  const CommandResult result = run_ccdbench("queries '" + (data / "sample-queries").string() + "' '" +
-                                            (data / "scalable-ccd-sample").string() + "' --method exact --json '" +
-                                            (dir / "scores.json").string() + "'");
+  const CommandResult result = run_ccdbench("queries '" + (data / "sample-queries").string() + "' '" + (data / "scalable-ccd-sample").string() +
+                                            "' --method exact --json '" + (dir / "scores.json").string() + "'");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const nlohmann::json scores = read_json(dir / "scores.json");
   ASSERT_EQ(scores.size(), 9u);  // 8 files and the total
@@ -218,8 +214,8 @@ TEST(Cli, QueriesWithTheExactMethodScoreEverySharedQueryRight) {
 TEST(Cli, TruthOnASampleStepFindsEveryLabelledCollision) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   testing::TempDir dir;
-  const CommandResult result = run_ccdbench("truth --sample '" + (data / "scalable-ccd-sample/cloth-funnel").string() +
-                                            "' --json '" + (dir / "truth.json").string() + "'");
+  const CommandResult result =
+      run_ccdbench("truth --sample '" + (data / "scalable-ccd-sample/cloth-funnel").string() + "' --json '" + (dir / "truth.json").string() + "'");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const nlohmann::json truth = read_json(dir / "truth.json");
   EXPECT_GE(truth["vf"].get<int>(), 27);
@@ -229,9 +225,8 @@ TEST(Cli, TruthOnASampleStepFindsEveryLabelledCollision) {
   EXPECT_EQ(truth["decided_by_filter"].get<int>() + truth["decided_exactly"].get<int>(),
             truth["vf_pairs_enumerated"].get<int>() + truth["ee_pairs_enumerated"].get<int>());
   const auto frames = data / "scalable-ccd-sample/cloth-funnel/frames";
-  const CommandResult by_frames = run_ccdbench("truth --frames '" + (frames / "227.ply").string() + "' '" +
-                                               (frames / "228.ply").string() + "' --json '" +
-                                               (dir / "frames.json").string() + "'");
+  const CommandResult by_frames = run_ccdbench("truth --frames '" + (frames / "227.ply").string() + "' '" + (frames / "228.ply").string() +
+                                               "' --json '" + (dir / "frames.json").string() + "'");
   ASSERT_EQ(by_frames.exit_code, 0) << by_frames.output;
   EXPECT_EQ(read_json(dir / "frames.json")["vf"], truth["vf"]);
 }
@@ -239,8 +234,7 @@ TEST(Cli, TruthOnASampleStepFindsEveryLabelledCollision) {
 TEST(Cli, QueriesAndTruthRejectBadArguments) {
   testing::TempDir dir;
   testing::write_text(dir / "vertex-face/q.csv", "0,1,0,1,0,1,0\n0,1,0,1,0,1,0\n");
-  EXPECT_NE(run_ccdbench("queries '" + dir.path().string() + "' --method nonsense").output.find("unknown method"),
-            std::string::npos);
+  EXPECT_NE(run_ccdbench("queries '" + dir.path().string() + "' --method nonsense").output.find("unknown method"), std::string::npos);
   EXPECT_EQ(run_ccdbench("queries '" + dir.path().string() + "'").exit_code, 2);
   EXPECT_NE(run_ccdbench("queries '" + dir.path().string() + "' --thickness -1").exit_code, 0);
   EXPECT_NE(run_ccdbench("truth").output.find("exactly one of"), std::string::npos);
@@ -292,8 +286,8 @@ TEST(Cli, StressPrintsFamiliesAndWritesTheSuiteAsQueries) {
   for (const auto& row : rows) families.insert(row["family"].get<std::string>());
   EXPECT_EQ(families, (std::set<std::string>{"coplanar-motion", "subnormal", "scaled-2^-1000", "(all)"}));
   EXPECT_NE(run_ccdbench("stress --family no-such-family").exit_code, 0);
-  const CommandResult scored = run_ccdbench("queries '" + (dir / "suite").string() + "' --method exact --json '" +
-                                            (dir / "scores.json").string() + "'");
+  const CommandResult scored =
+      run_ccdbench("queries '" + (dir / "suite").string() + "' --method exact --json '" + (dir / "scores.json").string() + "'");
   ASSERT_EQ(scored.exit_code, 0) << scored.output;
   EXPECT_EQ(read_json(dir / "scores.json").back()["false_negatives"], 0);
 }
@@ -301,16 +295,15 @@ TEST(Cli, StressPrintsFamiliesAndWritesTheSuiteAsQueries) {
 TEST(Cli, RunVerifiesWritesResultsAndResumes) {
   testing::TempDir dir;
   ::setenv("CCDBENCH_CACHE_DIR", (dir / "cache").c_str(), 1);
-  const std::string base = "run --suite ci --strategy full --out '" + (dir / "out").string() + "' --json '" +
-                           (dir / "summary.json").string() + "'";
+  const std::string base = "run --suite ci --strategy full --out '" + (dir / "out").string() + "' --json '" + (dir / "summary.json").string() + "'";
   const CommandResult first = run_ccdbench(base);
   ASSERT_EQ(first.exit_code, 0) << first.output;
   const nlohmann::json summary = read_json(dir / "summary.json");
   ASSERT_EQ(summary.size(), 3u);
   for (const auto& s : summary) {
-    for (const char* field : {"scene", "strategy", "steps", "ms_per_step", "colliding", "colliding_by_objects", "reported", "missed",
-                              "missed_culled", "missed_tested", "false_alarms", "machine", "build_type", "threads",
-                              "git_revision", "executable", "thickness", "thickness_from", "key", "finished_at"}) {
+    for (const char* field : {"scene",        "strategy",      "steps",         "ms_per_step",    "colliding", "colliding_by_objects", "reported",
+                              "missed",       "missed_culled", "missed_tested", "false_alarms",   "machine",   "build_type",           "threads",
+                              "git_revision", "executable",    "thickness",     "thickness_from", "key",       "finished_at"}) {
       EXPECT_TRUE(s.contains(field)) << field;
     }
     EXPECT_EQ(s["missed"], 0) << s.dump();
@@ -352,9 +345,9 @@ TEST(Cli, RunJudgesFclByTrianglePairsAndRefusesItAtPositiveThickness) {
   // The ci suite's mesh scenes, named by generator blocks.
   testing::write_text(dir / "ball.json", R"({"generator": {"name": "spinning-ball", "resolution": 8, "frames": 5}})");
   testing::write_text(dir / "fold.json", R"({"generator": {"name": "fold", "resolution": 8, "frames": 24}})");
-  const CommandResult run = run_ccdbench("run --scene '" + (dir / "ball.json").string() + "' '" + (dir / "fold.json").string() +
-                                         "' --thickness 0 --max-steps 3 --strategy full,fcl:bv=aabb,fcl-bvh" + out +
-                                         " --json '" + (dir / "s.json").string() + "'");
+  const CommandResult run =
+      run_ccdbench("run --scene '" + (dir / "ball.json").string() + "' '" + (dir / "fold.json").string() +
+                   "' --thickness 0 --max-steps 3 --strategy full,fcl:bv=aabb,fcl-bvh" + out + " --json '" + (dir / "s.json").string() + "'");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("fcl:bv=aabb (†)"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("judged by triangle pairs"), std::string::npos) << run.output;
@@ -383,9 +376,9 @@ namespace {
 TEST(CliToi, TheErrorsMedianAndP99AreThoseOfThePerQueryErrors) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   testing::TempDir dir;
-  const CommandResult queries = testing::run_ccdbench("queries " + testing::quoted(data / "sample-queries") +
-                                                      " --toi --method conservative,advancement --json " + testing::quoted(dir / "q.json") +
-                                                      " --write-answers " + testing::quoted(dir / "answers.csv"));
+  const CommandResult queries =
+      testing::run_ccdbench("queries " + testing::quoted(data / "sample-queries") + " --toi --method conservative,advancement --json " +
+                            testing::quoted(dir / "q.json") + " --write-answers " + testing::quoted(dir / "answers.csv"));
   ASSERT_EQ(queries.exit_code, 0) << queries.output;
   EXPECT_NE(queries.output.find("p99"), std::string::npos) << queries.output;
   std::map<std::string, std::vector<double>> errors;
@@ -423,8 +416,7 @@ TEST(CliToi, QueriesAndRunsCountLateTimesOfImpact) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   testing::TempDir dir;
   const CommandResult queries = testing::run_ccdbench("queries " + testing::quoted(data / "sample-queries") +
-                                                      " --extremes --toi --method conservative,cubic64 --json " +
-                                                      testing::quoted(dir / "q.json"));
+                                                      " --extremes --toi --method conservative,cubic64 --json " + testing::quoted(dir / "q.json"));
   ASSERT_EQ(queries.exit_code, 0) << queries.output;
   EXPECT_NE(queries.output.find("TOI late"), std::string::npos) << queries.output;
   std::size_t cubic_late = 0;
@@ -443,9 +435,8 @@ TEST(CliToi, QueriesAndRunsCountLateTimesOfImpact) {
 
   ::setenv("CCDBENCH_CACHE_DIR", (dir / "cache").c_str(), 1);
   datasets::generate_procedural_scene({"fold", {{"resolution", 6}, {"frames", 12}}, dir / "s", {}, {}});
-  const CommandResult run = testing::run_ccdbench("run --toi --thickness 0 --strategy full,full+cubic64,apccd --scene " +
-                                                  testing::quoted(dir / "s") + " --out " + testing::quoted(dir / "out") +
-                                                  " --json " + testing::quoted(dir / "r.json"));
+  const CommandResult run = testing::run_ccdbench("run --toi --thickness 0 --strategy full,full+cubic64,apccd --scene " + testing::quoted(dir / "s") +
+                                                  " --out " + testing::quoted(dir / "out") + " --json " + testing::quoted(dir / "r.json"));
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("TOI late (error max / mean)"), std::string::npos) << run.output;
   for (const auto& summary : testing::read_json(dir / "r.json")) {
@@ -456,8 +447,9 @@ TEST(CliToi, QueriesAndRunsCountLateTimesOfImpact) {
       EXPECT_GT(summary["toi_checked"].get<int>(), 0) << strategy;
     }
   }
-  EXPECT_EQ(testing::run_ccdbench("run --toi --verify none --scene " + testing::quoted(dir / "s") + " --out " +
-                                  testing::quoted(dir / "out2")).exit_code, 2);
+  EXPECT_EQ(
+      testing::run_ccdbench("run --toi --verify none --scene " + testing::quoted(dir / "s") + " --out " + testing::quoted(dir / "out2")).exit_code,
+      2);
   ::unsetenv("CCDBENCH_CACHE_DIR");
 }
 

@@ -12,10 +12,10 @@ using testing::quoted;
 using testing::run_ccdbench;
 
 /// A verified summary as `ccdbench run --json` writes it (only the fields the gate reads).
-nlohmann::json summary(const std::string& strategy, std::size_t missed, std::size_t colliding,
-                       const std::string& thickness_from = "scene", double thickness = 0.01) {
-  return {{"scene", "s"},         {"strategy", strategy},     {"thickness", thickness}, {"thickness_from", thickness_from},
-          {"verified", true},     {"missed", missed},         {"missed_culled", missed}, {"missed_tested", 0},
+nlohmann::json summary(const std::string& strategy, std::size_t missed, std::size_t colliding, const std::string& thickness_from = "scene",
+                       double thickness = 0.01) {
+  return {{"scene", "s"},          {"strategy", strategy}, {"thickness", thickness},  {"thickness_from", thickness_from},
+          {"verified", true},      {"missed", missed},     {"missed_culled", missed}, {"missed_tested", 0},
           {"colliding", colliding}};
 }
 
@@ -75,8 +75,8 @@ TEST_F(Gate, EntriesNameTheThickness) {
   testing::write_text(dir_ / "baseline.json", nlohmann::json::array({entry("full", 0), entry("full", 0, 0.0)}).dump());
   testing::write_text(dir_ / "delta.json", nlohmann::json::array({summary("full", 0, 10)}).dump());
   testing::write_text(dir_ / "zero.json", nlohmann::json::array({at_zero}).dump());
-  const auto both = run_ccdbench("check --baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "delta.json") +
-                                 " " + quoted(dir_ / "zero.json"));
+  const auto both =
+      run_ccdbench("check --baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "delta.json") + " " + quoted(dir_ / "zero.json"));
   EXPECT_EQ(both.exit_code, 0) << both.output;
 }
 

@@ -30,12 +30,12 @@ testing::CommandResult mpirun(int ranks, const std::string& arguments, const std
   const std::string injector = fault.empty() ? std::string()
                                              : " -x LD_PRELOAD=" + quoted(CCDBENCH_FAULT_INJECTION) + " -x CCDBENCH_FAULT=" + fault +
                                                    " -x ASAN_OPTIONS=verify_asan_link_order=0";
-  const std::string command = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                              "OMPI_MCA_mca_base_component_disable_dlclose=1 PMIX_MCA_mca_base_component_disable_dlclose=1 "
-                              "LSAN_OPTIONS=fast_unwind_on_malloc=0:suppressions=" +
-                              quoted(std::filesystem::path(CCDBENCH_SOURCE_DIR) / "tests" / "lsan_openmpi.supp") + " " +
-                              CCDBENCH_MPIEXEC " -n " + std::to_string(ranks) +
-                              " --oversubscribe --bind-to none" + injector + " " CCDBENCH_EXECUTABLE " --threads 1 " + arguments;
+  const std::string command =
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+      "OMPI_MCA_mca_base_component_disable_dlclose=1 PMIX_MCA_mca_base_component_disable_dlclose=1 "
+      "LSAN_OPTIONS=fast_unwind_on_malloc=0:suppressions=" +
+      quoted(std::filesystem::path(CCDBENCH_SOURCE_DIR) / "tests" / "lsan_openmpi.supp") + " " + CCDBENCH_MPIEXEC " -n " + std::to_string(ranks) +
+      " --oversubscribe --bind-to none" + injector + " " CCDBENCH_EXECUTABLE " --threads 1 " + arguments;
   return run_command(command);
 }
 
@@ -43,10 +43,10 @@ testing::CommandResult mpirun(int ranks, const std::string& arguments, const std
 /// timings, host, rank, threads and when it finished).
 nlohmann::json verdict(const nlohmann::json& summary) {
   nlohmann::json kept;
-  for (const char* field : {"scene", "strategy", "triangles", "steps", "thickness", "thickness_from", "verified",
-                            "colliding", "missed", "missed_culled", "missed_tested", "false_alarms", "miss_causes",
-                            "reported", "candidate_pairs", "elementary_tests", "kept_bytes", "history_bytes", "device_bytes", "judged_by",
-                            "toi_checked", "toi_late", "toi_missing", "toi_error_max", "toi_error_mean"}) {
+  for (const char* field : {"scene",           "strategy",         "triangles",     "steps",         "thickness",    "thickness_from", "verified",
+                            "colliding",       "missed",           "missed_culled", "missed_tested", "false_alarms", "miss_causes",    "reported",
+                            "candidate_pairs", "elementary_tests", "kept_bytes",    "history_bytes", "device_bytes", "judged_by",      "toi_checked",
+                            "toi_late",        "toi_missing",      "toi_error_max", "toi_error_mean"}) {
     if (summary.contains(field)) kept[field] = summary[field];
   }
   return kept;
@@ -56,12 +56,11 @@ nlohmann::json verdict(const nlohmann::json& summary) {
 /// they compute is the truth the CI gate's own run of the suite reads afterwards, so CI computes it once.
 class Mpi : public ::testing::Test {
  protected:
-
   /// The ci suite's summaries from `ranks` ranks into OUT (0: a plain process, without mpirun). Each test starts with a plain run: it fills the truth cache, so that the runs under mpirun,
   /// whose LeakSanitizer unwinds slowly in the ASan build, read their truth instead of computing it.
   testing::CommandResult run_suite(int ranks, const std::string& out, const std::string& extra = {}) {
-    const std::string arguments = "run --suite ci --toi --strategy full,apccd,full+cubic64 " + extra + " --out " +
-                                  quoted(dir_ / out) + " --json " + quoted(dir_ / (out + ".json"));
+    const std::string arguments = "run --suite ci --toi --strategy full,apccd,full+cubic64 " + extra + " --out " + quoted(dir_ / out) + " --json " +
+                                  quoted(dir_ / (out + ".json"));
     if (ranks == 0) return run_command(std::string(CCDBENCH_EXECUTABLE) + " --threads 1 " + arguments);
     return mpirun(ranks, arguments);
   }
@@ -70,11 +69,12 @@ class Mpi : public ::testing::Test {
   /// of dying ranks, which run several times; `fault` as mpirun's.
   testing::CommandResult run_fold(int ranks, const std::string& out, const std::string& fault = {}) {
     if (!std::filesystem::exists(dir_ / "fold")) {
-      const auto generated = run_command(std::string(CCDBENCH_EXECUTABLE) + " generate fold --resolution 6 --frames 8 --out " + quoted(dir_ / "fold"));
+      const auto generated =
+          run_command(std::string(CCDBENCH_EXECUTABLE) + " generate fold --resolution 6 --frames 8 --out " + quoted(dir_ / "fold"));
       EXPECT_EQ(generated.exit_code, 0) << generated.output;
     }
-    const std::string arguments = "run --scene " + quoted(dir_ / "fold") + " --toi --strategy full,apccd,full+cubic64 --out " +
-                                  quoted(dir_ / out) + " --json " + quoted(dir_ / (out + ".json"));
+    const std::string arguments = "run --scene " + quoted(dir_ / "fold") + " --toi --strategy full,apccd,full+cubic64 --out " + quoted(dir_ / out) +
+                                  " --json " + quoted(dir_ / (out + ".json"));
     if (ranks == 0) return run_command(std::string(CCDBENCH_EXECUTABLE) + " --threads 1 " + arguments);
     return mpirun(ranks, arguments, fault);
   }

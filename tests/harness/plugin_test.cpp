@@ -131,8 +131,7 @@ TEST_F(Plugins, BothFormsJudgedAlikeWithTheirCellsResumedAndGated) {
   auto gate = [&](int allowed) {
     nlohmann::json entries = nlohmann::json::array();
     for (const nlohmann::json& s : summaries) {
-      entries.push_back({{"scene", s["scene"]}, {"strategy", s["spec"]}, {"thickness", "scene"},
-                         {"max_missed", s["spec"] == "full" ? 0 : allowed}});
+      entries.push_back({{"scene", s["scene"]}, {"strategy", s["spec"]}, {"thickness", "scene"}, {"max_missed", s["spec"] == "full" ? 0 : allowed}});
     }
     std::ofstream(baseline) << entries.dump();
     return run_ccdbench("check --baseline " + quoted(baseline) + " " + quoted(results));
@@ -204,8 +203,8 @@ TEST_F(Plugins, ACrashUnderIsolationIsTheQuerysErrorWrittenOut) {
   EXPECT_EQ(replay.queries[0].rounded, source.queries[16].rounded);
   // In a run: every 17th query of each child crashes it; the cell finishes with those errors (each counted as a miss
   // where the pair collides, errors=miss) and the other cell is whole.
-  const auto [steps, summaries] = with_json("run --scene " + quoted(fold()) + " --max-steps 3 --isolate --strategy full,full+" + crash + " --out " +
-                                            quoted(dir_ / "out"));
+  const auto [steps, summaries] =
+      with_json("run --scene " + quoted(fold()) + " --max-steps 3 --isolate --strategy full,full+" + crash + " --out " + quoted(dir_ / "out"));
   ASSERT_EQ(steps.exit_code, 0) << steps.output;
   const nlohmann::json crashed = cell_of(summaries, "full+" + crash + ":isolate=on");
   EXPECT_GT(crashed["errors"].get<int>(), 0);
@@ -227,8 +226,8 @@ TEST_F(Plugins, AHangIsStoppedByItsTimeout) {
 
 TEST_F(Plugins, NaNTimesOfImpactAreErrorsNeverAnswers) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
-  const auto [run, scores] = with_json("queries " + quoted(query_file(data, 10)) + " --faults " + quoted(dir_ / "faults") + " --method plugin:" +
-                                       plugin("broken_nan_toi") + ",exact");
+  const auto [run, scores] = with_json("queries " + quoted(query_file(data, 10)) + " --faults " + quoted(dir_ / "faults") +
+                                       " --method plugin:" + plugin("broken_nan_toi") + ",exact");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const nlohmann::json total = total_of(scores, "plugin:");
   EXPECT_EQ(total["errors"], 10);
@@ -248,8 +247,8 @@ TEST_F(Plugins, NaNTimesOfImpactAreErrorsNeverAnswers) {
 TEST_F(Plugins, AnAnswerLeftUnwrittenIsAnErrorIsolatedOrNot) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   for (const char* isolate : {"", ":isolate=on"}) {
-    const auto [run, scores] = with_json("queries " + quoted(query_file(data, 10)) + " --faults " + quoted(dir_ / "faults") + " --method plugin:" +
-                                         plugin("broken_silent") + isolate);
+    const auto [run, scores] = with_json("queries " + quoted(query_file(data, 10)) + " --faults " + quoted(dir_ / "faults") +
+                                         " --method plugin:" + plugin("broken_silent") + isolate);
     ASSERT_EQ(run.exit_code, 0) << run.output;
     const nlohmann::json total = total_of(scores, "plugin:");
     EXPECT_EQ(total["errors"], 10) << isolate;
@@ -261,7 +260,8 @@ TEST_F(Plugins, AnAnswerLeftUnwrittenIsAnErrorIsolatedOrNot) {
 
 TEST_F(Plugins, APluginThatIsNotThreadSafeRunsOnOneThreadSaidInTheRecord) {
   const std::string single = "plugin:" + plugin("broken_one_thread");
-  const auto [run, summaries] = with_json("--threads 2 run --scene " + quoted(fold()) + " --strategy full+" + single + " --out " + quoted(dir_ / "out"));
+  const auto [run, summaries] =
+      with_json("--threads 2 run --scene " + quoted(fold()) + " --strategy full+" + single + " --out " + quoted(dir_ / "out"));
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const nlohmann::json cell = cell_of(summaries, "full+" + single);
   ASSERT_GT(cell["elementary_tests"].get<double>(), 100) << "enough queries that two threads would have shared them";
@@ -270,7 +270,8 @@ TEST_F(Plugins, APluginThatIsNotThreadSafeRunsOnOneThreadSaidInTheRecord) {
 }
 
 TEST_F(Plugins, AnotherAbiVersionIsRefusedNamingBoth) {
-  const auto run = run_ccdbench("run --scene " + quoted(fold()) + " --strategy full+plugin:" + plugin("broken_abi_2") + " --out " + quoted(dir_ / "out"));
+  const auto run =
+      run_ccdbench("run --scene " + quoted(fold()) + " --strategy full+plugin:" + plugin("broken_abi_2") + " --out " + quoted(dir_ / "out"));
   EXPECT_EQ(run.exit_code, 2) << run.output;
   EXPECT_NE(run.output.find("built for plugin ABI version 2, but this ccdbench speaks version 1"), std::string::npos) << run.output;
 }
@@ -302,8 +303,8 @@ TEST_F(Plugins, QueryAnswerFilesScoreAsTheMethodThatWroteThem) {
     ASSERT_EQ(read.exit_code, 0) << read.output;
     const nlohmann::json expected = total_of(scores, method), got = total_of(again, "answers:");
     ASSERT_GT(expected["positives"].get<int>(), 0);
-    for (const char* field : {"queries", "positives", "reported", "false_negatives", "false_positives", "toi_checked", "toi_late",
-                              "toi_error_max", "toi_error_mean"}) {
+    for (const char* field :
+         {"queries", "positives", "reported", "false_negatives", "false_positives", "toi_checked", "toi_late", "toi_error_max", "toi_error_mean"}) {
       EXPECT_EQ(got[field], expected[field]) << method << " " << field;
     }
   }
@@ -340,7 +341,8 @@ TEST_F(Plugins, StepAnswerFoldersAreJudgedAsTheStrategyThatWroteThem) {
     ASSERT_EQ(again.size(), 1u);
     const nlohmann::json expected = cell_of(summaries, strategy);
     ASSERT_GT(expected["colliding"].get<int>(), 0);
-    for (const char* field : {"colliding", "missed", "false_alarms", "reported"}) EXPECT_EQ(again[0][field], expected[field]) << strategy << " " << field;
+    for (const char* field : {"colliding", "missed", "false_alarms", "reported"})
+      EXPECT_EQ(again[0][field], expected[field]) << strategy << " " << field;
   }
   // A pair the scene cannot have, a line cut short, a missing step: refused as FILE:line N: REASON.
   const std::filesystem::path folder = dir_ / "answers" / "full";
@@ -391,8 +393,8 @@ TEST_F(Plugins, TheTemplateBuiltAgainstAnInstalledCcdbenchRunsEverywhere) {
   EXPECT_EQ(total_of(read_json(dir_ / "q.json"), "plugin:")["queries"], testing::shared_query_count("sample-queries"));
   const auto stress = installed("stress --family zero-motion --method " + p);
   ASSERT_EQ(stress.exit_code, 0) << stress.output;
-  const std::string run_arguments = "run --scene " + quoted(fold()) + " --strategy " + p + ",full+" + p + " --out " + quoted(dir_ / "out") +
-                                    " --json " + quoted(dir_ / "r.json");
+  const std::string run_arguments =
+      "run --scene " + quoted(fold()) + " --strategy " + p + ",full+" + p + " --out " + quoted(dir_ / "out") + " --json " + quoted(dir_ / "r.json");
   const auto run = installed(run_arguments);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const nlohmann::json summaries = read_json(dir_ / "r.json");

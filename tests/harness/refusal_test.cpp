@@ -65,7 +65,9 @@ TEST_F(Refusal, OutOfRangeKeysAndFlagsNameTheirRange) {
   expect_refused("queries " + quoted(dir_.path()) + " --method 'conservative:max_iterations=1e300'", "max_iterations=1e300");
   // apccd's own key misspelt: blamed on apccd, with both lists.
   expect_refused(run + "'apccd:foo=1'", "apccd+conservative has no parameter 'foo' (apccd's: skip,");
-  expect_refused(run + "'full:nf_max=3'", "full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, filter; narrow phase conservative's: tolerance, toi_tolerance, max_iterations)");
+  expect_refused(run + "'full:nf_max=3'",
+                 "full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, filter; narrow "
+                 "phase conservative's: tolerance, toi_tolerance, max_iterations)");
   // --threads 4294967297 used to wrap to 1, --threads 1e8 to allocate gigabytes.
   expect_refused("--threads 4294967297 scenes", "--threads");
   expect_refused("--threads 100000000 scenes", "--threads");
@@ -87,13 +89,14 @@ TEST_F(Refusal, BadFilesNameTheFileAndWhere) {
                  "a.ply: is a folder, expected a PLY file");
   expect_refused("inspect " + quoted(dir_ / "a.ply"), "a.ply");
   // An empty mesh (FCL's endModel used to fail with a raw code).
-  const std::string empty = "ply\nformat ascii 1.0\nelement vertex 0\nproperty double x\nproperty double y\n"
-                            "property double z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string empty =
+      "ply\nformat ascii 1.0\nelement vertex 0\nproperty double x\nproperty double y\n"
+      "property double z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n";
   testing::write_text(dir_ / "e0.ply", empty);
   testing::write_text(dir_ / "e1.ply", empty);
   for (const char* strategy : {"fcl", "full"}) {
-    expect_refused("run --strategy " + std::string(strategy) + " --frames " + quoted(dir_ / "e0.ply") + " " +
-                       quoted(dir_ / "e1.ply") + " --out " + quoted(dir_ / "out"),
+    expect_refused("run --strategy " + std::string(strategy) + " --frames " + quoted(dir_ / "e0.ply") + " " + quoted(dir_ / "e1.ply") + " --out " +
+                       quoted(dir_ / "out"),
                    "e0.ply:faces: the mesh has no triangles");
   }
   // A simulation that diverges names the scene and the parameter that was changed.
@@ -133,8 +136,7 @@ TEST_F(Refusal, MissesStayInsideTheirFolder) {
     std::snprintf(b, sizeof b, "g/sheet/frame_%04d.ply", step + 1);
     std::filesystem::copy_file(dir_ / a, dir_ / "work/c0.ply", std::filesystem::copy_options::overwrite_existing);
     std::filesystem::copy_file(dir_ / b, dir_ / "work/c1.ply", std::filesystem::copy_options::overwrite_existing);
-    const auto result = run_ccdbench("run --strategy 'full+cubic32:eta=0' " + frames + " --fresh --out out --misses m",
-                                     dir_ / "work/inside");
+    const auto result = run_ccdbench("run --strategy 'full+cubic32:eta=0' " + frames + " --fresh --out out --misses m", dir_ / "work/inside");
     ASSERT_EQ(result.exit_code, 0) << result.output;
     for (const auto& entry : std::filesystem::recursive_directory_iterator(dir_.path())) {
       if (entry.path().extension() != ".csv") continue;

@@ -35,8 +35,7 @@ class Resume : public ::testing::Test {
   nlohmann::json run(const std::string& arguments, const std::string& out = "out") {
     const auto summary = dir_ / "summary.json";
     std::filesystem::remove(summary);
-    const testing::CommandResult result =
-        run_ccdbench(arguments + " --out " + quoted(dir_ / out) + " --json " + quoted(summary));
+    const testing::CommandResult result = run_ccdbench(arguments + " --out " + quoted(dir_ / out) + " --json " + quoted(summary));
     last_output_ = result.output;
     EXPECT_EQ(result.exit_code, 0) << arguments << "\n" << result.output;
     return std::filesystem::exists(summary) ? read_json(summary) : nlohmann::json::array();
@@ -101,8 +100,8 @@ TEST_F(Resume, StepsRepeatsThreadsAndTheExecutableAreInTheKey) {
   std::filesystem::copy_file(CCDBENCH_EXECUTABLE, copy);
   std::ofstream(copy, std::ios::app | std::ios::binary) << '\0';
   std::filesystem::permissions(copy, std::filesystem::perms::owner_exec, std::filesystem::perm_options::add);
-  const testing::CommandResult other = testing::run_command(
-      quoted(copy) + " --threads 1 run --strategy full --scene " + quoted(dir_ / "s") + " --out " + quoted(dir_ / "out"));
+  const testing::CommandResult other =
+      testing::run_command(quoted(copy) + " --threads 1 run --strategy full --scene " + quoted(dir_ / "s") + " --out " + quoted(dir_ / "out"));
   ASSERT_EQ(other.exit_code, 0) << other.output;
   EXPECT_EQ(other.output.find("(resumed)"), std::string::npos) << "another executable's cell was reused:\n" << other.output;
 }
@@ -155,8 +154,8 @@ TEST_F(Resume, TwoRunsAtOnceIntoOneFolderKeepEachOthersCells) {
   const std::vector<std::string> strategies = {"full", "apccd", "brute", "full+cubic64"};
   std::vector<FILE*> runs;
   for (const std::string& strategy : strategies) {
-    runs.push_back(::popen((std::string(CCDBENCH_EXECUTABLE) + " run --scene " + scene + " --strategy " + strategy + out +
-                            " > /dev/null 2>&1").c_str(), "r"));
+    runs.push_back(
+        ::popen((std::string(CCDBENCH_EXECUTABLE) + " run --scene " + scene + " --strategy " + strategy + out + " > /dev/null 2>&1").c_str(), "r"));
   }
   for (FILE* process : runs) EXPECT_EQ(::pclose(process), 0);
   std::set<std::string> kept;

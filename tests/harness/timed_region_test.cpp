@@ -2,10 +2,10 @@
 // digest, miss, fault and answer files, query scoring) announces itself, and none may find itself inside a
 // strategy's timed region. Moving one there on purpose (e.g. the digest into run_cell's step call) fails this test.
 
+#include "harness/timed_region.hpp"
 #include "datasets/query_file.hpp"
 #include "harness/query_scoring.hpp"
 #include "harness/run.hpp"
-#include "harness/timed_region.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>

@@ -1,11 +1,11 @@
 // The truth cache: a file is used only when its checksum holds and every pair is one the scene can have; anything
 // else is reported and the truth computed again.
 
+#include "harness/truth_cache.hpp"
 #include "ccd/source_digest.hpp"
 #include "core/error.hpp"
 #include "core/step.hpp"
 #include "datasets/procedural_scenes.hpp"
-#include "harness/truth_cache.hpp"
 #include "reference/elementary_pair.hpp"
 #include "reference/step_truth.hpp"
 #include "tests/support/cli.hpp"
@@ -34,8 +34,7 @@ CrossingStep crossing_step() {
     x0.push_back(Vec3(0.3 + p.x() * 0.5, 0.2 + p.y() * 0.5, 0.5));
     x1.push_back(Vec3(0.35 + p.x() * 0.5, 0.25 + p.y() * 0.5, -0.5 + 0.02 * p.y()));
   }
-  Scene scene({{"lower", ObjectKind::deformable, true, 25, faces}, {"upper", ObjectKind::deformable, false, 25, faces}},
-              {{0, 1}}, 0.0);
+  Scene scene({{"lower", ObjectKind::deformable, true, 25, faces}, {"upper", ObjectKind::deformable, false, 25, faces}}, {{0, 1}}, 0.0);
   return {std::move(scene), std::move(x0), std::move(x1)};
 }
 
@@ -140,8 +139,7 @@ TEST(TruthCache, FaceShapePairsAreCachedAndCheckedToo) {
   CollisionSet block_pair;
   block_pair.add(FaceShapePair{0, 2});
   write_truth_file(dir / "y.truth", block_pair);
-  EXPECT_NE(testing::error_message<InputError>([&] { read_truth_file(dir / "y.truth", apart); }).find("not a face-shape pair"),
-            std::string::npos);
+  EXPECT_NE(testing::error_message<InputError>([&] { read_truth_file(dir / "y.truth", apart); }).find("not a face-shape pair"), std::string::npos);
 }
 
 // A file with a valid checksum can still hold pairs of another scene: every pair is checked against this one (an
@@ -248,7 +246,7 @@ TEST(TruthCache, ARunWithCorruptCachedTruthGivesTheSameVerdicts) {
   std::size_t corrupted = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir / "cache/truth")) {
     std::vector<char> bytes = file_bytes(entry.path());
-    if (bytes.size() <= 40) continue;  // no pair to corrupt
+    if (bytes.size() <= 40) continue;              // no pair to corrupt
     bytes[32] = static_cast<char>(bytes[32] ^ 1);  // the first pair's vertex: another pair, a valid-looking file
     write_bytes(entry.path(), bytes);
     ++corrupted;

@@ -27,9 +27,12 @@ namespace {
 bool same_toi(double a, double b) { return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof(double)) == 0; }
 
 /// The counters of apccd's session logic: the two backends must take the same decisions.
-const std::vector<std::string> kSessionCounters{"session_start", "nf", "pending_pairs", "dangling_vertices", "dangling_triangles", "history_pairs",
-                                               "distance_filtered", "history_catches", "admissible_pairs",
-                                               "object_pair_candidates", "relative_motion"};
+const std::vector<std::string> kSessionCounters{"session_start",      "nf",
+                                                "pending_pairs",      "dangling_vertices",
+                                                "dangling_triangles", "history_pairs",
+                                                "distance_filtered",  "history_catches",
+                                                "admissible_pairs",   "object_pair_candidates",
+                                                "relative_motion"};
 
 double extra_counter(const strategies::StepResult& result, const std::string& name) {
   for (const auto& [key, value] : result.counters.extra) {
@@ -88,7 +91,6 @@ std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& 
   return colliding;
 }
 
-
 /// The steps a parity run compares: `count` steps from step `first` (0: to the last), both strategies starting fresh
 /// at frame `first` (a scene that ends before is left out). Suite runs too long for the sanitizer run come in two tests, the first steps and the rest
 /// (`_from_step_K`, which the ASan test preset leaves out by name, CMakePresets.json): each checks the same thing in
@@ -106,10 +108,9 @@ class OpenClParity : public ::testing::Test {
   /// Every scene of `suite` at its δ and at δ = 0, with `strategy`+narrow`keys` on both backends (`device_keys` on the
   /// device's only). Returns, per δ (scene's, 0) and narrow phase, how many scenes collided: a comparison of empty
   /// sets proves nothing. Adds the device's counters to `counters`.
-  std::vector<std::size_t> suite_at_both_thicknesses(const std::string& suite, const std::vector<std::string>& narrow_phases,
-                                                     Steps steps = {}, const std::string& strategy = "full",
-                                                     const std::string& keys = "", std::map<std::string, double>* counters = nullptr,
-                                                     const std::string& device_keys = "") {
+  std::vector<std::size_t> suite_at_both_thicknesses(const std::string& suite, const std::vector<std::string>& narrow_phases, Steps steps = {},
+                                                     const std::string& strategy = "full", const std::string& keys = "",
+                                                     std::map<std::string, double>* counters = nullptr, const std::string& device_keys = "") {
     std::vector<std::size_t> colliding_scenes(2 * narrow_phases.size(), 0);
     for (const harness::SceneSource& source : harness::suite_scenes(suite)) {
       const datasets::SceneSequence loaded = source.load();
@@ -155,7 +156,8 @@ TEST_F(OpenClParity, TheDefaultSuiteGivesTheCpuAnswersAtBothThicknesses_from_ste
 // pairs dropped by the filter.
 TEST_F(OpenClParity, FullWithTheFilterOnGivesTheCpuAnswers) {
   std::map<std::string, double> counters;
-  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, {}, "full", ":filter=on", &counters)) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
+  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative"}, {}, "full", ":filter=on", &counters))
+    EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
   EXPECT_GT(counters["distance_filtered"], 0.0);
 }
 
@@ -163,7 +165,8 @@ TEST_F(OpenClParity, FullWithTheFilterOnGivesTheCpuAnswers) {
 // (session starts, nf, pending pairs, dangling vertices and triangles, pairs the distance heuristic drops).
 TEST_F(OpenClParity, ApccdOnTheCiSuiteGivesTheCpuAnswersAtBothThicknesses) {
   std::map<std::string, double> counters;
-  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"}, {}, "apccd", "", &counters)) EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
+  for (const std::size_t scenes : suite_at_both_thicknesses("ci", {"conservative", "cubic64"}, {}, "apccd", "", &counters))
+    EXPECT_EQ(scenes, harness::suite_scenes("ci").size());
   // Sessions longer than a frame, with dangling triangles (at δ = 0), and the distance heuristic at work.
   EXPECT_GT(counters["dangling_triangles"], 0.0);
   EXPECT_GT(counters["distance_filtered"], 0.0);
@@ -179,9 +182,16 @@ TEST_F(OpenClParity, ApccdOnTheDefaultSuiteGivesTheCpuAnswers) {
 // global, inflation_max), the session's end (dangling_max, pending_max), the front end off or boxes only, pairs across objects
 // from the session's trees, and history; in two parts (Steps): the first 5 steps, in which every ci scene collides
 // at both δ and sessions outlive their first frame with every knob, and the rest (the two fold scenes).
-const std::vector<const char*> kApccdKnobs{":skip=off", ":nf_min=2:nf_max=4", ":nf_max=16:inflation_max=1e9", ":local=2.5:global=0",
-                                           ":local=0.5:global=1.5:inflation_max=0.25", ":dangling_max=0.001:pending_max=1.5",
-                                           ":heuristic=off", ":heuristic=boxes", ":object_pairs=session", ":history=persistent:inflation_max=1e9"};
+const std::vector<const char*> kApccdKnobs{":skip=off",
+                                           ":nf_min=2:nf_max=4",
+                                           ":nf_max=16:inflation_max=1e9",
+                                           ":local=2.5:global=0",
+                                           ":local=0.5:global=1.5:inflation_max=0.25",
+                                           ":dangling_max=0.001:pending_max=1.5",
+                                           ":heuristic=off",
+                                           ":heuristic=boxes",
+                                           ":object_pairs=session",
+                                           ":history=persistent:inflation_max=1e9"};
 
 TEST_F(OpenClParity, ApccdKnobsGiveTheCpuAnswers) {
   for (const char* keys : kApccdKnobs) {
@@ -243,7 +253,8 @@ TEST_F(OpenClParity, TheSuiteAskedForGivesTheCpuAnswersAtBothThicknesses) {
   const std::vector<std::string> narrow_phases =
       narrow != nullptr ? std::vector<std::string>{narrow} : std::vector<std::string>{"conservative", "cubic64"};
   std::map<std::string, double> counters;
-  for (const std::size_t scenes : suite_at_both_thicknesses(suite, narrow_phases, {0, max_steps}, strategy != nullptr ? strategy : "full", "", &counters)) {
+  for (const std::size_t scenes :
+       suite_at_both_thicknesses(suite, narrow_phases, {0, max_steps}, strategy != nullptr ? strategy : "full", "", &counters)) {
     EXPECT_GT(scenes, 0u);
   }
   std::cout << "[ counts   ] " << (strategy != nullptr ? strategy : "full") << " on " << suite << ", device's totals over both δ";
@@ -339,14 +350,13 @@ TEST_F(OpenClParity, QueriesGivenUpByTheDeviceGetTheSameAnswers) {
   for (const char* limit : {"1", "8", "64"}) {
     SCOPED_TRACE(std::string("device_iterations=") + limit);
     std::map<std::string, double> counters;
-    const std::size_t colliding = expect_same_answers("full", std::string("full:backend=opencl:device_iterations=") + limit,
-                                                      loaded.scene(), testing::all_frames(loaded), &counters);
+    const std::size_t colliding = expect_same_answers("full", std::string("full:backend=opencl:device_iterations=") + limit, loaded.scene(),
+                                                      testing::all_frames(loaded), &counters);
     EXPECT_GT(colliding, 0u);
     EXPECT_GT(counters["device_given_up_pairs"], 0.0) << "no query ran past the limit: the hand-over was not exercised";
     if (std::string(limit) == "1") {
       EXPECT_GT(counters["device_second_pass_pairs"], 0.0) << "the second device pass did not run";
     }
-
   }
 }
 

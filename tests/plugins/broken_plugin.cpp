@@ -12,11 +12,11 @@
 #include <ccdbench/ccdbench_plugin.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <thread>
-#include <chrono>
 
 namespace {
 
@@ -90,8 +90,21 @@ constexpr std::uint32_t kCapabilities = CCDBENCH_REPORTS_TOI;
 constexpr std::uint32_t kCapabilities = CCDBENCH_REPORTS_TOI | CCDBENCH_THREAD_SAFE;
 #endif
 
-const ccdbench_plugin table = {sizeof(ccdbench_plugin), kAbi, "broken", "0", "broken on purpose (tests)", kCapabilities,
-                               nullptr, 0, create, destroy, answer, answer, begin, step, nullptr};
+const ccdbench_plugin table = {sizeof(ccdbench_plugin),
+                               kAbi,
+                               "broken",
+                               "0",
+                               "broken on purpose (tests)",
+                               kCapabilities,
+                               nullptr,
+                               0,
+                               create,
+                               destroy,
+                               answer,
+                               answer,
+                               begin,
+                               step,
+                               nullptr};
 
 }  // namespace
 

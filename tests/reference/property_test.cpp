@@ -34,9 +34,12 @@ std::vector<RandomPair> random_pairs(std::size_t count, std::uint64_t seed) {
     const int family = static_cast<int>(i % 6) / 2;
     for (Vec3& row : pair.rows) {
       for (int k = 0; k < 3; ++k) {
-        if (family == 0) row[k] = grid(random) / 8.0;
-        else if (family == 1) row[k] = grid(random) / 4.0 + (random() % 3 == 0 ? std::ldexp(uniform(random), exponent(random)) : 0.0);
-        else row[k] = uniform(random);
+        if (family == 0)
+          row[k] = grid(random) / 8.0;
+        else if (family == 1)
+          row[k] = grid(random) / 4.0 + (random() % 3 == 0 ? std::ldexp(uniform(random), exponent(random)) : 0.0);
+        else
+          row[k] = uniform(random);
       }
     }
     if (family == 0 && random() % 2 == 0) {
@@ -48,8 +51,8 @@ std::vector<RandomPair> random_pairs(std::size_t count, std::uint64_t seed) {
 }
 
 std::string describe(const RandomPair& pair, double thickness) {
-  return std::string(pair.kind == PairKind::vertex_face ? "vertex-face" : "edge-edge") + ", δ = " +
-         std::to_string(thickness) + ", seed " + std::to_string(kSeed) + ":\n" + testing::rational_rows(pair.rows);
+  return std::string(pair.kind == PairKind::vertex_face ? "vertex-face" : "edge-edge") + ", δ = " + std::to_string(thickness) + ", seed " +
+         std::to_string(kSeed) + ":\n" + testing::rational_rows(pair.rows);
 }
 
 // Tests of many random pairs come in parts (testing::Part): every part draws the same pairs and checks its own.
@@ -78,8 +81,8 @@ std::vector<RandomPair> near_pairs(std::size_t count, std::uint64_t seed, double
   std::uniform_real_distribution<double> log_length(-3.0, 1.0);
   std::vector<RandomPair> pairs = random_pairs(count, seed);
   for (RandomPair& pair : pairs) {
-    const Vec3 offset = Vec3(uniform(random), uniform(random), uniform(random)).normalized() *
-                        std::pow(10.0, log_length(random)) * (thickness > 0 ? 20 * thickness : 1.0);
+    const Vec3 offset = Vec3(uniform(random), uniform(random), uniform(random)).normalized() * std::pow(10.0, log_length(random)) *
+                        (thickness > 0 ? 20 * thickness : 1.0);
     const int split = pair.kind == PairKind::vertex_face ? 1 : 2;
     for (int k = split; k < 4; ++k) {
       pair.rows[k] += offset;
@@ -127,8 +130,7 @@ TEST(ReferenceProperty, SeparationPreCheckIsExactAtDistanceDelta) {
     for (int k = 0; k < 4; ++k) rows[k + 4] = rows[k];
     const bool collides = decide(PairKind::vertex_face, rows, thickness, {false, false, 0}).collides;
     EXPECT_EQ(collides, height == thickness);
-    EXPECT_EQ(certainly_apart(PairKind::vertex_face, interval_rows(rows), Interval(thickness), 2), !collides)
-        << "height " << height;
+    EXPECT_EQ(certainly_apart(PairKind::vertex_face, interval_rows(rows), Interval(thickness), 2), !collides) << "height " << height;
   }
 }
 
@@ -199,9 +201,7 @@ namespace {
 // successor lies beyond the exact interval. A double TOI is late exactly when it exceeds the floor.
 TEST(ReferenceToi, FloorIsTheLargestDoubleNotAfterTheEarliestContact) {
   const Vec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
-  auto vertex_through = [&](double z0, double z1) {
-    return std::array<Vec3, 8>{Vec3(0.25, 0.25, z0), a, b, c, Vec3(0.25, 0.25, z1), a, b, c};
-  };
+  auto vertex_through = [&](double z0, double z1) { return std::array<Vec3, 8>{Vec3(0.25, 0.25, z0), a, b, c, Vec3(0.25, 0.25, z1), a, b, c}; };
   const DecisionRequest with_toi{true, true, 64};
   const Decision half = decide(PairKind::vertex_face, vertex_through(1, -1), 0.0, with_toi);
   ASSERT_TRUE(half.collides);

@@ -43,8 +43,8 @@ TEST(ReferenceSharedData, SampleQueriesAllRightWithAndWithoutFilter) {
 
 TEST(ReferenceSharedData, ScalableCcdQueriesAllRight) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
-  for (const char* path : {"cloth-funnel/queries/227vf.csv", "cloth-funnel/queries/227ee.csv",
-                           "rod-twist/queries/3036vf.csv", "rod-twist/queries/3036ee.csv"}) {
+  for (const char* path :
+       {"cloth-funnel/queries/227vf.csv", "cloth-funnel/queries/227ee.csv", "rod-twist/queries/3036vf.csv", "rod-twist/queries/3036ee.csv"}) {
     expect_every_query_right(datasets::read_query_file(data / "scalable-ccd-sample" / path), true);
   }
 }
@@ -59,8 +59,7 @@ TEST_P(StepTruthOnPublicSteps, HoldsEverySampleColliding) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   const std::string name = GetParam();
   const datasets::SampleStep step = datasets::load_sample_step(data / "scalable-ccd-sample" / name);
-  const Scene scene({{"mesh", ObjectKind::deformable, true, step.topology.num_vertices(), step.topology.faces()}}, {},
-                    0.0);
+  const Scene scene({{"mesh", ObjectKind::deformable, true, step.topology.num_vertices(), step.topology.faces()}}, {}, 0.0);
   const StepTruth truth = compute_step_truth(scene, step.x0, step.x1, {0.0, false, {}});
   std::size_t vf_positives = 0;
   for (std::size_t i = 0; i < step.vertex_face_candidates.size(); ++i) {
@@ -80,8 +79,8 @@ TEST_P(StepTruthOnPublicSteps, HoldsEverySampleColliding) {
     if (!*query.truth) continue;
     ++ee_positives;
     const auto& r = query.rounded;
-    const EdgeEdgePair pair = make_edge_edge_pair(make_edge(vertex(r[0], r[4]), vertex(r[1], r[5])),
-                                                  make_edge(vertex(r[2], r[6]), vertex(r[3], r[7])));
+    const EdgeEdgePair pair =
+        make_edge_edge_pair(make_edge(vertex(r[0], r[4]), vertex(r[1], r[5])), make_edge(vertex(r[2], r[6]), vertex(r[3], r[7])));
     EXPECT_TRUE(truth.collisions.contains(pair)) << "EE query " << i;
   }
   EXPECT_EQ(vf_positives, name == "cloth-funnel" ? 27u : 765u) << "the README's positives";

@@ -1,10 +1,10 @@
 // Whole-step truth on small hand-made scenes, checked against brute force over every elementary pair.
 
+#include "reference/step_truth.hpp"
 #include "core/scene.hpp"
 #include "core/step.hpp"
 #include "reference/elementary_pair.hpp"
 #include "reference/face_shape.hpp"
-#include "reference/step_truth.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -83,8 +83,7 @@ TEST(StepTruth, EqualsBruteForceForEveryCollisionFilterAndThickness) {
         const Scene scene = fold.scene.with_thickness(delta);
         const StepTruth truth = compute_step_truth(scene, fold.x0, fold.x1, {delta, false, {}});
         const CollisionSet expected = brute_force_truth(scene, fold.x0, fold.x1, delta);
-        EXPECT_TRUE(truth.collisions.same_pairs(expected))
-            << "sweep " << truth.collisions.size() << " pairs, brute force " << expected.size();
+        EXPECT_TRUE(truth.collisions.same_pairs(expected)) << "sweep " << truth.collisions.size() << " pairs, brute force " << expected.size();
         if (self || inter) {
           EXPECT_GT(expected.size(), 0u) << "the scene must exercise the filter it tests";
         } else {

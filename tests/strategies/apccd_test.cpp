@@ -78,9 +78,9 @@ TEST_P(ApccdOnScene, MissesNothingUnderEveryKnobAndThreadCount) {
     // Every knob, at least once: defaults; no skipping, no front end, history on; no inflation at all (every
     // motion dangles) with the box filter alone as front end; object pairs from the session's trees with persistent history; long sessions (nf 2..16, no
     // inflation cap, many dangling vertices and a long pending list allowed before a session ends).
-    for (const char* spec : {"apccd", "apccd:skip=off:heuristic=off:history=on", "apccd:local=0:global=0:heuristic=boxes",
-                             "apccd:object_pairs=session:history=persistent",
-                             "apccd:nf_min=2:nf_max=16:inflation_max=1e9:dangling_max=0.5:pending_max=1e9"}) {
+    for (const char* spec :
+         {"apccd", "apccd:skip=off:heuristic=off:history=on", "apccd:local=0:global=0:heuristic=boxes",
+          "apccd:object_pairs=session:history=persistent", "apccd:nf_min=2:nf_max=16:inflation_max=1e9:dangling_max=0.5:pending_max=1e9"}) {
       SCOPED_TRACE(GetParam() + ", δ = " + std::to_string(thickness) + ", " + spec);
       const auto two = testing::run_all_steps(spec, scene, frames, 2);
       // One thread against two for the default and for the longest sessions (where most state is carried from
@@ -96,8 +96,7 @@ TEST_P(ApccdOnScene, MissesNothingUnderEveryKnobAndThreadCount) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(BuiltInScenes, ApccdOnScene, ::testing::ValuesIn(testing::procedural_scene_names()),
-                         testing::param_name);
+INSTANTIATE_TEST_SUITE_P(BuiltInScenes, ApccdOnScene, ::testing::ValuesIn(testing::procedural_scene_names()), testing::param_name);
 INSTANTIATE_TEST_SUITE_P(ShapeScenes, ApccdOnScene, ::testing::ValuesIn(testing::shape_scene_names()), testing::param_name);
 
 // With the box filter alone as its front end, apccd admits the candidates its sessions, partial traversals and
@@ -181,7 +180,8 @@ TEST(Apccd, WithTheBoxFrontEndTestsFullsPairsLessThoseItsObjectFramesProveApart)
           std::set_difference(all.edge_edge.begin(), all.edge_edge.end(), some.edge_edge.begin(), some.edge_edge.end(),
                               std::back_inserter(edge_edge));
           for (const EdgeEdgePair& p : edge_edge) {
-            ASSERT_TRUE(apart_in_object_frame({p.a.v0, p.a.v1}, {p.b.v0, p.b.v1})) << "edges " << p.a.v0 << "-" << p.a.v1 << ", " << p.b.v0 << "-" << p.b.v1 << " lost";
+            ASSERT_TRUE(apart_in_object_frame({p.a.v0, p.a.v1}, {p.b.v0, p.b.v1}))
+                << "edges " << p.a.v0 << "-" << p.a.v1 << ", " << p.b.v0 << "-" << p.b.v1 << " lost";
             ASSERT_FALSE(truth.contains(p));
           }
           // full's answers on the pairs apccd tested are apccd's, TOIs included.
@@ -331,9 +331,8 @@ TEST(Apccd, KnobsAreParsedRecordedAndChecked) {
   // nf_max=2^31 used to wrap in the conversion to int and give a wrong message.
   const std::string huge = testing::error_message<std::invalid_argument>([] { make_strategy("apccd:nf_max=2147483648"); });
   EXPECT_NE(huge.find("apccd: nf_max=2147483648 must be an integer in [1, 1000]"), std::string::npos) << huge;
-  for (const char* bad : {"apccd:nf_min=2.5", "apccd:local=-1", "apccd:global=1e7", "apccd:dangling_max=1.5",
-                          "apccd:pending_max=0.5", "apccd:inflation_max=-1", "apccd:object_pairs=stale", "apccd:history=2",
-                          "apccd:history=forever"}) {
+  for (const char* bad : {"apccd:nf_min=2.5", "apccd:local=-1", "apccd:global=1e7", "apccd:dangling_max=1.5", "apccd:pending_max=0.5",
+                          "apccd:inflation_max=-1", "apccd:object_pairs=stale", "apccd:history=2", "apccd:history=forever"}) {
     EXPECT_THROW(make_strategy(bad), std::invalid_argument) << bad;
   }
 }

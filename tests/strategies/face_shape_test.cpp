@@ -45,8 +45,7 @@ struct StrategyAnswer {
 /// use_gjk false: the certified axes decide every pair, so that a wrong certificate cannot hide behind GJK.
 StrategyAnswer strategy_answer(const Shape& shape, const FaceShapeRows& rows, double thickness, bool use_gjk = true) {
   StrategyAnswer answer;
-  answer.culled =
-      strategies::cull_face_shape(shape, rows, thickness, use_gjk) == strategies::FaceShapeCull::certified_apart;
+  answer.culled = strategies::cull_face_shape(shape, rows, thickness, use_gjk) == strategies::FaceShapeCull::certified_apart;
   if (!answer.culled) answer.narrow = strategies::narrow_phase_face_shape(conservative(), shape, rows, thickness);
   return answer;
 }
@@ -117,8 +116,8 @@ TEST_P(FaceShapeParts, StrategiesMissNoRandomPairAtEitherThicknessAndEveryScale)
           certified += strategy_answer(shape, rows, thickness, false).culled ? 1 : 0;
         }
       }
-      std::cout << to_string(kind) << " 2^" << exponent << ": " << colliding << " colliding, " << apart << " apart, " << culled << " culled (" << certified
-                << " by the certified axes alone)\n";
+      std::cout << to_string(kind) << " 2^" << exponent << ": " << colliding << " colliding, " << apart << " apart, " << culled << " culled ("
+                << certified << " by the certified axes alone)\n";
       const std::size_t decisions = 2 * checked;
       const std::size_t some = std::max<std::size_t>(1, decisions / 20);
       EXPECT_GE(colliding, 2 * some) << to_string(kind) << " at 2^" << exponent;

@@ -72,8 +72,7 @@ TEST_P(FclBvhOnScene, CandidatesCoverEveryTruthPairAndNothingIsMissed) {
   EXPECT_GT(colliding, 0u) << name << " must collide at δ = 0 to test this";
 }
 
-INSTANTIATE_TEST_SUITE_P(BuiltInScenes, FclBvhOnScene, ::testing::ValuesIn(testing::procedural_scene_names()),
-                         testing::param_name);
+INSTANTIATE_TEST_SUITE_P(BuiltInScenes, FclBvhOnScene, ::testing::ValuesIn(testing::procedural_scene_names()), testing::param_name);
 
 // The fold contact of two triangles sharing vertex 0 (as in full_traversal_test): FCL's own tests reject the pairs
 // that share the vertex (their cubic is identically zero) and find the others, so `fcl` reports the triangle pair.
@@ -115,8 +114,7 @@ TEST(Fcl, ThicknessUnknownVolumesAndNarrowPhasesAreClearErrors) {
 
 // FCL's endModel fails on a model without triangles (it used to surface as "FCL endModel failed with code -3").
 TEST(Fcl, AnObjectWithoutTrianglesIsRefusedByName) {
-  const Scene scene({{"cloth", ObjectKind::deformable, true, 3, {{0, 1, 2}}}, {"points", ObjectKind::static_object, false, 2, {}}},
-                    {{0, 1}}, 0.0);
+  const Scene scene({{"cloth", ObjectKind::deformable, true, 3, {{0, 1, 2}}}, {"points", ObjectKind::static_object, false, 2, {}}}, {{0, 1}}, 0.0);
   for (const char* spec : {"fcl", "fcl-bvh"}) {
     const std::string message = testing::error_message<std::invalid_argument>([&] { make_strategy(spec)->check_scene(scene); });
     EXPECT_NE(message.find("cannot model object 'points': it has no triangles"), std::string::npos) << message;
@@ -154,7 +152,7 @@ TEST(FclRegression, EachQueryCollidesAndFclMissesItForTheCauseItIsFiledUnder) {
 // The absolute constants make FCL's answer depend on units: the same crossing, scaled by a power of two (exact),
 // is found at metre scale and lost at millimetre-sized features.
 TEST(Fcl, AnswerDependsOnTheSceneUnits) {
-  narrowphase::PairRows rows = {Vec3(0.3, 0.3, 1), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
+  narrowphase::PairRows rows = {Vec3(0.3, 0.3, 1),  Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
                                 Vec3(0.3, 0.3, -1), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   EXPECT_TRUE(fcl_vertex_face(rows));
   for (Vec3& row : rows) row *= 0x1p-10;  // about a millimetre

@@ -49,20 +49,19 @@ std::string key(const std::string& scene, double thickness, const std::string& s
 }
 
 /// Every step of `frames` with `spec`, into `answers`. Returns the colliding pairs reported over the steps.
-std::size_t run_steps(const std::string& scene_label, const Scene& scene, const std::vector<std::vector<Vec3>>& frames,
-                      const std::string& spec, Answers& answers) {
+std::size_t run_steps(const std::string& scene_label, const Scene& scene, const std::vector<std::vector<Vec3>>& frames, const std::string& spec,
+                      Answers& answers) {
   auto strategy = make_strategy(spec);
   strategy->init(scene, frames[0]);
   std::size_t reported = 0;
   for (std::size_t k = 0; k + 1 < frames.size(); ++k) {
     const StepResult r = strategy->step({&scene, k, frames[k], frames[k + 1]}, false);
-    answers[key(scene_label, scene.thickness(), spec, k)] = {r.counters.candidate_triangle_pairs, r.counters.elementary_tests,
-                                                              r.collisions.size(), answers_digest(r.collisions)};
+    answers[key(scene_label, scene.thickness(), spec, k)] = {r.counters.candidate_triangle_pairs, r.counters.elementary_tests, r.collisions.size(),
+                                                             answers_digest(r.collisions)};
     reported += r.collisions.size();
   }
   return reported;
 }
-
 
 const std::vector<std::string> kSpecs{"full", "full+cubic64", "full:filter=on", "apccd"};
 
@@ -149,8 +148,7 @@ TEST_P(FullAnswersOnPublicSteps, GiveTheRecordedAnswers) {
   Answers answers;
   const auto frames_dir = data / "scalable-ccd-sample" / name / "frames";
   const std::string second = std::to_string(std::stoi(first) + 1);
-  const datasets::SceneSequence loaded =
-      datasets::scene_from_frame_files({frames_dir / (first + ".ply"), frames_dir / (second + ".ply")}, 0.0);
+  const datasets::SceneSequence loaded = datasets::scene_from_frame_files({frames_dir / (first + ".ply"), frames_dir / (second + ".ply")}, 0.0);
   for (const std::string& spec : kSpecs) {
     EXPECT_GT(run_steps(name, loaded.scene(), testing::all_frames(loaded), spec, answers), 0u) << name << " " << spec;
   }
@@ -160,7 +158,9 @@ TEST_P(FullAnswersOnPublicSteps, GiveTheRecordedAnswers) {
 INSTANTIATE_TEST_SUITE_P(PublicSteps, FullAnswersOnPublicSteps,
                          ::testing::Values(std::pair<std::string, std::string>{"cloth-funnel", "227"},
                                            std::pair<std::string, std::string>{"rod-twist", "3036"}),
-                         [](const auto& instance) { return testing::param_name({instance.param.first, instance.index}); });
+                         [](const auto& instance) {
+                           return testing::param_name({instance.param.first, instance.index});
+                         });
 
 }  // namespace
 }  // namespace ccd::strategies

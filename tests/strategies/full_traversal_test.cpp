@@ -48,8 +48,7 @@ TEST_P(FullTraversalOnScene, EqualsBruteForceForAnyThreadCountAndMissesNothing) 
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(BuiltInScenes, FullTraversalOnScene, ::testing::ValuesIn(testing::procedural_scene_names()),
-                         testing::param_name);
+INSTANTIATE_TEST_SUITE_P(BuiltInScenes, FullTraversalOnScene, ::testing::ValuesIn(testing::procedural_scene_names()), testing::param_name);
 // Obstacles as analytic shapes: face-shape pairs beside VF and EE, each a truth pair that must not be missed.
 INSTANTIATE_TEST_SUITE_P(ShapeScenes, FullTraversalOnScene, ::testing::ValuesIn(testing::shape_scene_names()), testing::param_name);
 
@@ -85,8 +84,11 @@ TEST(StrategyFactory, SpecsResolveAndErrorsAreClear) {
   EXPECT_THROW(make_strategy("full:nf_max=3"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full:oops"), std::invalid_argument);
   const std::string unknown = testing::error_message<std::invalid_argument>([] { make_strategy("full:nf_max=3"); });
-  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, filter; narrow phase conservative's: "
-                         "tolerance, toi_tolerance, max_iterations)"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, filter; "
+                         "narrow phase conservative's: "
+                         "tolerance, toi_tolerance, max_iterations)"),
+            std::string::npos)
+      << unknown;
 }
 
 // Every numeric key has a range: max_iterations=1e300 used to convert to a negative count (undefined behaviour)
@@ -98,7 +100,8 @@ TEST(StrategyFactory, EveryNumericKeyIsCheckedAgainstItsRange) {
   EXPECT_THROW(make_strategy("full:tolerance=2"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full+cubic64:eta=-1e-9"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full+advancement:max_iterations=0"), std::invalid_argument);
-  EXPECT_EQ(make_strategy("full:max_iterations=1000000000")->name(), "full+conservative:tolerance=1e-10:toi_tolerance=1e-06:max_iterations=1000000000");
+  EXPECT_EQ(make_strategy("full:max_iterations=1000000000")->name(),
+            "full+conservative:tolerance=1e-10:toi_tolerance=1e-06:max_iterations=1000000000");
 }
 
 }  // namespace

@@ -30,16 +30,13 @@ NarrowPhaseResult run(const NarrowPhase& variant, datasets::QueryKind kind, cons
 }
 
 /// Checks `variant` against the reference on one pair: a miss fails; the TOI must not be later than the truth's.
-void expect_no_miss(const NarrowPhase& variant, datasets::QueryKind kind, const PairRows& rows, double thickness,
-                    const std::string& where) {
+void expect_no_miss(const NarrowPhase& variant, datasets::QueryKind kind, const PairRows& rows, double thickness, const std::string& where) {
   const reference::Decision truth = reference::decide(kind_of(kind), rows, thickness, {true, true, 64});
   if (!truth.collides) return;
   const NarrowPhaseResult answer = run(variant, kind, rows, thickness);
-  ASSERT_TRUE(answer.collides) << variant.name() << " missed " << where << " at δ = " << thickness << ":\n"
-                               << testing::rational_rows(rows, 1);
+  ASSERT_TRUE(answer.collides) << variant.name() << " missed " << where << " at δ = " << thickness << ":\n" << testing::rational_rows(rows, 1);
   // Exact: no double lies strictly between toi_floor and the true time, so a later double TOI exceeds toi_floor.
-  ASSERT_LE(answer.toi, *truth.toi_floor) << variant.name() << " reported a TOI later than the true one for " << where
-                                          << ":\n"
+  ASSERT_LE(answer.toi, *truth.toi_floor) << variant.name() << " reported a TOI later than the true one for " << where << ":\n"
                                           << testing::rational_rows(rows, 1);
 }
 
@@ -110,13 +107,15 @@ TEST_P(ConservativeToiOnData, IsNeverLateAndWithinItsTolerance) {
           const reference::Decision truth = reference::decide(kind_of(file.kind), rows, thickness, {true, true, 64});
           if (!truth.collides) continue;
           const NarrowPhaseResult answer = run(*conservative, file.kind, rows, thickness);
-          const std::string where = conservative->name() + " on " + path.string() + " query " + std::to_string(q) + " at δ = " +
-                                    format_spec_number(thickness) + ":\n" + testing::rational_rows(rows, 1);
+          const std::string where = conservative->name() + " on " + path.string() + " query " + std::to_string(q) +
+                                    " at δ = " + format_spec_number(thickness) + ":\n" + testing::rational_rows(rows, 1);
           ASSERT_TRUE(answer.collides) << "missed: " << where;
           ++checked;
           ASSERT_LE(answer.toi, *truth.toi_floor) << "late: " << where;
           // toi_floor is the largest double not after the contact: the gap to it bounds the gap to the contact.
-          ASSERT_LE(*truth.toi_floor - answer.toi, toi_tolerance) << "earlier than the contact by more than toi_tolerance (TOI " << answer.toi << ", contact " << *truth.toi_floor << ", cap " << answer.hit_iteration_cap << ", achieved " << answer.achieved_tolerance << "): " << where;
+          ASSERT_LE(*truth.toi_floor - answer.toi, toi_tolerance)
+              << "earlier than the contact by more than toi_tolerance (TOI " << answer.toi << ", contact " << *truth.toi_floor << ", cap "
+              << answer.hit_iteration_cap << ", achieved " << answer.achieved_tolerance << "): " << where;
           loose += *truth.toi_floor - answer.toi > toi_tolerance / 4 ? 1 : 0;
         }
       }
@@ -211,10 +210,10 @@ TEST(Conservative, SubnormalsAreNotFlushed) {
   const double tiny = std::ldexp(1.0, -1062);
   ASSERT_FALSE(std::isnormal(tiny));
   ASSERT_GT(tiny, 0.0);
-  const PairRows stops_short = {Vec3(0.25, 0.25, 1) * tiny, Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny,
+  const PairRows stops_short = {Vec3(0.25, 0.25, 1) * tiny,    Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny,
                                 Vec3(0.25, 0.25, 0.25) * tiny, Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny};
   EXPECT_FALSE(make_narrow_phase("conservative")->vertex_face(stops_short, 0.0).collides);
-  const PairRows crosses = {Vec3(0.25, 0.25, 1) * tiny, Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny,
+  const PairRows crosses = {Vec3(0.25, 0.25, 1) * tiny,  Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny,
                             Vec3(0.25, 0.25, -1) * tiny, Vec3(0, 0, 0), Vec3(1, 0, 0) * tiny, Vec3(0, 1, 0) * tiny};
   EXPECT_TRUE(make_narrow_phase("conservative")->vertex_face(crosses, 0.0).collides);
 }
@@ -223,7 +222,7 @@ TEST(Conservative, AnswersNoOnlyWithProofAndReportsItsCap) {
   const auto capped = make_narrow_phase("conservative", {{"max_iterations", "1"}});
   // A near miss that needs subdivision (through the face's plane, 1e-9 beyond its hypotenuse, where u + v > 1
   // inside the first box of (u, v)): with one box the test must give up and say "collides".
-  const PairRows near_miss = {Vec3(0.5 + 1e-9, 0.5, 1), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
+  const PairRows near_miss = {Vec3(0.5 + 1e-9, 0.5, 1),  Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
                               Vec3(0.5 + 1e-9, 0.5, -1), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   const NarrowPhaseResult answer = capped->vertex_face(near_miss, 0.0);
   EXPECT_TRUE(answer.collides);
@@ -246,10 +245,10 @@ TEST(Conservative, AnswersNoOnlyWithProofAndReportsItsCap) {
 // 2^-540 edge's norm squared to 0, so the band |V| <= δ|X||Y| collapsed while V did not.
 TEST(Conservative, TheTimeWindowsKeepTinyAndFarCarriedContacts) {
   const double a = 0x1p-53, b = 0x1p-54, c = 0x1p-60, d = 0x1p-59;
-  const PairRows vertex_face = {Vec3(0, 0, 0.5 + a), Vec3(-0.25, -0.25, 0.5), Vec3(0.5, -0.25, 0.5), Vec3(-0.25, 0.5, 0.5),
-                                Vec3(0, 0, b + c), Vec3(-0.25, -0.25, b + d), Vec3(0.5, -0.25, b + d), Vec3(-0.25, 0.5, b + d)};
+  const PairRows vertex_face = {Vec3(0, 0, 0.5 + a), Vec3(-0.25, -0.25, 0.5),   Vec3(0.5, -0.25, 0.5),   Vec3(-0.25, 0.5, 0.5),
+                                Vec3(0, 0, b + c),   Vec3(-0.25, -0.25, b + d), Vec3(0.5, -0.25, b + d), Vec3(-0.25, 0.5, b + d)};
   const double tiny = 0x1p-540;
-  const PairRows edge_edge = {Vec3(0, 0, 1), Vec3(tiny, 0, 1), Vec3(0, -0.5, 0), Vec3(0, 0.5, 0),
+  const PairRows edge_edge = {Vec3(0, 0, 1),        Vec3(tiny, 0, 1),        Vec3(0, -0.5, 0), Vec3(0, 0.5, 0),
                               Vec3(0, 0, 1.0 / 16), Vec3(tiny, 0, 1.0 / 16), Vec3(0, -0.5, 0), Vec3(0, 0.5, 0)};
   const auto conservative = make_narrow_phase("conservative");
   const struct {
@@ -289,10 +288,10 @@ TEST(Advancement, ItsStepsNeverPassTheContactOnTheUnitTests) {
 }
 
 TEST(Cubic, FindsACleanCrossingAndMissesCoplanarMotion) {
-  const PairRows crossing = {Vec3(0.25, 0.25, 1), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
+  const PairRows crossing = {Vec3(0.25, 0.25, 1),  Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
                              Vec3(0.25, 0.25, -1), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   const PairRows coplanar_sweep = {Vec3(-1, 0.25, 0), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
-                                   Vec3(2, 0.25, 0), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+                                   Vec3(2, 0.25, 0),  Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   for (const char* name : {"cubic32", "cubic64"}) {
     const auto cubic = make_narrow_phase(name);
     const NarrowPhaseResult hit = cubic->vertex_face(crossing, 0.0);

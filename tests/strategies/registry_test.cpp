@@ -1,8 +1,8 @@
 // The registries of strategies and narrow phases: every entry's keys and their defaults, resolved names, and the
 // cell keys made from them.
 
-#include "harness/cell_store.hpp"
 #include "strategies/narrowphase/registry.hpp"
+#include "harness/cell_store.hpp"
 #include "strategies/registry.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -47,9 +47,10 @@ TEST(Registry, DefaultsPrintAsBefore) {
   EXPECT_EQ(make_strategy("full+cubic64")->name(), "full+cubic64:eta=1e-06");
   EXPECT_EQ(make_strategy("brute+cubic32")->name(), "brute+cubic32:eta=1e-06");
   EXPECT_EQ(make_strategy("full+advancement")->name(), "full+advancement:eta=1e-06:max_iterations=1000");
-  EXPECT_EQ(make_strategy("apccd")->name(),
-            "apccd+conservative:tolerance=1e-10:toi_tolerance=1e-06:max_iterations=20000:skip=on:nf_min=1:nf_max=8:local=1:global=0.25:dangling_max=0.05:"
-            "pending_max=4:inflation_max=0.5:heuristic=on:object_pairs=fresh:history=off");
+  EXPECT_EQ(
+      make_strategy("apccd")->name(),
+      "apccd+conservative:tolerance=1e-10:toi_tolerance=1e-06:max_iterations=20000:skip=on:nf_min=1:nf_max=8:local=1:global=0.25:dangling_max=0.05:"
+      "pending_max=4:inflation_max=0.5:heuristic=on:object_pairs=fresh:history=off");
   EXPECT_EQ(make_strategy("full+cubic64:filter=on")->name(), "full+cubic64:eta=1e-06:filter=on");
 }
 

@@ -2,10 +2,10 @@
 // come within δ: checked against the exact reference on the public data, the extremes suite and seeded random
 // pairs; a single pair it wrongly calls apart fails, printed as a rational query.
 
+#include "strategies/separation_filter.hpp"
 #include "datasets/extremes_suite.hpp"
 #include "datasets/query_file.hpp"
 #include "reference/elementary_pair.hpp"
-#include "strategies/separation_filter.hpp"
 #include "tests/support/rational_rows.hpp"
 #include "tests/support/scale_pairs.hpp"
 #include "tests/support/test_support.hpp"
@@ -25,8 +25,7 @@ bool check(const narrowphase::PairRows& rows, bool vertex_face, double thickness
   if (!provably_apart(rows, vertex_face, thickness)) return false;
   const auto kind = vertex_face ? reference::PairKind::vertex_face : reference::PairKind::edge_edge;
   const bool collides = reference::decide(kind, rows, thickness, {true, true, 64}).collides;
-  EXPECT_FALSE(collides) << "called apart but collides: " << where << " at δ = " << thickness << ":\n"
-                         << testing::rational_rows(rows, 1);
+  EXPECT_FALSE(collides) << "called apart but collides: " << where << " at δ = " << thickness << ":\n" << testing::rational_rows(rows, 1);
   return true;
 }
 

@@ -15,8 +15,8 @@
 namespace ccd::testing {
 
 /// Each step's collision set from strategy `spec` on `threads` threads.
-inline std::vector<CollisionSet> run_all_steps(const std::string& spec, const Scene& scene,
-                                               const std::vector<std::vector<Vec3>>& frames, std::size_t threads) {
+inline std::vector<CollisionSet> run_all_steps(const std::string& spec, const Scene& scene, const std::vector<std::vector<Vec3>>& frames,
+                                               std::size_t threads) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   auto strategy = strategies::make_strategy(spec);
   strategy->init(scene, frames[0]);
@@ -72,7 +72,7 @@ inline LoadedScene small_scene(const std::string& full_name, const TempDir& dir)
     parameters["frames"] = 40;
   }
   if (name == "spinning-ball") parameters["frames"] = 6;  // contact from step 1 on, and a 2304-triangle ball
-  if (name == "funnel") parameters["frames"] = 16;  // the cloth first touches the funnel's wall (δ = 0) in step 13
+  if (name == "funnel") parameters["frames"] = 16;        // the cloth first touches the funnel's wall (δ = 0) in step 13
   const auto generated = datasets::generate_procedural_scene({name, parameters, dir.path(), {}, {}});
   LoadedScene loaded{datasets::load_scene_file(generated.scene_file), {}};
   loaded.frames = all_frames(loaded.sequence);

@@ -117,14 +117,14 @@ inline std::size_t shared_query_count(const std::string& folder) {
 
 /// Binds `dir` to the public data folder, or skips the test saying why (fails instead under
 /// CCDBENCH_REQUIRE_DATA=1, as CI sets it).
-#define CCD_REQUIRE_EXTERNAL_DATA(dir)                                                   \
-  std::filesystem::path dir;                                                             \
-  {                                                                                      \
-    std::string ccd_reason_;                                                             \
-    const auto ccd_found_ = ::ccd::testing::external_data_or_reason(ccd_reason_);       \
-    if (!ccd_found_) {                                                                   \
-      if (::ccd::testing::external_data_required()) FAIL() << ccd_reason_;              \
-      GTEST_SKIP() << ccd_reason_;                                                       \
-    }                                                                                    \
-    dir = *ccd_found_;                                                                   \
+#define CCD_REQUIRE_EXTERNAL_DATA(dir)                                            \
+  std::filesystem::path dir;                                                      \
+  {                                                                               \
+    std::string ccd_reason_;                                                      \
+    const auto ccd_found_ = ::ccd::testing::external_data_or_reason(ccd_reason_); \
+    if (!ccd_found_) {                                                            \
+      if (::ccd::testing::external_data_required()) FAIL() << ccd_reason_;        \
+      GTEST_SKIP() << ccd_reason_;                                                \
+    }                                                                             \
+    dir = *ccd_found_;                                                            \
   }

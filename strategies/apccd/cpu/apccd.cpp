@@ -43,9 +43,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
-#include <limits>
 #include <unordered_map>
 
 namespace ccd::strategies {
@@ -68,9 +68,8 @@ void append_kept(std::span<const bvh::TrianglePair> list, const Keep& keep, std:
   std::vector<std::size_t> offsets(chunks + 1, out.size());
   for (std::size_t c = 0; c < chunks; ++c) offsets[c + 1] = offsets[c] + kept[c].size();
   out.resize(offsets[chunks]);
-  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-    std::copy(kept[c].begin(), kept[c].end(), out.begin() + static_cast<std::ptrdiff_t>(offsets[c]));
-  });
+  tbb::parallel_for(std::size_t{0}, chunks,
+                    [&](std::size_t c) { std::copy(kept[c].begin(), kept[c].end(), out.begin() + static_cast<std::ptrdiff_t>(offsets[c])); });
 }
 
 class Apccd final : public Strategy {
@@ -114,12 +113,9 @@ class Apccd final : public Strategy {
       {
         ScopedStageTimer timer(result.stages, "dangling collection");
         std::vector<char> dangling(topology.num_vertices(), 0);
-        auto outside = [&](const Vec3& relative, std::size_t v) {
-          return (relative - anchor_[v]).cwiseAbs().maxCoeff() > budget_[v];
-        };
-        tbb::parallel_for(std::size_t{0}, topology.num_vertices(), [&](std::size_t v) {
-          dangling[v] = outside(relative0_[v], v) || outside(relative1_[v], v) ? 1 : 0;
-        });
+        auto outside = [&](const Vec3& relative, std::size_t v) { return (relative - anchor_[v]).cwiseAbs().maxCoeff() > budget_[v]; };
+        tbb::parallel_for(std::size_t{0}, topology.num_vertices(),
+                          [&](std::size_t v) { dangling[v] = outside(relative0_[v], v) || outside(relative1_[v], v) ? 1 : 0; });
         std::vector<char> face_dangles(topology.num_faces(), 0);
         for (std::size_t v = 0; v < dangling.size(); ++v) {
           if (!dangling[v]) continue;
@@ -160,9 +156,8 @@ class Apccd final : public Strategy {
         // Admissible: the two triangles' fresh swept boxes, widened by δ/2, overlap this step. Each face's box is
         // computed once per step; candidate pairs then only compare two boxes.
         std::vector<Box3> face_boxes(topology.num_faces());
-        tbb::parallel_for(std::size_t{0}, topology.num_faces(), [&](std::size_t f) {
-          face_boxes[f] = bvh::swept_face_box(topology.face(static_cast<FaceId>(f)), step.x0, step.x1, half);
-        });
+        tbb::parallel_for(std::size_t{0}, topology.num_faces(),
+                          [&](std::size_t f) { face_boxes[f] = bvh::swept_face_box(topology.face(static_cast<FaceId>(f)), step.x0, step.x1, half); });
         // The pending list and this step's object pairs are filtered in place of a merged copy: the back end's
         // answer does not depend on the order of its candidates.
         const auto overlapping = [&](const bvh::TrianglePair& pair) { return boxes_overlap(face_boxes[pair.first], face_boxes[pair.second]); };
@@ -245,9 +240,8 @@ class Apccd final : public Strategy {
     if (dangling_faces.empty()) return;
     const MeshTopology& topology = scene_->topology();
     std::vector<Box3> fresh(dangling_faces.size());
-    tbb::parallel_for(std::size_t{0}, dangling_faces.size(), [&](std::size_t i) {
-      fresh[i] = bvh::swept_face_box(topology.face(dangling_faces[i]), relative0_, relative1_, half);
-    });
+    tbb::parallel_for(std::size_t{0}, dangling_faces.size(),
+                      [&](std::size_t i) { fresh[i] = bvh::swept_face_box(topology.face(dangling_faces[i]), relative0_, relative1_, half); });
     // Enlarged leaves keep every tree valid; object pairs then see them through the per-step pair traversal.
     for (std::size_t i = 0; i < dangling_faces.size(); ++i) hierarchies_.enlarge_leaf(dangling_faces[i], fresh[i]);
     std::vector<bvh::TrianglePair> found;
@@ -259,8 +253,7 @@ class Apccd final : public Strategy {
       while (end < dangling_faces.size() && scene_->object_of_face(dangling_faces[end]) == object) ++end;
       if (scene_->object(object).self_collision) {
         const auto pairs = bvh::subset_overlaps(std::span(dangling_faces).subspan(begin, end - begin),
-                                                std::span<const Box3>(fresh).subspan(begin, end - begin),
-                                                hierarchies_.tree(object));
+                                                std::span<const Box3>(fresh).subspan(begin, end - begin), hierarchies_.tree(object));
         found.insert(found.end(), pairs.begin(), pairs.end());
       }
       begin = end;

@@ -73,7 +73,8 @@ class ApccdOpenCl final : public Strategy {
       world_boxes_.reserve(context, box_bytes);
       pipeline_.refit(pipeline_.all_nodes(), positions_.x0(), positions_.x1(), scene.thickness() / 2, nullptr, world_boxes_, nullptr);
     }
-    for (Buffer* relative : {&relative_[0], &relative_[1], &anchor_}) relative->reserve(context, std::max<std::size_t>(num_vertices_, 1) * 3 * sizeof(double));
+    for (Buffer* relative : {&relative_[0], &relative_[1], &anchor_})
+      relative->reserve(context, std::max<std::size_t>(num_vertices_, 1) * 3 * sizeof(double));
     budget_.reserve(context, std::max<std::size_t>(num_vertices_, 1) * sizeof(double));
     dangling_.reserve(context, std::max<std::size_t>(num_vertices_, 1));
     face_boxes_.reserve(context, std::max<std::size_t>(topology.num_faces(), 1) * 6 * sizeof(double));
@@ -146,12 +147,13 @@ class ApccdOpenCl final : public Strategy {
     }
     const cl_mem across_memory = across != nullptr ? across->buffer.get() : nullptr;
     if (admissible_.capacity == 0) admissible_.capacity = pipeline_.list_start(std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024));
-    const std::size_t admissible = pipeline_.fill_list(
-        "admit", pending_.count + across_count, admissible_, sizeof(cl_uint2), events, "front end", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
-          const cl_uchar check_boxes = box_filter ? 1 : 0;
-          set_arguments(kernel, static_cast<cl_uint>(pending_.count), pending_.buffer.get(), static_cast<cl_uint>(across_count), across_memory,
-                        face_boxes_.get(), check_boxes, capacity, counter.get(), admissible_.buffer.get());
-        });
+    const std::size_t admissible =
+        pipeline_.fill_list("admit", pending_.count + across_count, admissible_, sizeof(cl_uint2), events, "front end",
+                            [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+                              const cl_uchar check_boxes = box_filter ? 1 : 0;
+                              set_arguments(kernel, static_cast<cl_uint>(pending_.count), pending_.buffer.get(), static_cast<cl_uint>(across_count),
+                                            across_memory, face_boxes_.get(), check_boxes, capacity, counter.get(), admissible_.buffer.get());
+                            });
     // The back end: elementary pairs by the masks and the primitive box test, the distance heuristic, the narrow phase.
     pipeline_.vertex_boxes(x0, x1, events);
     const std::size_t elementary = pipeline_.expand(admissible_.buffer, admissible, elementary_, events);
@@ -273,13 +275,12 @@ class ApccdOpenCl final : public Strategy {
     launch(context, enlarge, count, pipeline_.group(), events.add("partial traversal"));
     pipeline_.refit_levels(pipeline_.moving_nodes(), session_boxes_, &events);
     if (found_.capacity == 0) found_.capacity = pipeline_.list_start(std::max<std::size_t>(4 * count, 1024));
-    const std::size_t found = pipeline_.fill_list("partial_traverse", count, found_, sizeof(cl_uint2), events, "partial traversal",
-                                                  [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
-                                                    set_arguments(kernel, static_cast<cl_uint>(count), dangling_faces_.buffer.get(),
-                                                                  fresh_boxes_.get(), face_root_.get(), session_boxes_.get(),
-                                                                  pipeline_.children().get(), pipeline_.node_face().get(), capacity,
-                                                                  counter.get(), found_.buffer.get());
-                                                  });
+    const std::size_t found = pipeline_.fill_list(
+        "partial_traverse", count, found_, sizeof(cl_uint2), events, "partial traversal",
+        [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+          set_arguments(kernel, static_cast<cl_uint>(count), dangling_faces_.buffer.get(), fresh_boxes_.get(), face_root_.get(), session_boxes_.get(),
+                        pipeline_.children().get(), pipeline_.node_face().get(), capacity, counter.get(), found_.buffer.get());
+        });
     if (found == 0) return;
     // The table holds the pending list; it is (re)built when missing or when the new pairs could fill it past half.
     const std::size_t most = pending_.count + found;
@@ -326,9 +327,28 @@ class ApccdOpenCl final : public Strategy {
 
   std::size_t device_bytes() const {
     std::size_t total = pipeline_.bytes() + positions_.bytes() + self_queries_.bytes() + pair_queries_.bytes();
-    for (const Buffer* b : {&relative_[0], &relative_[1], &anchor_, &budget_, &dangling_, &session_boxes_, &world_boxes_,
-                            &face_boxes_, &fresh_boxes_, &centroids_[0], &centroids_[1], &vertex_object_, &face_root_, &offsets_, &table_, &counter_,
-                            &pending_.buffer, &across_.buffer, &admissible_.buffer, &elementary_.buffer, &tested_.buffer, &found_.buffer,
+    for (const Buffer* b : {&relative_[0],
+                            &relative_[1],
+                            &anchor_,
+                            &budget_,
+                            &dangling_,
+                            &session_boxes_,
+                            &world_boxes_,
+                            &face_boxes_,
+                            &fresh_boxes_,
+                            &centroids_[0],
+                            &centroids_[1],
+                            &vertex_object_,
+                            &face_root_,
+                            &offsets_,
+                            &table_,
+                            &counter_,
+                            &pending_.buffer,
+                            &across_.buffer,
+                            &admissible_.buffer,
+                            &elementary_.buffer,
+                            &tested_.buffer,
+                            &found_.buffer,
                             &dangling_faces_.buffer}) {
       total += b->bytes();
     }
@@ -375,8 +395,9 @@ std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings& settings, std::
 #else
 
 std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings&, std::unique_ptr<narrowphase::NarrowPhase>, const BackendChoice&) {
-  throw std::invalid_argument("backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
-                              "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
+  throw std::invalid_argument(
+      "backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
+      "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }
 
 #endif

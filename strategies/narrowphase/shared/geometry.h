@@ -152,8 +152,7 @@ static inline ccd_real ccd_segment_segment_squared_distance(ccd_v3 p0, ccd_v3 p1
 }
 /* The pair's squared distance at one instant; x holds its four points in row order (VF: p, a, b, c). */
 static inline ccd_real ccd_pair_squared_distance(const ccd_v3 x[4], int vertex_face) {
-  return vertex_face ? ccd_point_triangle_squared_distance(x[0], x[1], x[2], x[3])
-                     : ccd_segment_segment_squared_distance(x[0], x[1], x[2], x[3]);
+  return vertex_face ? ccd_point_triangle_squared_distance(x[0], x[1], x[2], x[3]) : ccd_segment_segment_squared_distance(x[0], x[1], x[2], x[3]);
 }
 
 /* ---- The coplanarity cubic (coplanarity.hpp explains the terms). ---- */
@@ -177,9 +176,7 @@ static inline void ccd_coplanarity_cubic(const ccd_v3 x0[4], const ccd_v3 dx[4],
 }
 
 static inline ccd_real ccd_cubic_value(const ccd_real c[4], ccd_real t) { return ((c[3] * t + c[2]) * t + c[1]) * t + c[0]; }
-static inline ccd_real ccd_cubic_slope(const ccd_real c[4], ccd_real t) {
-  return ((ccd_real)3 * c[3] * t + (ccd_real)2 * c[2]) * t + c[1];
-}
+static inline ccd_real ccd_cubic_slope(const ccd_real c[4], ccd_real t) { return ((ccd_real)3 * c[3] * t + (ccd_real)2 * c[2]) * t + c[1]; }
 
 /* Candidate times, increasing: the cubic's sign-change roots in [0, 1], plus 0 and 1 (at most 5, written to
  * times[6]); returns their count. [0, 1] is split at the roots of the derivative, so every piece is monotone; a

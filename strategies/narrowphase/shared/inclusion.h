@@ -72,8 +72,8 @@ typedef struct {
 
 enum { CCD_EXCLUDED = 0, CCD_ACCEPTED = 1, CCD_SPLIT = 2 };
 
-static inline void ccd_inclusion_init(ccd_inclusion* s, const ccd_v3 rows[8], double thickness, int vertex_face,
-                                      double tolerance_fraction, double toi_tolerance, long max_iterations) {
+static inline void ccd_inclusion_init(ccd_inclusion* s, const ccd_v3 rows[8], double thickness, int vertex_face, double tolerance_fraction,
+                                      double toi_tolerance, long max_iterations) {
   ccd_v3 magnitude = ccd_v3_make(0, 0, 0), lower = rows[0], upper = rows[0];
   for (int i = 0; i < 8; ++i) {
     magnitude = ccd_cwise_max(magnitude, ccd_cwise_abs(rows[i]));
@@ -127,9 +127,7 @@ static inline void ccd_terms_at(const ccd_inclusion* s, double t, ccd_v3* S, ccd
   for (int k = 0; k < 4; ++k) x[k] = ccd_along(s->x0[k], t, s->dx[k]);
   ccd_split_terms(s, x, S, X, Y);
 }
-static inline ccd_v3 ccd_f_value(ccd_v3 S, double u, ccd_v3 X, double v, ccd_v3 Y) {
-  return ccd_add(ccd_add(S, ccd_scale(u, X)), ccd_scale(v, Y));
-}
+static inline ccd_v3 ccd_f_value(ccd_v3 S, double u, ccd_v3 X, double v, ccd_v3 Y) { return ccd_add(ccd_add(S, ccd_scale(u, X)), ccd_scale(v, Y)); }
 
 /* The eight corner values of F over a box (corner index = t·4 + u·2 + v). */
 static inline void ccd_corners(const ccd_inclusion* s, const ccd_sub_box* box, ccd_v3 F[8]) {
@@ -150,11 +148,20 @@ static inline double ccd_box_bound(const ccd_sub_box* box, int dimension, int hi
 }
 static inline void ccd_set_box_bound(ccd_sub_box* box, int dimension, int high, double value) {
   if (dimension == 0) {
-    if (high) box->t1 = value; else box->t0 = value;
+    if (high)
+      box->t1 = value;
+    else
+      box->t0 = value;
   } else if (dimension == 1) {
-    if (high) box->u1 = value; else box->u0 = value;
+    if (high)
+      box->u1 = value;
+    else
+      box->u0 = value;
   } else {
-    if (high) box->v1 = value; else box->v0 = value;
+    if (high)
+      box->v1 = value;
+    else
+      box->v0 = value;
   }
 }
 
@@ -243,8 +250,8 @@ static inline int ccd_separated_along(const ccd_inclusion* s, const ccd_v3* F, i
   const double reach = s->thickness * length;
   for (int i = 0; i < count; ++i) {
     const double g = ccd_dot(n, F[i]);
-    const double bound = carried + 4 * CCD_UNIT_ROUNDOFF * ccd_dot(magnitude, ccd_cwise_abs(F[i])) +
-                         CCD_SEPARATION_RELATIVE_SLACK * (fabs(g) + reach);
+    const double bound =
+        carried + 4 * CCD_UNIT_ROUNDOFF * ccd_dot(magnitude, ccd_cwise_abs(F[i])) + CCD_SEPARATION_RELATIVE_SLACK * (fabs(g) + reach);
     if (!(g - bound > reach)) return 0;
   }
   return 1;
@@ -455,17 +462,15 @@ static inline ccd_v3 ccd_m3_apply(const ccd_m3* a, ccd_v3 x) {
   return r;
 }
 /* Row i of A dotted with x, summed right to left (Eigen's order for a strided row). */
-static inline double ccd_m3_row_dot(const ccd_m3* a, int i, ccd_v3 x) {
-  return a->m[i][0] * x.c[0] + (a->m[i][1] * x.c[1] + a->m[i][2] * x.c[2]);
-}
+static inline double ccd_m3_row_dot(const ccd_m3* a, int i, ccd_v3 x) { return a->m[i][0] * x.c[0] + (a->m[i][1] * x.c[1] + a->m[i][2] * x.c[2]); }
 
 /* Miranda's theorem in a small box around (t, u, v): returns 1 and the box's t1 in *toi when it proves a zero (the
  * zero, and so the earliest contact, is no later than that). */
 static inline int ccd_miranda(const ccd_inclusion* s, double t, double u, double v, ccd_v3 dS, ccd_v3 dX, ccd_v3 dY, double* toi) {
   const double w = CCD_MIRANDA_HALF_WIDTH;
   const ccd_sub_box box = ccd_sub_box_make(t - w, t + w, u - w, u + w, v - w, v + w, 0);
-  if (box.t0 < 0 || box.t1 > 1 || !ccd_in_domain(s, box.u0, box.v0) || !ccd_in_domain(s, box.u1, box.v1) ||
-      !ccd_in_domain(s, box.u0, box.v1) || !ccd_in_domain(s, box.u1, box.v0)) {
+  if (box.t0 < 0 || box.t1 > 1 || !ccd_in_domain(s, box.u0, box.v0) || !ccd_in_domain(s, box.u1, box.v1) || !ccd_in_domain(s, box.u0, box.v1) ||
+      !ccd_in_domain(s, box.u1, box.v0)) {
     return 0;
   }
   ccd_v3 S, X, Y;
@@ -486,7 +491,7 @@ static inline int ccd_miranda(const ccd_inclusion* s, double t, double u, double
       const double g = ccd_m3_row_dot(&A, i, F[corner]);
       /* |A·F_computed - A·F_exact| <= |A|·error, plus the rounding of the 3-term product (< 4u|A||F|). */
       const double bound = ccd_m3_row_dot(&magnitude, i, s->error) + 4 * CCD_UNIT_ROUNDOFF * ccd_m3_row_dot(&magnitude, i, ccd_cwise_abs(F[corner]));
-      const int negative = g + bound < 0, positive = g - bound > 0;
+      const int negative = g + bound<0, positive = g - bound> 0;
       if (corner & bit) {
         high_negative = high_negative && negative;
         high_positive = high_positive && positive;
@@ -647,7 +652,10 @@ static inline double ccd_bernstein_crossing(const double c[4], double sign, doub
   for (int i = 0; i < 16; ++i) {
     const double value = sign * ccd_bernstein_value(c, x) - level;
     if (fabs(value) <= close) break;
-    if (value < 0) lo = x; else hi = x;
+    if (value < 0)
+      lo = x;
+    else
+      hi = x;
     const double slope = sign * ccd_bernstein_slope(c, x);
     double next = slope > 0 ? x - value / slope : (lo + hi) / 2;
     if (!(next > lo && next < hi)) next = (lo + hi) / 2;
@@ -741,8 +749,8 @@ static inline int ccd_time_windows(const ccd_inclusion* s, ccd_window windows[CC
   stack[0].c[3] = blossom[7];
   double largest = 0;
   for (int i = 0; i < 4; ++i) largest = ccd_max(largest, fabs(stack[0].c[i]));
-  stack[0].error = CCD_WINDOW_ERROR_UNITS * CCD_UNIT_ROUNDOFF * magnitude + CCD_WINDOW_ERROR_SLACK_UNITS * CCD_UNIT_ROUNDOFF * largest +
-                   64 * CCD_DENORM_MIN;
+  stack[0].error =
+      CCD_WINDOW_ERROR_UNITS * CCD_UNIT_ROUNDOFF * magnitude + CCD_WINDOW_ERROR_SLACK_UNITS * CCD_UNIT_ROUNDOFF * largest + 64 * CCD_DENORM_MIN;
   stack[0].depth = 0;
   const double step_error = CCD_WINDOW_HALVING_UNITS * (CCD_UNIT_ROUNDOFF * (largest + stack[0].error) + CCD_DENORM_MIN);
   const double x_most = ccd_norm_above(ccd_cwise_max(ccd_cwise_abs(X[0]), ccd_cwise_abs(X[1])));
@@ -813,8 +821,8 @@ static inline int ccd_accept_nearest(ccd_inclusion* s, const ccd_sub_box* box, d
   const double spread = ccd_norm(X) + ccd_norm(Y);
   if (!(spread > 0)) return 0;
   const double h = s->tolerance / (4 * spread);
-  ccd_sub_box tiny = ccd_sub_box_make(box->t0, box->t1, ccd_max(box->u0, u - h), ccd_min(box->u1, u + h), ccd_max(box->v0, v - h),
-                                      ccd_min(box->v1, v + h), 0);
+  ccd_sub_box tiny =
+      ccd_sub_box_make(box->t0, box->t1, ccd_max(box->u0, u - h), ccd_min(box->u1, u + h), ccd_max(box->v0, v - h), ccd_min(box->v1, v + h), 0);
   ccd_sub_box low, high;
   return ccd_examine(s, &tiny, &low, &high, achieved) == CCD_ACCEPTED;
 }
@@ -863,8 +871,8 @@ static inline int ccd_advance(ccd_inclusion* s, ccd_window* window) {
   return 1;
 }
 
-static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const ccd_window* windows, int count, double upper,
-                                                         ccd_sub_box* storage, int capacity) {
+static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const ccd_window* windows, int count, double upper, ccd_sub_box* storage,
+                                                         int capacity) {
   ccd_conservative_outcome result = ccd_outcome_make(0, NAN, 0);
   int size = 0;
   for (int i = 0; i < count; ++i) {
@@ -933,8 +941,8 @@ static inline int ccd_within_thickness_at_start(const ccd_v3 r[8], double thickn
  * caller reruns it with 0). Runs in round-to-nearest (the caller's duty on the host; the only mode on an OpenCL
  * device). */
 static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 original[8], double thickness_given, int vertex_face,
-                                                             double tolerance_fraction, double toi_tolerance, long max_iterations,
-                                                             long give_up_after, ccd_sub_box* storage, int capacity) {
+                                                             double tolerance_fraction, double toi_tolerance, long max_iterations, long give_up_after,
+                                                             ccd_sub_box* storage, int capacity) {
   ccd_conservative_outcome result = ccd_outcome_make(1, 0, INFINITY);
   ccd_v3 rows[8];
   for (int i = 0; i < 8; ++i) rows[i] = original[i];

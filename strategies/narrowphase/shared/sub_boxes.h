@@ -24,9 +24,7 @@ static inline ccd_sub_box ccd_sub_box_make(double t0, double t1, double u0, doub
 /* Earliest first: the order of the search's priority queue (a strict total order, so every heap pops alike). Among
  * boxes that start at the same time the newest comes first: the search then goes deep where it can (splits in u and
  * v keep t0), as a depth-first search would, instead of widening a front of equal boxes along a near contact. */
-static inline int ccd_earlier(const ccd_sub_box* a, const ccd_sub_box* b) {
-  return a->t0 != b->t0 ? a->t0 < b->t0 : a->order > b->order;
-}
+static inline int ccd_earlier(const ccd_sub_box* a, const ccd_sub_box* b) { return a->t0 != b->t0 ? a->t0 < b->t0 : a->order > b->order; }
 
 /* A binary min-heap of sub-boxes, earliest on top, over caller-owned storage. */
 static inline void ccd_heap_sift_down(ccd_sub_box* heap, int size, int i) {

@@ -39,11 +39,13 @@ kernel void dangling_vertices(uint count, global const double* relative0, global
 }
 
 /* Dangling triangles: the faces with a dangling corner, listed in any order. */
-kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void dangling_faces(
-    uint count, global const uint* faces, global const uchar* dangling, uint capacity, volatile global uint* total, global uint* out) {
+kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void dangling_faces(uint count, global const uint* faces,
+                                                                                       global const uchar* dangling, uint capacity,
+                                                                                       volatile global uint* total, global uint* out) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   const uint f = get_global_id(0);
-  const uint keep = f < count && (dangling[faces[3 * (size_t)f]] || dangling[faces[3 * (size_t)f + 1]] || dangling[faces[3 * (size_t)f + 2]]) ? 1u : 0u;
+  const uint keep =
+      f < count && (dangling[faces[3 * (size_t)f]] || dangling[faces[3 * (size_t)f + 1]] || dangling[faces[3 * (size_t)f + 2]]) ? 1u : 0u;
   const uint slot = ccd_group_reserve(scratch, keep, total);
   if (keep && slot < capacity) out[slot] = f;
 }
@@ -51,8 +53,8 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void dangling
 /* Each dangling face's fresh box (relative positions over the step, widened by δ/2), kept for its query, and its
  * leaf grown to hold it (the CPU's enlarge_leaf; the levels above are refitted after). */
 kernel void enlarge_leaves(uint count, global const uint* dangling, global const uint* leaf_node, global const uint* faces,
-                           global const double* relative0, global const double* relative1, double half_thickness,
-                           global double* node_boxes, global double* fresh_boxes) {
+                           global const double* relative0, global const double* relative1, double half_thickness, global double* node_boxes,
+                           global double* fresh_boxes) {
   const uint i = get_global_id(0);
   if (i >= count) return;
   const uint f = dangling[i];
@@ -65,9 +67,8 @@ kernel void enlarge_leaves(uint count, global const uint* dangling, global const
 /* The partial traversal: each dangling face's fresh box against its own object's tree (face_root[f] < 0: the
  * object has no self-collision), every other face whose leaf overlaps it, as (smaller, larger). */
 kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void partial_traverse(
-    uint count, global const uint* dangling, global const double* fresh_boxes, global const int* face_root,
-    global const double* node_boxes, global const int2* children, global const uint* node_face, uint capacity,
-    volatile global uint* total, global uint2* pairs) {
+    uint count, global const uint* dangling, global const double* fresh_boxes, global const int* face_root, global const double* node_boxes,
+    global const int2* children, global const uint* node_face, uint capacity, volatile global uint* total, global uint2* pairs) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   uint kept[CCD_TRAVERSAL_KEEP];
   const uint i = get_global_id(0);
@@ -79,8 +80,9 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void partial_
     f = dangling[i];
     root = face_root[f];
     query = ccd_box_load(fresh_boxes, i);
-    if (root >= 0) found = ccd_traverse(f, query, root, 4, /* no offset */ node_boxes, node_boxes, children, node_face, /* mode 4: unused */ 0, pairs, 0,
-                                        0, 0, kept);
+    if (root >= 0)
+      found =
+          ccd_traverse(f, query, root, 4, /* no offset */ node_boxes, node_boxes, children, node_face, /* mode 4: unused */ 0, pairs, 0, 0, 0, kept);
   }
   const uint first = ccd_group_reserve(scratch, found, total);
   if (found > 0 && first < capacity) {
@@ -97,8 +99,8 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void partial_
 /* The pending list's hash table (open addressing, linear probing, 2^bits slots of 64-bit keys (a << 32) | b):
  * inserts each pair; with `append`, a pair not there before is also appended to the pending list after its
  * first `pending_first` entries (total[0] counts them). The set that results does not depend on the order. */
-kernel void pending_insert(uint count, global const uint2* pairs, volatile global ulong* table, uint bits, uchar append,
-                           global uint2* pending, uint pending_first, volatile global uint* total) {
+kernel void pending_insert(uint count, global const uint2* pairs, volatile global ulong* table, uint bits, uchar append, global uint2* pending,
+                           uint pending_first, volatile global uint* total) {
   const uint i = get_global_id(0);
   if (i >= count) return;
   const uint2 p = pairs[i];
@@ -127,9 +129,9 @@ kernel void face_boxes(uint count, global const uint* faces, global const double
 
 /* The front end: the pairs of the pending list and of this step's object pairs whose faces' fresh boxes overlap
  * (every pair with check = 0: heuristic=off). */
-kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void admit(
-    uint count_a, global const uint2* a, uint count_b, global const uint2* b, global const double* boxes, uchar check, uint capacity,
-    volatile global uint* total, global uint2* out) {
+kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void admit(uint count_a, global const uint2* a, uint count_b,
+                                                                              global const uint2* b, global const double* boxes, uchar check,
+                                                                              uint capacity, volatile global uint* total, global uint2* out) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   const uint i = get_global_id(0);
   uint keep = 0;
@@ -153,8 +155,8 @@ kernel void separation(uint count, global const uint4* pairs, global const uint*
 }
 
 /* The pairs with keep != 0, in any order. */
-kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void compact_kept(
-    uint count, global const uint4* pairs, global const uchar* keep, uint capacity, volatile global uint* total, global uint4* out) {
+kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void compact_kept(uint count, global const uint4* pairs, global const uchar* keep,
+                                                                                     uint capacity, volatile global uint* total, global uint4* out) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   const uint i = get_global_id(0);
   const uint k = i < count && keep[i] != 0 ? 1u : 0u;

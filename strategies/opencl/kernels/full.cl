@@ -71,8 +71,7 @@ static inline ccd_box ccd_box_widen(ccd_box b, double w) {
   return b;
 }
 static inline int ccd_box_intersects(ccd_box a, ccd_box b) {
-  return a.lo[0] <= b.hi[0] && a.lo[1] <= b.hi[1] && a.lo[2] <= b.hi[2] && b.lo[0] <= a.hi[0] && b.lo[1] <= a.hi[1] &&
-         b.lo[2] <= a.hi[2];
+  return a.lo[0] <= b.hi[0] && a.lo[1] <= b.hi[1] && a.lo[2] <= b.hi[2] && b.lo[0] <= a.hi[0] && b.lo[1] <= a.hi[1] && b.lo[2] <= a.hi[2];
 }
 
 /* Reserves `count` slots of a global list for the calling work item and returns its first one: the group sums its
@@ -110,8 +109,7 @@ static inline ccd_box ccd_swept_face_box(global const uint* faces, uint f, globa
 }
 
 /* Swept vertex boxes x0 ∪ x1 widened by half_thickness (elementary_tests.cpp's primitive-level box test). */
-kernel void vertex_boxes(uint count, global const double* x0, global const double* x1, double half_thickness,
-                         global double* boxes) {
+kernel void vertex_boxes(uint count, global const double* x0, global const double* x1, double half_thickness, global double* boxes) {
   const uint v = get_global_id(0);
   if (v >= count) return;
   ccd_box b;
@@ -123,9 +121,8 @@ kernel void vertex_boxes(uint count, global const double* x0, global const doubl
 /* Leaf boxes of the listed leaves: the face's corners at t = 0 and 1, widened by `inflation` (bvh.cpp's
  * swept_face_box), plus, with has_budget, the largest budget of its corners (apccd's session trees:
  * inflation = δ/2 + max(budget[a], budget[b], budget[c]), one rounding as on the host). */
-kernel void leaf_boxes(uint count, global const uint* leaves, global const uint* node_face, global const uint* faces,
-                       global const double* x0, global const double* x1, double inflation, uchar has_budget,
-                       global const double* budget, global double* node_boxes) {
+kernel void leaf_boxes(uint count, global const uint* leaves, global const uint* node_face, global const uint* faces, global const double* x0,
+                       global const double* x1, double inflation, uchar has_budget, global const double* budget, global double* node_boxes) {
   const uint i = get_global_id(0);
   if (i >= count) return;
   const uint node = leaves[i];
@@ -151,8 +148,9 @@ kernel void refit_level(uint count, uint first, global const uint* level, global
  * level[offsets[l] .. offsets[l + 1]), each the union of its children; the barrier makes a level's boxes visible to
  * the whole group before the level above reads them. The same unions as refit_level, launched once for the levels
  * too small to fill the device. */
-kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void refit_levels_in_group(
-    uint first, uint end, global const uint* offsets, global const uint* level, global const int2* children, global double* node_boxes) {
+kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void refit_levels_in_group(uint first, uint end, global const uint* offsets,
+                                                                                              global const uint* level, global const int2* children,
+                                                                                              global double* node_boxes) {
   for (uint l = first; l < end; ++l) {
     for (uint i = offsets[l] + get_local_id(0); i < offsets[l + 1]; i += CCD_GROUP_SIZE) {
       const uint node = level[i];
@@ -184,8 +182,8 @@ static inline ccd_box ccd_box_shift(ccd_box b, global const double* offset) {
   return b;
 }
 static inline uint ccd_traverse(uint f, ccd_box query, int root, int mode, global const double* offset, global const double* node_boxes,
-                                global const int2* children, global const uint* node_face, global const uint* max_face,
-                                global uint2* pairs, uint first, uint capacity, int write, uint* kept) {
+                                global const int2* children, global const uint* node_face, global const uint* max_face, global uint2* pairs,
+                                uint first, uint capacity, int write, uint* kept) {
   int stack[CCD_TRAVERSAL_STACK];
   int size = 0;
   uint found = 0;
@@ -217,10 +215,12 @@ static inline void ccd_write_kept(uint f, const uint* kept, uint found, global u
   for (uint j = 0; j < found && first + j < capacity; ++j) pairs[first + j] = (uint2)(min(f, kept[j]), max(f, kept[j]));
 }
 
-kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void traverse(
-    uint count, global const uint* q_leaf, global const uint* q_face, global const int* q_root, global const uchar* q_mode,
-    global const int* q_offset, global const double* offsets, global const double* node_boxes, global const int2* children,
-    global const uint* node_face, global const uint* max_face, uint capacity, volatile global uint* total, global uint2* pairs) {
+kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void traverse(uint count, global const uint* q_leaf, global const uint* q_face,
+                                                                                 global const int* q_root, global const uchar* q_mode,
+                                                                                 global const int* q_offset, global const double* offsets,
+                                                                                 global const double* node_boxes, global const int2* children,
+                                                                                 global const uint* node_face, global const uint* max_face,
+                                                                                 uint capacity, volatile global uint* total, global uint2* pairs) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   uint kept[CCD_TRAVERSAL_KEEP];
   const uint q = get_global_id(0);
@@ -262,9 +262,9 @@ static inline uint ccd_expand(uint a, uint b, global const uchar* masks, global 
   for (int side = 0; side < 2; ++side) {
     const uint owner = side == 0 ? a : b, other = side == 0 ? b : a;
     const uint3 owner_face = ccd_face(faces, owner), other_face = ccd_face(faces, other);
-    const ccd_box face_box = ccd_box_merge(ccd_box_merge(ccd_box_merge(ccd_box_empty(), ccd_vertex_box(vertex_boxes, other_face.x)),
-                                                         ccd_vertex_box(vertex_boxes, other_face.y)),
-                                           ccd_vertex_box(vertex_boxes, other_face.z));
+    const ccd_box face_box = ccd_box_merge(
+        ccd_box_merge(ccd_box_merge(ccd_box_empty(), ccd_vertex_box(vertex_boxes, other_face.x)), ccd_vertex_box(vertex_boxes, other_face.y)),
+        ccd_vertex_box(vertex_boxes, other_face.z));
     for (int k = 0; k < 3; ++k) {
       if (!(masks[owner] & (1u << k))) continue;
       const uint v = ccd_face_corner(owner_face, k);
@@ -290,9 +290,10 @@ static inline uint ccd_expand(uint a, uint b, global const uchar* masks, global 
   return found;
 }
 
-kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void expand(
-    uint count, global const uint2* candidates, global const uchar* masks, global const uint* faces, global const uint* face_edges,
-    global const uint2* edges, global const double* vertex_boxes, uint capacity, volatile global uint* total, global uint4* out) {
+kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void expand(uint count, global const uint2* candidates, global const uchar* masks,
+                                                                               global const uint* faces, global const uint* face_edges,
+                                                                               global const uint2* edges, global const double* vertex_boxes,
+                                                                               uint capacity, volatile global uint* total, global uint4* out) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   uint4 pairs[15];
   const uint i = get_global_id(0);
@@ -329,9 +330,9 @@ static inline int ccd_load_rows(uint4 p, global const uint* faces, global const 
 
 /* status: 0 apart, 1 collides (toi set), 2 the query needs more sub-boxes than a work item holds, or more than
  * give_up_after iterations (the host decides it). */
-kernel void narrow_conservative(uint count, global const uint4* pairs, global const uint* faces, global const double* x0,
-                                global const double* x1, double thickness, double tolerance, double toi_tolerance,
-                                long max_iterations, long give_up_after, global uchar* status, global double* toi) {
+kernel void narrow_conservative(uint count, global const uint4* pairs, global const uint* faces, global const double* x0, global const double* x1,
+                                double thickness, double tolerance, double toi_tolerance, long max_iterations, long give_up_after,
+                                global uchar* status, global double* toi) {
   const uint i = get_global_id(0);
   if (i >= count) return;
   ccd_v3 rows[8];
@@ -343,8 +344,8 @@ kernel void narrow_conservative(uint count, global const uint4* pairs, global co
   toi[i] = r.toi;
 }
 
-kernel void narrow_cubic(uint count, global const uint4* pairs, global const uint* faces, global const double* x0,
-                         global const double* x1, double thickness, double eta, global uchar* status, global double* toi) {
+kernel void narrow_cubic(uint count, global const uint4* pairs, global const uint* faces, global const double* x0, global const double* x1,
+                         double thickness, double eta, global uchar* status, global double* toi) {
   const uint i = get_global_id(0);
   if (i >= count) return;
   ccd_v3 rows[8];
@@ -355,9 +356,10 @@ kernel void narrow_cubic(uint count, global const uint4* pairs, global const uin
 }
 
 /* The pairs whose status is not 0, with their status and TOI (in any order: the host sorts). */
-kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void compact(
-    uint count, global const uint4* pairs, global const uchar* status, global const double* toi, uint capacity,
-    volatile global uint* total, global uint4* out_pairs, global uchar* out_status, global double* out_toi) {
+kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void compact(uint count, global const uint4* pairs, global const uchar* status,
+                                                                                global const double* toi, uint capacity, volatile global uint* total,
+                                                                                global uint4* out_pairs, global uchar* out_status,
+                                                                                global double* out_toi) {
   local uint scratch[CCD_GROUP_SIZE + 1];
   const uint i = get_global_id(0);
   const uint keep = i < count && status[i] != 0 ? 1u : 0u;

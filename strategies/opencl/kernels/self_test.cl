@@ -16,8 +16,8 @@ kernel void self_test_arithmetic(global const double* in, global double* out) {
 }
 
 /* Both narrow phases on `count` pairs (rows: 24 doubles per pair; kinds: 1 for vertex-face), as the host runs them. */
-kernel void self_test_pairs(uint count, global const double* rows, global const int* kinds, global const double* thickness,
-                            double tolerance, double toi_tolerance, long max_iterations, double eta, global double* out) {
+kernel void self_test_pairs(uint count, global const double* rows, global const int* kinds, global const double* thickness, double tolerance,
+                            double toi_tolerance, long max_iterations, double eta, global double* out) {
   const uint i = get_global_id(0);
   if (i >= count) return;
   ccd_v3 r[8];
