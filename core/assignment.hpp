@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Primitive assignment (DESIGN.md §1, the paper's six-bit masks): every used vertex and every edge is owned by
+/// Primitive assignment (docs/DESIGN.md §1, the paper's six-bit masks): every used vertex and every edge is owned by
 /// exactly one incident triangle, so that testing, for each candidate triangle pair (A, B), the primitives A owns
 /// against B and those B owns against A generates every elementary pair exactly once.
 

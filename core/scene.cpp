@@ -26,7 +26,7 @@ std::optional<ObjectKind> parse_object_kind(std::string_view text) {
 
 namespace {
 
-/// δ must be finite and >= 0 (DESIGN.md §1).
+/// δ must be finite and >= 0 (docs/DESIGN.md §1).
 void check_thickness(double thickness) {
   if (!std::isfinite(thickness) || thickness < 0.0) {
     throw InputError({}, "thickness", "must be finite and >= 0, got " + std::to_string(thickness));

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// A scene (DESIGN.md §1 "Scenes"): objects with their own topology, kind and self-collision flag, the object
+/// A scene (docs/DESIGN.md §1 "Scenes"): objects with their own topology, kind and self-collision flag, the object
 /// pairs that may collide, and the thickness δ. Positions are not part of it: they come per step (step.hpp).
 
 #include "core/shape.hpp"
@@ -53,7 +53,7 @@ struct SceneObject {
 class Scene {
  public:
   /// @param collidable  unordered pairs of distinct object indices that may collide with each other
-  /// @param thickness   δ >= 0, finite (DESIGN.md §1)
+  /// @param thickness   δ >= 0, finite (docs/DESIGN.md §1)
   /// @throws InputError on an empty or duplicate name, a bad face list (named by object and face), a collidable
   ///         pair naming a missing object or one object twice, a negative or non-finite thickness, or a shape object
   ///         without a valid shape, with other than one vertex, with faces or with self-collision.

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Analytic convex obstacles (DESIGN.md §3, "Model only what a scene requires"): a sphere or an axis-aligned box,
+/// Analytic convex obstacles (docs/DESIGN.md §3, "Model only what a scene requires"): a sphere or an axis-aligned box,
 /// given by its size and, per step, by its centre at t = 0 and t = 1 (linear in between). A face and a shape
 /// collide in a step when their distance is <= δ at some t in [0, 1]:
 /// - sphere: the distance from the face to the centre is <= R + δ (a vertex-face question with thickness R + δ);

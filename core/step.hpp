@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// One step of a scene: every vertex moves linearly from x0 to x1 over t in [0, 1] (DESIGN.md §1).
+/// One step of a scene: every vertex moves linearly from x0 to x1 over t in [0, 1] (docs/DESIGN.md §1).
 
 #include "core/pair_id.hpp"
 #include "core/scene.hpp"
@@ -20,7 +20,7 @@ struct StepView {
   std::span<const Vec3> x1;
 };
 
-/// A pair's eight positions in the query files' row order (DESIGN.md §7): VF v, f0, f1, f2 at t = 0 then t = 1;
+/// A pair's eight positions in the query files' row order (docs/DESIGN.md §7): VF v, f0, f1, f2 at t = 0 then t = 1;
 /// EE a.v0, a.v1, b.v0, b.v1 at t = 0 then t = 1.
 inline std::array<Vec3, 8> pair_rows(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1, const VertexFacePair& p) {
   const Face& f = topology.face(p.f);

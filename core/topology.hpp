@@ -64,7 +64,7 @@ class MeshTopology {
   /// Id of the edge (a, b), or nullopt when no face has it.
   std::optional<EdgeId> find_edge(VertexId a, VertexId b) const;
 
-  /// Whether some face uses v. Unused vertices are not primitives (DESIGN.md §1).
+  /// Whether some face uses v. Unused vertices are not primitives (docs/DESIGN.md §1).
   bool is_used(VertexId v) const { return !vertex_faces(v).empty(); }
   std::size_t num_unused_vertices() const { return num_unused_vertices_; }
   std::size_t num_boundary_edges() const;

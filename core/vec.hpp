@@ -11,7 +11,7 @@
 namespace ccd {
 
 /// The scalar of all positions. Double by default; the float variants of a narrow phase convert on purpose
-/// at their own entry instead of templating the project on the scalar (STYLE.md "Shape").
+/// at their own entry instead of templating the project on the scalar (docs/STYLE.md "Shape").
 using Scalar = double;
 using Vec3 = Eigen::Matrix<Scalar, 3, 1>;
 /// Axis-aligned box; an empty box has min > max (Eigen's convention).

@@ -43,7 +43,7 @@ struct CacheHeader {
   std::uint64_t frames_offset = 0;
 };
 
-/// Reads the whole file once and compares its checksum (a cache is verified before it is used, DESIGN.md §6).
+/// Reads the whole file once and compares its checksum (a cache is verified before it is used, docs/DESIGN.md §6).
 void verify_checksum(const std::filesystem::path& path, const CacheHeader& header, std::uint64_t size) {
   std::ifstream in = open_input_file(path, "frame cache", std::ios::in | std::ios::binary);
   ContentHash hash;

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The rational CSV query format (../shared/data/README.md; DESIGN.md §7): 8 rows per query, 3 exact rationals
+/// The rational CSV query format (docs/DATA.md; docs/DESIGN.md §7): 8 rows per query, 3 exact rationals
 /// per row as numerator,denominator pairs, an optional 7th column of truth (1 = the primitives touch for some
 /// t in [0, 1] at zero thickness), or the truth in mma_bool/NAME_mma_bool.json beside queries/NAME.csv.
 
@@ -55,7 +55,7 @@ struct QueryFile {
   std::size_t not_exactly_double() const;
 };
 
-/// DESIGN.md §7: under a `vertex-face` folder or named `*vf.csv` is VF; under `edge-edge` or `*ee.csv` is EE.
+/// docs/DESIGN.md §7: under a `vertex-face` folder or named `*vf.csv` is VF; under `edge-edge` or `*ee.csv` is EE.
 std::optional<QueryKind> classify_query_path(const std::filesystem::path& path);
 
 /// Files named on the command line are taken as they are; directories are searched recursively for `.csv`

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The Scalable-CCD sample step layout (../shared/data/README.md): frames/<S>.ply and <S+1>.ply,
+/// The Scalable-CCD sample step layout (docs/DATA.md): frames/<S>.ply and <S+1>.ply,
 /// boxes/<S>{vf,ee}.json (candidate primitive pairs), queries/<S>{vf,ee}.csv and mma_bool/<S>{vf,ee}_mma_bool.json.
 
 #include "core/topology.hpp"

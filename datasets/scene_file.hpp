@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Scene files (JSON): declare only what a scene needs (DESIGN.md §1 "Scenes").
+/// Scene files (JSON): declare only what a scene needs (docs/DESIGN.md §1 "Scenes").
 ///
 ///     {
 ///       "name": "cloth-on-table",

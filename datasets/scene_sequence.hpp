@@ -39,7 +39,7 @@ class SceneSequence {
 };
 
 /// Two or more mesh files as one deformable object named "mesh" with self-collision on: what
-/// `--frames A.ply B.ply` means (DESIGN.md §1).
+/// `--frames A.ply B.ply` means (docs/DESIGN.md §1).
 SceneSequence scene_from_frame_files(std::vector<std::filesystem::path> files, double thickness);
 
 }  // namespace ccd::datasets

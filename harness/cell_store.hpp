@@ -3,7 +3,7 @@
 /// The finished cells of `ccdbench run` (one scene x strategy x δ each), kept in OUT/cells so that an interrupted
 /// or repeated run reuses them, and the results log OUT/results.jsonl built from them.
 ///
-/// A cell is reused only when its key covers everything that can change one of its numbers (DESIGN.md §6): the
+/// A cell is reused only when its key covers everything that can change one of its numbers (docs/DESIGN.md §6): the
 /// scene's content (topology, objects, collision filter and every frame the cell steps through), the step count,
 /// δ, the resolved strategy, verification, repeats, the thread count (timings depend on it, verdicts do not) and a
 /// digest of the executable that computed it (a git revision reads "-dirty" for every uncommitted build, so it

@@ -511,7 +511,7 @@ std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int expon
         for (int r = 0; r < 8; ++r) {
           for (int k = 0; k < 3; ++k) query.exact[r][k] = mpq_class(query.rounded[r][k]);
         }
-        // Labels are for δ = 0 (DESIGN.md §7), whatever δ the methods are scored at.
+        // Labels are for δ = 0 (docs/DESIGN.md §7), whatever δ the methods are scored at.
         if (query.truth) query.truth = decide_exactly(query, file.kind, 0.0, false).collides;
       } else {
         query.exactly_double = exact;

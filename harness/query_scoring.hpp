@@ -54,7 +54,7 @@ std::unique_ptr<QueryMethod> make_query_method(const std::string& spec);
 void bind_answer_files(const std::vector<std::string>& methods, const std::vector<datasets::QueryFile>& files);
 std::vector<std::string> query_method_names();
 
-/// One method on one file (or on all files: file = "(all)"), fields as DESIGN.md §5.
+/// One method on one file (or on all files: file = "(all)"), fields as docs/DESIGN.md §5.
 struct QueryScore {
   std::string method;
   std::string file;

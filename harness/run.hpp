@@ -38,7 +38,7 @@ struct RunOptions {
   std::vector<std::optional<double>> thicknesses;
   /// Verify every step against the exact truth.
   bool verify = true;
-  /// Also compare every reported TOI with the exact earliest contact (DESIGN.md §5; needs verify): toi_late
+  /// Also compare every reported TOI with the exact earliest contact (docs/DESIGN.md §5; needs verify): toi_late
   /// (reported later than exact, a defect for conservative methods), toi_error_max and toi_error_mean.
   bool toi = false;
   /// Timed passes over the whole sequence; ms per step is the median over them.
@@ -59,7 +59,7 @@ struct RunOptions {
   std::string command_line;
 };
 
-/// Runs the cells, prints the table and writes the results. Returns the summaries (DESIGN.md §5 fields).
+/// Runs the cells, prints the table and writes the results. Returns the summaries (docs/DESIGN.md §5 fields).
 std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostream& out);
 
 /// The CI gate (`ccdbench check`). The baseline is a JSON array of {scene, strategy, thickness, max_missed}

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The contract of DESIGN.md §4, written once: "the primitives come within δ at time t" is the union of sign
+/// The contract of docs/DESIGN.md §4, written once: "the primitives come within δ at time t" is the union of sign
 /// conditions over the closest features. The formulas are templates over the scalar so that the exact path
 /// (polynomials in t with rational coefficients) and the filter (intervals with outward rounding) evaluate the
 /// very same expressions and can never disagree on what they decide.
@@ -14,7 +14,7 @@
 ///   1..4   an endpoint against the other segment (a0|ab, a1|ab, b0|aa, b1|aa), as the VF edge condition
 ///   5..8   endpoint pairs a0b0, a0b1, a1b0, a1b1: |x-y|² - δ² <= 0
 /// The strict guards keep the interior conditions from firing at degenerate instants; those instants are covered
-/// by the edge and corner conditions (DESIGN.md §4). Every condition that holds names a real point pair within
+/// by the edge and corner conditions (docs/DESIGN.md §4). Every condition that holds names a real point pair within
 /// δ, and the closest point pair always satisfies one of them: the union is exact.
 
 #include <array>

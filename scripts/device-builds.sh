@@ -20,5 +20,5 @@ write_machine() {
 }
 # part NAME: whether $PARTS names it.
 part() { [[ " $PARTS " == *" $1 "* ]]; }
-# frames SCENE A B: the public step A -> B of ../shared/data's scalable-ccd-sample, as run's --frames arguments.
+# frames SCENE A B: the public step A -> B of the public data's scalable-ccd-sample (carried as device-carry/data), as run's --frames arguments.
 frames() { echo "$CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$2.ply $CCDBENCH_DATA_DIR/scalable-ccd-sample/$1/frames/$3.ply"; }

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fetches the public data with exact ground truth into data/external (ignored by git), by commit, for users
-# who have the network. The layout is the one of ../shared/data (see its README). Tests find it there when
-# ../shared/data is absent, or wherever CCDBENCH_DATA_DIR points.
+# who have the network. The layout and counts are in docs/DATA.md. Tests find it there, or wherever
+# CCDBENCH_DATA_DIR points.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 target=data/external

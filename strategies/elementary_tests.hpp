@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// From candidate triangle pairs to tested elementary pairs, by the primitive-assignment masks (DESIGN.md §1):
+/// From candidate triangle pairs to tested elementary pairs, by the primitive-assignment masks (docs/DESIGN.md §1):
 /// for (A, B), A != B, the vertices A owns against face B, those B owns against face A, and the edges A owns
 /// against those B owns, skipping pairs that share a vertex. Every elementary pair comes from exactly one
 /// triangle pair, and adjacent triangles still yield the pairs of theirs that share no vertex. Before the narrow

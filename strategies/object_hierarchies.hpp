@@ -2,7 +2,7 @@
 /// @file
 /// One BVH per scene object and the traversals the scene's collision filter asks for: self traversal only for
 /// objects with self-collision, object-against-object only for collidable pairs, and static objects' hierarchies
-/// fitted once and never refitted (DESIGN.md §3 "Model only what a scene requires").
+/// fitted once and never refitted (docs/DESIGN.md §3 "Model only what a scene requires").
 
 #include "core/scene.hpp"
 #include "core/step.hpp"

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The strategy registry: the one door through which a strategy enters (DESIGN.md §3). Each entry owns its name,
+/// The strategy registry: the one door through which a strategy enters (docs/DESIGN.md §3). Each entry owns its name,
 /// its keys (values, defaults, help), a one-line description, the backends it runs on, whether it takes a narrow
 /// phase, what its answers are judged by, the strategy its speed-up is measured against, how a miss of it is
 /// explained, and its factory. `run`, `queries`, `ccdbench strategies`, MPI work items and cell keys read it; the

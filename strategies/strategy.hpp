@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// What the harness compares (DESIGN.md §3): a strategy is built once per scene and fed steps in order.
+/// What the harness compares (docs/DESIGN.md §3): a strategy is built once per scene and fed steps in order.
 
 #include "core/collision_set.hpp"
 #include "core/stage_timer.hpp"
@@ -67,7 +67,7 @@ struct StepResult {
   std::vector<Fault> faults;
 };
 
-/// How answers are judged (DESIGN.md §3; each registry entry says which, registry.hpp). By triangle pairs: a truth pair counts as found when a reported triangle
+/// How answers are judged (docs/DESIGN.md §3; each registry entry says which, registry.hpp). By triangle pairs: a truth pair counts as found when a reported triangle
 /// pair contains both its primitives, and a false alarm is a reported triangle pair containing no truth pair.
 enum class Judging { elementary_pairs, triangle_pairs };
 
@@ -86,7 +86,7 @@ class Strategy {
   virtual void init(const Scene& scene, std::span<const Vec3> first_frame) = 0;
   /// One step, in order. With `audit`, also returns the elementary pairs tested (outside the timed stages).
   virtual StepResult step(const StepView& step, bool audit) = 0;
-  /// What a result of this strategy depends on beyond the build (DESIGN.md §5 provenance), as name-value pairs: the
+  /// What a result of this strategy depends on beyond the build (docs/DESIGN.md §5 provenance), as name-value pairs: the
   /// OpenCL backend's platform, device and driver. Empty for a strategy that runs on the host alone.
   virtual std::vector<std::pair<std::string, std::string>> provenance() const { return {}; }
 };

@@ -1,4 +1,4 @@
-# Fails when a folder includes a header it must not see (DESIGN.md §2):
+# Fails when a folder includes a header it must not see (docs/DESIGN.md §2):
 #   core/ sees only core/; datasets/ sees core/ and datasets/;
 #   reference/ never includes strategies/, and strategies/ never includes reference/.
 set(rules

@@ -75,7 +75,7 @@ extern const SceneParameter kObstaclesParameter;
 
 Vec3 rotate_z(const Vec3& p, double angle);
 double mean_edge_length(const ShapeMesh& mesh);
-/// DESIGN.md §1: built-in scenes declare δ as 5% of the cloth's mean rest edge length.
+/// docs/DESIGN.md §1: built-in scenes declare δ as 5% of the cloth's mean rest edge length.
 double thickness_of(const ShapeMesh& cloth);
 /// The simulator's settings for a cloth of side n: repulsion by the spacing, more sweeps for finer cloth.
 SimulatorSettings settings_for(const ShapeMesh& cloth, std::size_t n);

@@ -29,7 +29,7 @@ struct SceneData {
 using CellProgress = std::function<void(int pass, std::size_t step, const std::string& strategy)>;
 
 /// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.
-/// Returns {"summary": ..., "steps": [...]} (DESIGN.md §5 fields).
+/// Returns {"summary": ..., "steps": [...]} (docs/DESIGN.md §5 fields).
 nlohmann::json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps, const std::string& cell_name,
                         const CellProgress& progress = {});
 

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// What every run record carries about where and how it was made (DESIGN.md §5): the machine, the build, the thread
+/// What every run record carries about where and how it was made (docs/DESIGN.md §5): the machine, the build, the thread
 /// count, the git revision and the executable's digest, and its provenance (the versions of ccdbench, the compiler
 /// and every library); and the clock that orders finished cells.
 

@@ -14,7 +14,7 @@ using nlohmann::json;
 
 constexpr const char* kTrianglePairMark = " (†)";
 constexpr const char* kTrianglePairNote =
-    "(†) judged by triangle pairs at δ = 0 (DESIGN.md §3): a truth pair counts as found when a reported triangle pair "
+    "(†) judged by triangle pairs at δ = 0 (docs/DESIGN.md §3): a truth pair counts as found when a reported triangle pair "
     "contains both its primitives; false alarms are reported triangle pairs that contain no colliding pair.\n";
 constexpr std::size_t kStrategyColumn = 2;
 

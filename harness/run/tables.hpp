@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// What `ccdbench run` shows: the table of its cells (with speed-ups only between cells of this invocation,
-/// DESIGN.md §5) and the report page.
+/// docs/DESIGN.md §5) and the report page.
 
 #include "harness/table.hpp"
 
@@ -16,7 +16,7 @@ namespace ccd::harness {
 /// Sets each summary's "speedup" (its baseline's ms per step over its own) and "speedup_over" (the baseline's
 /// resolved name), or null where it has none: the baseline is the first cell of its strategy's baseline strategy
 /// (registry.hpp) on the same scene at the same δ with the same narrow phase, measured in this invocation on the
-/// same rank and machine (DESIGN.md §5: ratios only between cells of one invocation; resumed cells have none).
+/// same rank and machine (docs/DESIGN.md §5: ratios only between cells of one invocation; resumed cells have none).
 void attach_speedups(std::vector<nlohmann::json>& summaries);
 
 /// One row per cell summary (speed-ups as attach_speedups set them).

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Judging a strategy's step against the exact truth (DESIGN.md §1, §3, §5): misses (culled or tested), false alarms,
+/// Judging a strategy's step against the exact truth (docs/DESIGN.md §1, §3, §5): misses (culled or tested), false alarms,
 /// TOI accuracy; what each miss was caused by; contact between objects.
 
 #include "core/collision_set.hpp"

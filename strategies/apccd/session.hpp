@@ -18,7 +18,7 @@
 
 namespace ccd::strategies {
 
-/// How long history keeps a pair's orientation (DESIGN.md §3).
+/// How long history keeps a pair's orientation (docs/DESIGN.md §3).
 enum class HistoryMode {
   off,
   /// Rebuilt every step from the pairs the back end tested: a pair the front end drops this step is forgotten.
@@ -69,7 +69,7 @@ struct ApccdSettings {
 
 /// Why a step ended its session: each step's counters session_end_REASON are 1 for the rule that ended the
 /// session there (0 for the others, and all 0 while it goes on), so a summary's mean times its steps counts the
-/// sessions each rule ended (issue 37). The paper's rules (DESIGN.md: a session of adaptive length nf, ended early
+/// sessions each rule ended (issue 37). The paper's rules (docs/DESIGN.md §3: a session of adaptive length nf, ended early
 /// when too many vertices dangle): nf_max, nf_adapted and dangling. Ours: pending (the pending list's cost,
 /// pending_max) and inflation_cap (inflation_max, which shortens nf when a session starts), each with its reason
 /// at its setting in ApccdSettings.

@@ -1,5 +1,5 @@
 /// @file
-/// FCL (the Flexible Collision Library) as a peer would use it for deforming meshes (DESIGN.md §3).
+/// FCL (the Flexible Collision Library) as a peer would use it for deforming meshes (docs/DESIGN.md §3).
 ///
 /// Both strategies keep one `fcl::BVHModel` per scene object, built once from frame 0. Each step updates a model
 /// with `beginUpdateModel` / `updateSubModel` / `endUpdateModel(refit, bottom-up)`, after which its leaves bound a

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The elementary tests every strategy shares (DESIGN.md §3): one vertex-face and one edge-edge call on a pair
+/// The elementary tests every strategy shares (docs/DESIGN.md §3): one vertex-face and one edge-edge call on a pair
 /// with linear motion over the step, thickness δ >= 0. Variants differ in precision and in what they guarantee.
 
 #include "core/vec.hpp"
@@ -16,7 +16,7 @@ namespace ccd::narrowphase {
 /// EE ea0_t0, ea1_t0, eb0_t0, eb1_t0, ea0_t1, ea1_t1, eb0_t1, eb1_t1.
 using PairRows = std::array<Vec3, 8>;
 
-/// What a test answers, with what a user needs to judge it (STYLE.md "Shape").
+/// What a test answers, with what a user needs to judge it (docs/STYLE.md "Shape").
 struct NarrowPhaseResult {
   bool collides = false;
   /// Earliest time of contact in [0, 1] when collides (conservative variants: never later than the true one);

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The narrow-phase registry: the one door through which a narrow phase enters (DESIGN.md §3). Each entry owns its
+/// The narrow-phase registry: the one door through which a narrow phase enters (docs/DESIGN.md §3). Each entry owns its
 /// name, its keys (values, defaults, help), a one-line description, what it promises, the accuracy a `--sweep`
 /// varies and its factory; strategies, `queries`, `stress`, the OpenCL backend and `ccdbench strategies` read it.
 ///
@@ -36,7 +36,7 @@ struct NarrowPhaseEntry {
   std::function<std::unique_ptr<NarrowPhase>(const SpecReader&)> make;
 };
 
-/// The narrow phase of a strategy spec that names none (DESIGN.md §3): the one that never misses.
+/// The narrow phase of a strategy spec that names none (docs/DESIGN.md §3): the one that never misses.
 inline constexpr const char* kDefaultNarrowPhase = "conservative";
 
 /// Every narrow phase, in the order every listing shows them.

@@ -2,7 +2,7 @@
 /// @file
 /// What the conservative tests (the `conservative` narrow phase, the separation filter, the face-shape decisions)
 /// do before anything else: run in round-to-nearest, which their error budgets assume. They then rescale the pair
-/// exactly by a power of two (shared/scaling.h), so that those budgets hold at every scale (DESIGN.md §6).
+/// exactly by a power of two (shared/scaling.h), so that those budgets hold at every scale (docs/DESIGN.md §6).
 
 namespace ccd::narrowphase {
 

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The words of a spec, `NAME[+NARROW][:key=value...]` (DESIGN.md §3): how a key is declared (name, values, default,
+/// The words of a spec, `NAME[+NARROW][:key=value...]` (docs/DESIGN.md §3): how a key is declared (name, values, default,
 /// help), how its value is read and checked, and how a resolved name prints a number. The registries of strategies
 /// and narrow phases declare their keys with these, so that parsing, error messages, `ccdbench strategies` and the
 /// resolved names all come from one declaration per key.

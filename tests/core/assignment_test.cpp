@@ -45,7 +45,7 @@ TEST(Assignment, EveryUsedVertexAndEveryEdgeIsOwnedExactlyOnceByAnIncidentFace) 
   }
 }
 
-// DESIGN.md §1: expanding every triangle pair A != B by the masks generates every elementary pair exactly once,
+// docs/DESIGN.md §1: expanding every triangle pair A != B by the masks generates every elementary pair exactly once,
 // including those of adjacent triangles that share no vertex.
 TEST(Assignment, ExpandingAllTrianglePairsGeneratesEveryElementaryPairExactlyOnce) {
   for (const NamedMesh& m : meshes_with_every_shape()) {

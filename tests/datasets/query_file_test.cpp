@@ -148,7 +148,7 @@ struct SharedQueryCount {
   std::size_t positives;
 };
 
-// The counts of ../shared/data/README.md.
+// The counts of docs/DATA.md.
 TEST(QueryFileSharedData, CountsMatchTheDataReadme) {
   CCD_REQUIRE_EXTERNAL_DATA(data);
   std::size_t vf_queries = 0, vf_positives = 0, ee_queries = 0, ee_positives = 0;

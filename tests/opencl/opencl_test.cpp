@@ -291,7 +291,7 @@ TEST_F(OpenClParity, TheSceneAskedForGivesTheCpuAnswers) {
   }
 }
 
-// The two public steps of ../shared/data/scalable-ccd-sample (80k and 18k faces), one test each: δ = 0 and δ = 5%
+// The two public steps of the public data's scalable-ccd-sample (80k and 18k faces), one test each: δ = 0 and δ = 5%
 // of the step's mean edge length. Under AddressSanitizer rod-twist's two δ take nearly four minutes of CI's two
 // cores, so the sanitizer run leaves it out by name (CMakePresets.json); cloth-funnel runs the same code there.
 class OpenClParityOnPublicSteps : public OpenClParity, public ::testing::WithParamInterface<std::string> {};

@@ -1,4 +1,4 @@
-// The named library of degenerate cases with known answers (STYLE.md "Tests"). Every case runs three ways:
+// The named library of degenerate cases with known answers (docs/STYLE.md "Tests"). Every case runs three ways:
 // exact only, filter then exact, and the filter alone (which may be inconclusive, never wrong).
 
 #include "reference/certified_filter.hpp"

@@ -137,7 +137,7 @@ TEST(FullAnswers, TheCiSuiteGivesTheRecordedAnswersAtBothThicknesses) {
   compare_or_record(answers, scenes, "ci");
 }
 
-// The public steps (../shared/data), one test each: rod-twist 3036 -> 3037 (79,864 faces, 2.4 million candidate
+// The public steps (docs/DATA.md), one test each: rod-twist 3036 -> 3037 (79,864 faces, 2.4 million candidate
 // pairs: minutes under AddressSanitizer, so the sanitizer run leaves it out by name, CMakePresets.json) and
 // cloth-funnel 227 -> 228 (the same code), at δ = 0 as the source ran them.
 class FullAnswersOnPublicSteps : public ::testing::TestWithParam<std::pair<std::string, std::string>> {};

@@ -53,7 +53,7 @@ INSTANTIATE_TEST_SUITE_P(BuiltInScenes, FullTraversalOnScene, ::testing::ValuesI
 INSTANTIATE_TEST_SUITE_P(ShapeScenes, FullTraversalOnScene, ::testing::ValuesIn(testing::shape_scene_names()), testing::param_name);
 
 // Two triangles sharing vertex 0 whose other corners meet: the classic fold contact. Culling them for being
-// adjacent would miss it (DESIGN.md §1); only A = B may be skipped.
+// adjacent would miss it (docs/DESIGN.md §1); only A = B may be skipped.
 TEST(FullTraversal, FindsTheContactOfTwoTrianglesSharingAVertex) {
   const Scene scene({{"fold", ObjectKind::deformable, true, 5, {{0, 1, 2}, {0, 3, 4}}}}, {}, 0.0);
   // Triangle B swings down through triangle A's far edge (1-2) during the step.

@@ -102,7 +102,7 @@ bool external_data_required();
 /// The external data folder, when present with the expected content; otherwise nullopt and the reason.
 std::optional<std::filesystem::path> external_data_or_reason(std::string& reason);
 
-/// How many queries the public data holds under `folder` (../shared/data/README.md): data tests assert it, so that
+/// How many queries the public data holds under `folder` (docs/DATA.md): data tests assert it, so that
 /// a data folder that exists but is empty or partial fails instead of passing over nothing.
 inline std::size_t shared_query_count(const std::string& folder) {
   if (folder == "sample-queries") return 250 + 74;

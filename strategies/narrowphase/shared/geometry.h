@@ -1,5 +1,5 @@
 /* The narrow phases' arithmetic, written once for the host (C++) and the OpenCL backend (OpenCL C 1.2), so that
- * both perform the same operations in the same order and give the same answers bit for bit (DESIGN.md §3).
+ * both perform the same operations in the same order and give the same answers bit for bit (docs/DESIGN.md §3).
  *
  * This file is real-generic: it is compiled with `ccd_real` = double (both sides) and = float (the host's
  * cubic32). It includes nothing; its environment defines ccd_real, ccd_real_epsilon (the type's machine epsilon)

@@ -2,7 +2,7 @@
  * phase and the separation filter work on pairs brought to unit size, so that their error bounds are the same at
  * every scale. Multiplying a double by a power of two is exact while the result stays a normal double, so the
  * rescaled pair is the same geometric question (at δ = 0, the same truth): a pair at 2^-960 gets the same answer,
- * at the same cost, as at 2^0 (DESIGN.md §6). Round-to-nearest is assumed (the host sets it first:
+ * at the same cost, as at 2^0 (docs/DESIGN.md §6). Round-to-nearest is assumed (the host sets it first:
  * strategies/narrowphase/round_to_nearest.hpp). Double only; needs its environment's ldexp, frexp, nextafter, fabs
  * and isfinite (geometry.h says where they come from). */
 #ifndef CCD_SHARED_SCALING_H
