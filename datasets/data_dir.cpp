@@ -10,10 +10,8 @@ std::optional<std::filesystem::path> external_data_dir() {
   if (const char* value = std::getenv("CCDBENCH_DATA_DIR"); value != nullptr && *value != '\0') {
     return std::filesystem::path(value);
   }
-  const std::filesystem::path checkout(CCDBENCH_SOURCE_DIR);
-  for (const std::filesystem::path& candidate : {checkout.parent_path() / "shared" / "data", checkout / "data" / "external"}) {
-    if (std::filesystem::is_directory(candidate)) return candidate;
-  }
+  const std::filesystem::path fetched = std::filesystem::path(CCDBENCH_SOURCE_DIR) / "data" / "external";
+  if (std::filesystem::is_directory(fetched)) return fetched;
   return std::nullopt;
 }
 

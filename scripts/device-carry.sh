@@ -40,6 +40,8 @@ for binary in "$carry"/bin/ccdbench "$carry"/bin/ccdbench-* "$carry"/bin/*_bench
 done | sort -u | grep -vE '/(libc|libm|libpthread|libdl|librt)\.so|ld-linux' | while read -r library; do
   cp -L "$library" "$carry/lib/"
 done
-# The public data (../shared/data, about 10 MB) for the OpenCL parity tests and the public steps' timings.
-if [ -d ../shared/data ]; then cp -r ../shared/data "$carry/data"; fi
+# The public data (about 10 MB; scripts/data-dir.sh says where it is looked for) for the OpenCL parity tests and the
+# public steps' timings.
+source scripts/data-dir.sh
+if [ -n "${CCDBENCH_DATA_DIR:-}" ]; then cp -r "$CCDBENCH_DATA_DIR" "$carry/data"; fi
 du -sh "$carry"

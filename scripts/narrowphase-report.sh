@@ -7,8 +7,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh python3-matplotlib  # for the plot
 scripts/build.sh release
-data=${CCDBENCH_DATA_DIR:-../shared/data}
-[[ -d $data ]] || data=data/external
+source scripts/data-dir.sh
+data=${CCDBENCH_DATA_DIR:?"no public data: run scripts/fetch-data.sh, or set CCDBENCH_DATA_DIR"}
 out=reports/narrowphase
 mkdir -p "$out"
 build/release/bin/ccdbench stress --json "$out/stress.json" > "$out/stress.txt"

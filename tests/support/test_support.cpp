@@ -57,13 +57,12 @@ bool external_data_required() {
 std::optional<std::filesystem::path> external_data_or_reason(std::string& reason) {
   const auto dir = datasets::external_data_dir();
   if (!dir) {
-    reason =
-        "public data not found: set CCDBENCH_DATA_DIR, put ../shared/data beside the checkout, or run "
-        "scripts/fetch-data.sh";
+    reason = "needs the public data (docs/DATA.md), not found: run scripts/fetch-data.sh, or set CCDBENCH_DATA_DIR to a copy";
     return std::nullopt;
   }
   if (!std::filesystem::is_directory(*dir / "sample-queries") || !std::filesystem::is_directory(*dir / "scalable-ccd-sample")) {
-    reason = "public data folder " + dir->string() + " lacks sample-queries/ or scalable-ccd-sample/";
+    reason = "needs the public data (docs/DATA.md): " + dir->string() +
+             " lacks sample-queries/ or scalable-ccd-sample/; run scripts/fetch-data.sh, or set CCDBENCH_DATA_DIR to a copy";
     return std::nullopt;
   }
   return dir;
