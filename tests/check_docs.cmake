@@ -2,7 +2,8 @@
 #   - every `docs/DESIGN.md §N` names a section "## N. ..." of docs/DESIGN.md, and a quoted name after it
 #     (`docs/DESIGN.md §3 "Model only what a scene requires"`) occurs in that section;
 #   - every `docs/STYLE.md "NAME"` names a section "## NAME" of docs/STYLE.md;
-#   - no source cites DESIGN.md or STYLE.md elsewhere than docs/ (a clone has nothing beside it).
+#   - no source cites DESIGN.md or STYLE.md elsewhere than docs/, and none but a script names the folder beside the
+#     checkout that CI keeps the public data in (a clone has nothing beside it; scripts/data-dir.sh looks there).
 # Usage: cmake -DSOURCE_DIR=... -P check_docs.cmake
 file(READ "${SOURCE_DIR}/docs/DESIGN.md" design)
 file(READ "${SOURCE_DIR}/docs/STYLE.md" style)
@@ -32,14 +33,25 @@ endforeach()
 file(GLOB_RECURSE sources ${patterns})
 list(APPEND sources "${SOURCE_DIR}/CMakeLists.txt" "${SOURCE_DIR}/README.md")
 
-set(problems "")
 set(citations 0)
 list(REMOVE_ITEM sources "${CMAKE_CURRENT_LIST_FILE}")
+file(GLOB docs "${SOURCE_DIR}/docs/*.md")
+set(problems "")
+foreach(source IN LISTS sources docs)
+  if(source MATCHES "/scripts/[^/]+\\.sh$")
+    continue()
+  endif()
+  file(STRINGS "${source}" lines ENCODING UTF-8 REGEX "\\.\\./shared")
+  file(RELATIVE_PATH name "${SOURCE_DIR}" "${source}")
+  foreach(line IN LISTS lines)
+    string(APPEND problems "  ${name}: names a folder beside the checkout, which a clone does not have: ${line}\n")
+  endforeach()
+endforeach()
 foreach(source IN LISTS sources)
   file(STRINGS "${source}" lines ENCODING UTF-8 REGEX "DESIGN\\.md|STYLE\\.md")
   file(RELATIVE_PATH name "${SOURCE_DIR}" "${source}")
   foreach(line IN LISTS lines)
-    # Every mention must be of docs/ (a bare DESIGN.md, or ../shared/DESIGN.md, is a document a clone lacks).
+    # Every mention must be of docs/ (a bare DESIGN.md, or one beside the checkout, is a document a clone lacks).
     string(REGEX REPLACE "docs/(DESIGN|STYLE)\\.md" "" rest "${line}")
     if(rest MATCHES "DESIGN\\.md|STYLE\\.md")
       string(APPEND problems "  ${name}: cites a document outside docs/: ${line}\n")
@@ -80,7 +92,7 @@ foreach(source IN LISTS sources)
 endforeach()
 
 if(problems)
-  message(FATAL_ERROR "documentation citations that do not resolve:\n${problems}")
+  message(FATAL_ERROR "documentation problems:\n${problems}")
 endif()
 if(citations LESS 40)
   # The sources cite the docs about 60 times: far fewer means this check stopped finding them, not that they went.
