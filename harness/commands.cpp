@@ -84,14 +84,15 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
     for (std::string& method : methods) method = plugin::isolated_spec(method);
   }
   auto answer_file = [](const std::string& method) { return method.rfind("answers:", 0) == 0; };
-  // Unknown names fail before any work; answer files once they are matched to the queries, below.
-  for (const std::string& method : methods) {
-    if (!answer_file(method)) make_query_method(method);
-  }
+  // Outputs are checked before any work and before any plugin is loaded; then unknown names fail, answer files once
+  // they are matched to the queries, below.
   if (rank_info().rank == 0) {  // only rank 0 writes
     if (options.json) datasets::require_writable_file(*options.json);
     if (options.report) datasets::require_writable_directory(*options.report);
     if (options.write_answers) datasets::require_writable_file(*options.write_answers);
+  }
+  for (const std::string& method : methods) {
+    if (!answer_file(method)) make_query_method(method);
   }
   std::vector<datasets::QueryFile> files;
   for (const auto& path : datasets::discover_query_files(options.paths)) files.push_back(datasets::read_query_file(path));

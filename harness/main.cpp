@@ -62,7 +62,9 @@ std::string method_names() {
 
 std::string version_text() {
   return std::string("ccdbench ") + CCDBENCH_VERSION + " (" + CCDBENCH_BUILD_TYPE + "; OpenCL " + (CCDBENCH_WITH_OPENCL ? "on" : "off") + ", FCL " +
-         (CCDBENCH_WITH_FCL ? "on" : "off") + ", MPI " + (CCDBENCH_WITH_MPI ? "on" : "off") + ")";
+         (CCDBENCH_WITH_FCL ? "on" : "off") + ", MPI " + (CCDBENCH_WITH_MPI ? "on" : "off") +
+         (std::string(CCDBENCH_GUARDS_OFF).empty() ? "" : std::string("; plugin-boundary guards OFF: ") + CCDBENCH_GUARDS_OFF + ", a test build") +
+         ")";
 }
 
 }  // namespace
@@ -261,8 +263,13 @@ int run_command_line(int argc, char** argv) {
       app.add_subcommand("check",
                          "The CI gate: exit 1 when it fails, 2 when a file is malformed. It fails when the results are empty, a result\n"
                          "has no baseline entry or an entry no result, a result was not verified or has no colliding pair (it could\n"
-                         "not miss anything, so it gates nothing), or a result misses more than its entry allows.");
-  check->add_option("--baseline", baseline_file, "JSON array of {scene, strategy, thickness: \"scene\" or a number, max_missed: integer >= 0}")
+                         "not miss anything, so it gates nothing), or a result misses more than its entry allows, has errors\n"
+                         "(answers a plugin could not give) beyond its max_errors (default 0), or answers that changed between\n"
+                         "passes unless its entry says allow_nondeterministic: true.");
+  check
+      ->add_option("--baseline", baseline_file,
+                   "JSON array of {scene, strategy, thickness: \"scene\" or a number, max_missed: integer >= 0}, each with optional\n"
+                   "steps, colliding, max_toi_late, max_errors (integers) and allow_nondeterministic (true or false)")
       ->required();
   check->add_option("RESULTS", results_files, "`ccdbench run --json` summary files, taken together")->required();
 
@@ -325,6 +332,17 @@ int run_command_line(int argc, char** argv) {
   std::optional<tbb::global_control> thread_limit;
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, threads);
 
+    // Every output is named by its absolute path before any plugin is loaded (docs/DESIGN.md §10): no working
+    // directory a plugin might move to can send results elsewhere.
+#if CCDBENCH_GUARD_CHDIR
+  for (std::filesystem::path* output : {&run_options.out, &queries_options.faults}) *output = std::filesystem::absolute(*output);
+  for (std::optional<std::filesystem::path>* output :
+       {&run_options.json, &run_options.report, &run_options.misses, &run_options.faults, &run_options.write_answers, &queries_options.json,
+        &queries_options.report, &queries_options.write_answers, &stress_options.json, &stress_options.write_queries}) {
+    if (*output) **output = std::filesystem::absolute(**output);
+  }
+#endif
+
   if (ccd::harness::rank_info().size > 1 && !*run && !*truth && !*queries) {
     return ccd::harness::rank_info().rank == 0 ? refuse({}, "only run, truth and queries are spread over MPI ranks: run this command without mpirun")
                                                : 2;
@@ -383,6 +401,7 @@ int run_command_line(int argc, char** argv) {
       if (run_isolate) {
         for (std::string& spec : run_options.strategies) spec = ccd::plugin::isolated_spec(spec);
       }
+      ccd::harness::check_run_outputs(run_options);
       for (const std::string& spec : run_options.strategies) {
         try {
           ccd::strategies::make_strategy(spec);

@@ -1,6 +1,7 @@
 #include "harness/query_answers.hpp"
 
 #include "core/error.hpp"
+#include "strategies/plugin/library.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -46,6 +47,9 @@ AnswerTable read_answer_table(const std::filesystem::path& path, const std::stri
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   AnswerTable table;
   table.path = path;
+  // The digest is of the bytes scored, from this one read (a file rewritten while it is read cannot put one file's
+  // digest on another's verdict).
+  table.digest = plugin::bytes_digest(text);
   std::map<std::string, std::size_t> column;
   std::set<std::string> methods;
   std::size_t line_number = 0;

@@ -39,6 +39,7 @@ struct AnswerLine {
 /// The lines of one answer file, for one method.
 struct AnswerTable {
   std::filesystem::path path;
+  /// The digest of the bytes read (and scored).
   std::string digest;
   /// The method chosen (`method=`), or the file's one method, or "" when it has no method column.
   std::string method;

@@ -1,5 +1,6 @@
 #include "harness/query_scoring.hpp"
 
+#include "ccd/config.hpp"
 #include "datasets/atomic_file.hpp"
 #include "datasets/rational.hpp"
 #include "harness/query_answers.hpp"
@@ -12,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "strategies/plugin/call_guard.hpp"
 #include "strategies/plugin/library.hpp"
 #include "strategies/plugin/plugin_narrow_phase.hpp"
 
@@ -95,7 +97,9 @@ AnswerTable& answer_table(const std::string& spec) {
   const narrowphase::SpecReader reader(head, keys, parameters);
   const std::filesystem::path path = head.substr(std::strlen(narrowphase::kAnswersHead) + 1);
   AnswerTable table = read_answer_table(path, reader.text("method"));
-  table.digest = plugin::content_digest(path);
+#if !CCDBENCH_GUARD_READ_ONCE
+  table.digest = plugin::content_digest(path);  // without the guard: a second read, apart from the one scored
+#endif
   if (reader.given("digest") && reader.text("digest") != table.digest) {
     throw std::invalid_argument(spec + ": the file changed (digest " + table.digest + ")");
   }
@@ -182,7 +186,8 @@ nlohmann::json to_json(const QueryScore& s) {
                         {"unlabeled", s.unlabeled},
                         {"ns_per_query", s.ns_per_query},
                         {"false_negative_lines", s.false_negative_lines},
-                        {"errors", s.faults}};
+                        {"errors", s.faults},
+                        {"changed_between_passes", s.changed_between_passes}};
   if (!s.fault_queries.empty()) {
     row["error_queries"] = nlohmann::json::array();
     for (const QueryScore::Fault& f : s.fault_queries) row["error_queries"].push_back({{"index", f.index}, {"line", f.line}, {"message", f.message}});
@@ -219,16 +224,33 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
     score.thickness = request.thickness;
     score.with_toi = request.toi;
     std::vector<double> per_query;
+    std::vector<QueryAnswer> first_answers;
+    // What a plugin that ends the process was doing: this file, and (per query, one relaxed store) which query.
+    plugin::set_activity("file " + file.path.string() + " (method " + score.method + ")", "query");
     for (int repeat = 0; repeat < std::max(1, request.repeats); ++repeat) {
       std::vector<QueryAnswer> answers(file.queries.size());
       const auto start = std::chrono::steady_clock::now();
       {
         const TimedRegion timed;
-        for (std::size_t q = 0; q < file.queries.size(); ++q) answers[q] = method->answer(file, q, request.thickness);
+        for (std::size_t q = 0; q < file.queries.size(); ++q) {
+          plugin::set_activity_item(q + 1);
+          answers[q] = method->answer(file, q, request.thickness);
+        }
       }
       const std::chrono::duration<double, std::nano> elapsed = std::chrono::steady_clock::now() - start;
       per_query.push_back(file.queries.empty() ? 0.0 : elapsed.count() / static_cast<double>(file.queries.size()));
-      if (repeat > 0) continue;  // verdicts from the first pass; later passes only time
+      if (repeat > 0) {
+        // Later passes only time, and say whether an answer changed (verdicts are the first pass's).
+        harness_pass("query scoring");
+        for (std::size_t q = 0; q < answers.size(); ++q) {
+          const QueryAnswer& a = answers[q];
+          const QueryAnswer& b = first_answers[q];
+          const bool same_toi = (std::isnan(a.toi) && std::isnan(b.toi)) || std::memcmp(&a.toi, &b.toi, sizeof a.toi) == 0;
+          if (a.collides != b.collides || !same_toi || a.fault.empty() != b.fault.empty()) ++score.changed_between_passes;
+        }
+        continue;
+      }
+      first_answers = answers;
       harness_pass("query scoring");
       for (std::size_t q = 0; q < file.queries.size(); ++q) {
         const datasets::Query& query = file.queries[q];
@@ -268,6 +290,7 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
     score.ns_per_query = median(per_query);
     scores.push_back(std::move(score));
   }
+  plugin::set_activity({});
   return scores;
 }
 
@@ -292,6 +315,7 @@ void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std:
     total.toi_error_sum += score.toi_error_sum;
     total.toi_errors.insert(total.toi_errors.end(), score.toi_errors.begin(), score.toi_errors.end());
     total.faults += score.faults;
+    total.changed_between_passes += score.changed_between_passes;
     total_nanoseconds[score.method] += score.ns_per_query * static_cast<double>(score.queries);
   }
   for (const std::string& name : methods) {
@@ -367,6 +391,7 @@ nlohmann::json to_message(const QueryScore& s) {
           {"toi_errors", s.toi_errors},
           {"false_negative_lines", s.false_negative_lines},
           {"faults", s.faults},
+          {"changed_between_passes", s.changed_between_passes},
           {"fault_queries", fault_list(s)},
           {"answers", answer_list(s)},
           {"exact_toi", number_list(s.exact_toi)},
@@ -393,6 +418,7 @@ QueryScore from_message(const nlohmann::json& m) {
   s.toi_errors = m.at("toi_errors").get<std::vector<double>>();
   s.false_negative_lines = m.at("false_negative_lines").get<std::vector<std::size_t>>();
   s.faults = m.at("faults");
+  s.changed_between_passes = m.at("changed_between_passes");
   for (const nlohmann::json& f : m.at("fault_queries")) s.fault_queries.push_back({f.at(0), f.at(1), f.at(2)});
   for (const nlohmann::json& a : m.at("answers")) {
     s.answers.push_back(
@@ -421,6 +447,8 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
   const bool with_errors = std::any_of(scores.begin(), scores.end(),
                                        [](const QueryScore& s) { return s.faults > 0 || plugin::names_plugin(s.method) || names_answers(s.method); });
   if (with_errors) table.add_column({"errors", Align::right});
+  const bool with_changes = std::any_of(scores.begin(), scores.end(), [](const QueryScore& s) { return s.changed_between_passes > 0; });
+  if (with_changes) table.add_column({"changed between passes", Align::right});
   if (with_toi) {
     for (const char* header : {"TOI late", "TOI error mean", "median", "p99", "max"}) table.add_column({header, Align::right});
   }
@@ -434,6 +462,7 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
                                     labelled_text(s, s.false_positives),
                                     fixed(s.ns_per_query, 0)};
     if (with_errors) row.push_back(std::to_string(s.faults));
+    if (with_changes) row.push_back(std::to_string(s.changed_between_passes));
     if (with_toi) {
       row.push_back(std::to_string(s.toi_late));
       row.push_back(significant(s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0, 3));

@@ -89,6 +89,9 @@ struct QueryScore {
     std::string message;
   };
   std::vector<Fault> fault_queries;
+  /// Queries whose answer (outcome, TOI bits, or whether it was an error) differed between timed passes
+  /// (--repeat N > 1): a method whose answers depend on what it was asked before.
+  std::size_t changed_between_passes = 0;
   /// With QueryScoringRequest::keep_answers: every query's answer (first pass) and the exact TOI floor at δ (NaN
   /// where there is none, or where TOIs were not asked for).
   std::vector<QueryAnswer> answers;

@@ -71,10 +71,10 @@ json registry_listing(const std::vector<std::string>& plugins) {
   for (const strategies::StrategyEntry& entry : strategies::strategy_entries()) strategy_list.push_back(&entry);
   for (const narrowphase::NarrowPhaseEntry& entry : narrowphase::narrow_phases()) narrow_list.push_back(&entry);
   for (const std::string& path : plugins) {
-    const auto library = plugin::load_library(path);
+    const plugin::PluginDescription& description = plugin::plugin_description(path);
     const std::string name = std::string(narrowphase::kPluginHead) + ":" + path;
-    if (library->answers_steps()) strategy_list.push_back(&strategies::find_strategy(name));
-    if (library->answers_queries()) narrow_list.push_back(&narrowphase::find_narrow_phase(name));
+    if (description.answers_steps()) strategy_list.push_back(&strategies::find_strategy(name));
+    if (description.answers_queries()) narrow_list.push_back(&narrowphase::find_narrow_phase(name));
   }
   for (const strategies::StrategyEntry* entry_pointer : strategy_list) {
     const strategies::StrategyEntry& entry = *entry_pointer;

@@ -92,17 +92,21 @@ std::string on_rank(int rank) { return rank_info().size > 1 ? " (rank " + std::t
 
 }  // namespace
 
+void check_run_outputs(const RunOptions& options) {
+  if (rank_info().rank != 0) return;  // only rank 0 writes them
+  datasets::require_writable_directory(options.out);
+  datasets::require_writable_directory(options.out / "cells");
+  if (options.json) datasets::require_writable_file(*options.json);
+  if (options.report) datasets::require_writable_directory(*options.report);
+  if (options.misses) datasets::require_writable_directory(*options.misses);
+}
+
 std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
-  for (const std::string& spec : options.strategies) strategies::make_strategy(spec);  // unknown names fail first
+  // Every output is checked before any work (a run must not compute for an hour and then fail to write), and before
+  // any plugin is loaded; then unknown names fail.
+  check_run_outputs(options);
+  for (const std::string& spec : options.strategies) strategies::make_strategy(spec);
   const bool planner = rank_info().rank == 0;
-  if (planner) {
-    // Every output is checked before any work: a run must not compute for an hour and then fail to write.
-    datasets::require_writable_directory(options.out);
-    datasets::require_writable_directory(options.out / "cells");
-    if (options.json) datasets::require_writable_file(*options.json);
-    if (options.report) datasets::require_writable_directory(*options.report);
-    if (options.misses) datasets::require_writable_directory(*options.misses);
-  }
   const TruthCache truth_cache(datasets::procedural_cache_root() / "truth");
   const std::vector<SceneVariant> variants = scene_variants(options);
   SceneStore store(options, variants);
@@ -165,7 +169,8 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
         if (!data.has_truth[k]) load_truth(k);
       }
     }
-    json result = run_cell(data, task.at("spec"), options, data.steps, task.at("file"), planner ? cell_progress : CellProgress{});
+    json result =
+        run_cell(data, task.at("spec"), options, data.steps, task.at("file"), planner ? cell_progress : CellProgress{}, task.at("strategy"));
     return result.dump();
   };
   if (!planner) {
@@ -246,7 +251,10 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     }
     for (Pending& cell : pending) {
       const std::string file = cell.file.filename().string();
-      items.push_back({json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"file", file}, {"threads", worker_threads()}}.dump(), truth_items});
+      items.push_back(
+          {json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"strategy", cell.key.strategy}, {"file", file}, {"threads", worker_threads()}}
+               .dump(),
+           truth_items});
       planned.push_back({source.label, 0, steps, true, cell.slot, std::move(cell.file), std::move(cell.key)});
     }
   };

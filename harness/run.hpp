@@ -59,6 +59,10 @@ struct RunOptions {
   std::string command_line;
 };
 
+/// Checks that every output of a run can be written (rank 0's: only it writes them). @throws InputError naming one
+/// that cannot.
+void check_run_outputs(const RunOptions& options);
+
 /// Runs the cells, prints the table and writes the results. Returns the summaries (docs/DESIGN.md §5 fields).
 std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostream& out);
 

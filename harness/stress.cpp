@@ -4,6 +4,7 @@
 #include "harness/table.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase/registry.hpp"
+#include "strategies/plugin/call_guard.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -19,6 +20,7 @@ nlohmann::json to_json(const StressRow& row) {
           {"positives", row.positives},
           {"false_negatives", row.false_negatives},
           {"false_positives", row.false_positives},
+          {"errors", row.errors},
           {"missed", row.missed}};
 }
 
@@ -32,6 +34,7 @@ std::vector<StressRow> run_stress(const std::vector<datasets::ExtremeQuery>& sui
     for (const datasets::ExtremeQuery& query : suite) {
       const double thickness = std::string(pass) == "zero" ? 0.0 : query.positive_thickness;
       const bool truth = reference::decide(reference_kind(query.kind), query.rows, thickness).collides;
+      plugin::set_activity("the extremes suite (stress), " + query.family + ": " + query.name + ", δ " + pass);
       for (const auto& variant : variants) {
         const narrowphase::NarrowPhaseResult answer =
             query.kind == datasets::QueryKind::vertex_face ? variant->vertex_face(query.rows, thickness) : variant->edge_edge(query.rows, thickness);
@@ -46,9 +49,11 @@ std::vector<StressRow> run_stress(const std::vector<datasets::ExtremeQuery>& sui
             if (row->missed.size() < 10) row->missed.push_back(query.family + ": " + query.name);
           }
           if (!truth && answer.collides) row->false_positives += 1;
+          if (!answer.fault.empty()) row->errors += 1;
         }
       }
     }
+    plugin::set_activity({});
     for (const std::string& family : datasets::extremes_families()) {
       for (const auto& variant : variants) {
         const auto it = by_family.find({family, variant->name()});
@@ -62,10 +67,17 @@ std::vector<StressRow> run_stress(const std::vector<datasets::ExtremeQuery>& sui
 
 void print_stress(const std::vector<StressRow>& rows, std::ostream& out) {
   using Align = Table::Align;
-  Table table({{"family"}, {"method"}, {"δ"}, {"queries", Align::right}, {"positive", Align::right}, {"FN", Align::right}, {"FP", Align::right}});
+  Table table({{"family"},
+               {"method"},
+               {"δ"},
+               {"queries", Align::right},
+               {"positive", Align::right},
+               {"FN", Align::right},
+               {"FP", Align::right},
+               {"errors", Align::right}});
   for (const StressRow& row : rows) {
     table.add_row({row.family, row.method, row.thickness == "zero" ? "0" : "positive", std::to_string(row.queries), std::to_string(row.positives),
-                   std::to_string(row.false_negatives), std::to_string(row.false_positives)});
+                   std::to_string(row.false_negatives), std::to_string(row.false_positives), std::to_string(row.errors)});
   }
   table.print(out);
 }

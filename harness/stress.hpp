@@ -23,6 +23,9 @@ struct StressRow {
   std::size_t positives = 0;
   std::size_t false_negatives = 0;
   std::size_t false_positives = 0;
+  /// Cases the method gave no answer to (a plugin's error, crash or hang): counted apart, and for FN and FP as the
+  /// plugin's `errors` key says.
+  std::size_t errors = 0;
   /// Names of the missed cases (for the regression library), at most 10.
   std::vector<std::string> missed;
 };

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 
 namespace ccd::strategies {
@@ -38,33 +39,47 @@ const StrategyEntry& find_strategy(const std::string& name) {
 
 namespace {
 
-/// A strategy whose narrow phase may not be called from several threads at once (a plugin without
-/// CCDBENCH_THREAD_SAFE), run on one thread: the calling one, in an arena of one (TBB then starts no worker in it).
-/// Its records say so (provenance "threads").
-class OnOneThread final : public Strategy {
+/// A strategy whose narrow phase has provenance of its own (a plugin: its code and where it ran), or may not be called
+/// from several threads at once (a plugin without CCDBENCH_THREAD_SAFE): the latter runs on one thread, the calling
+/// one, in an arena of one (TBB then starts no worker in it). Its records say both (provenance).
+class WithNarrowPhaseNotes final : public Strategy {
  public:
-  OnOneThread(std::unique_ptr<Strategy> inner, std::string why) : inner_(std::move(inner)), why_(std::move(why)), arena_(1) {}
+  WithNarrowPhaseNotes(std::unique_ptr<Strategy> inner, std::vector<std::pair<std::string, std::string>> notes, std::string one_thread_why)
+      : inner_(std::move(inner)), notes_(std::move(notes)), why_(std::move(one_thread_why)) {
+    if (!why_.empty()) arena_.emplace(1);
+  }
   std::string name() const override { return inner_->name(); }
   void check_scene(const Scene& scene) const override { inner_->check_scene(scene); }
   void name_scene(const std::string& label) override { inner_->name_scene(label); }
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
-    arena_.execute([&] { inner_->init(scene, first_frame); });
+    on_its_threads([&] { inner_->init(scene, first_frame); });
   }
   StepResult step(const StepView& step, bool audit) override {
     StepResult result;
-    arena_.execute([&] { result = inner_->step(step, audit); });
+    on_its_threads([&] { result = inner_->step(step, audit); });
     return result;
   }
   std::vector<std::pair<std::string, std::string>> provenance() const override {
     auto values = inner_->provenance();
-    values.emplace_back("threads", "1: " + why_);
+    values.insert(values.end(), notes_.begin(), notes_.end());
+    if (!why_.empty()) values.emplace_back("threads", "1: " + why_);
     return values;
   }
 
  private:
   std::unique_ptr<Strategy> inner_;
+  template <class F>
+  void on_its_threads(F&& f) {
+    if (arena_) {
+      arena_->execute(f);
+    } else {
+      f();
+    }
+  }
+
+  std::vector<std::pair<std::string, std::string>> notes_;
   std::string why_;
-  tbb::task_arena arena_;
+  std::optional<tbb::task_arena> arena_;
 };
 
 }  // namespace
@@ -93,6 +108,12 @@ StrategySpec strategy_names_of(const std::string& spec) {
     head = spec.substr(0, end);
   }
   return {head.substr(0, plus), plus == std::string::npos ? std::string() : head.substr(plus + 1), {}};
+}
+
+bool from_outside(const std::string& spec) {
+  const StrategySpec names = strategy_names_of(spec);
+  return narrowphase::is_file_head(names.name.substr(0, names.name.find(':'))) ||
+         narrowphase::is_file_head(names.narrow_phase.substr(0, names.narrow_phase.find(':')));
 }
 
 std::string short_label(const std::string& spec) {
@@ -138,10 +159,10 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
   }
   const narrowphase::SpecReader keys(entry.name, entry.keys, own);
   std::unique_ptr<narrowphase::NarrowPhase> narrow_phase = narrow.make(narrowphase::SpecReader(narrow.name, narrow.keys, narrow_keys));
-  if (!narrow_phase->thread_safe()) {
-    const std::string why = "narrow phase " + narrow.name + " may not be called from several threads at once";
-    return std::make_unique<OnOneThread>(entry.make({keys, std::move(narrow_phase)}), why);
-  }
+  std::vector<std::pair<std::string, std::string>> notes = narrow_phase->provenance();
+  const std::string why = narrow_phase->thread_safe() ? "" : "narrow phase " + narrow.name + " may not be called from several threads at once";
+  if (!notes.empty() || !why.empty())
+    return std::make_unique<WithNarrowPhaseNotes>(entry.make({keys, std::move(narrow_phase)}), std::move(notes), why);
   return entry.make({keys, std::move(narrow_phase)});
 }
 

@@ -75,6 +75,10 @@ std::unique_ptr<Strategy> make_strategy(const std::string& spec);
 /// cubic64; "fcl:bv=aabb": fcl and ""), read from the head alone (a resolved name's device may hold any text).
 StrategySpec strategy_names_of(const std::string& spec);
 
+/// Whether a spec or resolved name runs code or answers from outside ccdbench (a plugin, as the strategy or as its
+/// narrow phase, or answer files): its errors and nondeterminism are verdicts, where a built-in's are defects.
+bool from_outside(const std::string& spec);
+
 /// A spec's or resolved name's head, short, for progress lines and file names: "full+cubic64", "fcl", and a file
 /// head by its file's name ("full+plugin:libmy_ccd.so", "answers:run-7").
 std::string short_label(const std::string& spec);

@@ -1,5 +1,7 @@
 #include "harness/run/cells.hpp"
 
+#include "ccd/config.hpp"
+
 #include "harness/cell_store.hpp"
 #include "harness/run/faults.hpp"
 #include "harness/run/provenance.hpp"
@@ -7,6 +9,7 @@
 #include "harness/statistics.hpp"
 #include "harness/table.hpp"
 #include "harness/timed_region.hpp"
+#include "strategies/plugin/call_guard.hpp"
 #include "strategies/registry.hpp"
 
 #include <algorithm>
@@ -44,7 +47,7 @@ std::size_t peak_resident_bytes() {
 }  // namespace
 
 json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps, const std::string& cell_name,
-              const CellProgress& progress) {
+              const CellProgress& progress, const std::string& planned_name) {
   const Scene& scene = data.sequence.scene();
   std::vector<std::vector<double>> step_ms(steps);
   std::map<std::string, std::vector<double>> stage_ms;
@@ -60,14 +63,33 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   // ms_per_step_mean and stage_ms_mean are of medians and of means, and their difference is not this).
   double unattributed_sum = 0;
   std::size_t unattributed_count = 0;
+  // Code from outside ccdbench may answer differently when asked again: its cell then says so (and `check` fails it
+  // unless its baseline allows it), where a built-in strategy's would be a defect that ends the run.
+  const bool from_outside = strategies::from_outside(spec);
+  std::optional<std::size_t> nondeterministic_step;
+  std::vector<std::string> first_digests;
+  auto not_deterministic = [&](std::size_t k, const char* how) {
+    if (!from_outside) {
+      throw std::runtime_error(resolved + " gave different answers on two " + how + " of step " + std::to_string(k) + " of " + data.label +
+                               ": the strategy is not deterministic");
+    }
+    if (!nondeterministic_step || k < *nondeterministic_step) nondeterministic_step = k;
+  };
   for (int repeat = 0; repeat < std::max(1, options.repeats); ++repeat) {
     auto strategy = strategies::make_strategy(spec);
     resolved = strategy->name();
+    if (!planned_name.empty() && resolved != planned_name) {
+      // The key this cell would be kept under names other code than the code that would run.
+      throw std::runtime_error(data.label + " / " + strategies::short_label(spec) + ": it was planned as " + planned_name + " and would run as " +
+                               resolved + ": its code or answers changed during the run; the cells finished before are kept");
+    }
     for (const auto& [name, value] : strategy->provenance()) environment_of_cell["provenance"][name] = value;
     strategy->name_scene(data.label);
     strategy->init(scene, data.frames[0]);
     for (std::size_t k = 0; k < steps; ++k) {
       const StepView view{&scene, k, data.frames[k], data.frames[k + 1]};
+      plugin::set_activity("cell " + data.label + " / " + strategies::short_label(spec) + ", pass " + std::to_string(repeat + 1) + ", step " +
+                           std::to_string(k + 1) + " of " + std::to_string(steps));
       std::optional<strategies::StepResult> answered;
       const auto start = std::chrono::steady_clock::now();
       {
@@ -79,39 +101,42 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
       unattributed_sum += step_ms[k].back() - result.stages.total_milliseconds();
       ++unattributed_count;
       for (const auto& [stage, ms] : result.stages.entries()) stage_ms[stage].push_back(ms);
+#if CCDBENCH_GUARD_REPEATS
+      // Every repeat's answers against the first pass's, step by step (harness work, after the timed call).
+      harness_pass("answers digest");
+      const std::string digest = answers_digest(result.collisions);
+      if (repeat == 0) {
+        first_digests.push_back(digest);
+      } else if (digest != first_digests[k]) {
+        not_deterministic(k, "passes");
+      }
+#endif
       if (repeat == 0) first_pass.push_back(std::move(result));
       if (progress) progress(repeat, k, resolved);
     }
   }
+  plugin::set_activity({});
   const double host_peak = static_cast<double>(peak_resident_bytes());
   std::vector<Verdict> verdicts(steps);
   std::vector<strategies::TestedPairs> audited;
   json miss_causes = json::object();
-  std::optional<std::size_t> nondeterministic_step;
   if (options.verify) {
     bool any_missed = false;
     for (std::size_t k = 0; k < steps; ++k) {
       verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, nullptr, options.toi);
       any_missed = any_missed || verdicts[k].missed > 0;
     }
-    // Code from outside ccdbench may answer differently when asked again: its cell then says so and its misses
-    // are left unexplained, where a built-in strategy's would be a defect that ends the run.
-    const strategies::StrategySpec names = strategies::strategy_names_of(spec);
-    const bool from_outside = narrowphase::is_file_head(names.name.substr(0, names.name.find(':'))) ||
-                              narrowphase::is_file_head(names.narrow_phase.substr(0, names.narrow_phase.find(':')));
-    if (any_missed) {
+    // A cell whose answers changed between passes has its misses left unexplained (below).
+    if (any_missed && !nondeterministic_step) {
       // Audit pass, outside every timed region: which misses were never tested (culled) and which tested wrong.
       auto strategy = strategies::make_strategy(spec);
       strategy->name_scene(data.label);
       strategy->init(scene, data.frames[0]);
       for (std::size_t k = 0; k < steps && !nondeterministic_step; ++k) {
+        plugin::set_activity("cell " + data.label + " / " + strategies::short_label(spec) + ", its audit pass, step " + std::to_string(k + 1));
         strategies::StepResult audit = strategy->step({&scene, k, data.frames[k], data.frames[k + 1]}, true);
         if (!audit.collisions.same_pairs(first_pass[k].collisions)) {
-          if (!from_outside) {
-            throw std::runtime_error(resolved + " gave different answers on two runs of step " + std::to_string(k) + " of " + data.label +
-                                     ": the strategy is not deterministic");
-          }
-          nondeterministic_step = k;
+          not_deterministic(k, "runs");
           break;
         }
         // A strategy that tests no pair ccdbench sees (a whole-step plugin, answer files) has no audit: its misses
@@ -119,17 +144,18 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
         verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, audit.tested ? &*audit.tested : nullptr, options.toi);
         audited.push_back(audit.tested ? std::move(*audit.tested) : strategies::TestedPairs{});
       }
-      if (nondeterministic_step) {
-        audited.clear();
-        for (std::size_t k = 0; k < steps; ++k) verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, nullptr, options.toi);
-        miss_causes = {
-            {"unexplained (its answers changed between two runs)",
-             std::accumulate(verdicts.begin(), verdicts.end(), std::size_t{0}, [](std::size_t n, const Verdict& v) { return n + v.missed; })}};
-      } else {
+      if (!nondeterministic_step) {
         std::optional<std::filesystem::path> directory;
         if (options.misses) directory = *options.misses / safe_path_component(data.label) / std::filesystem::path(cell_name).stem();
         miss_causes = record_misses(scene, data.frames, data.truth, first_pass, audited, strategy_entry, directory);
       }
+    }
+    if (any_missed && nondeterministic_step) {
+      audited.clear();
+      for (std::size_t k = 0; k < steps; ++k) verdicts[k] = judge(scene, data.truth[k], first_pass[k], judging, nullptr, options.toi);
+      miss_causes = {
+          {"unexplained (its answers changed between two runs)",
+           std::accumulate(verdicts.begin(), verdicts.end(), std::size_t{0}, [](std::size_t n, const Verdict& v) { return n + v.missed; })}};
     }
   }
   const std::filesystem::path fault_root = options.faults ? *options.faults : options.out / "faults";

@@ -30,7 +30,9 @@ using CellProgress = std::function<void(int pass, std::size_t step, const std::s
 
 /// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.
 /// Returns {"summary": ..., "steps": [...]} (docs/DESIGN.md §5 fields).
+/// `planned_name`: the resolved name the cell was planned (and its key made) with; a strategy that runs under another
+/// (code from outside ccdbench that changed during the run) ends the run instead of being kept under that key.
 nlohmann::json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps, const std::string& cell_name,
-                        const CellProgress& progress = {});
+                        const CellProgress& progress = {}, const std::string& planned_name = {});
 
 }  // namespace ccd::harness

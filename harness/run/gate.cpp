@@ -1,3 +1,4 @@
+#include "ccd/config.hpp"
 #include "core/error.hpp"
 #include "harness/run.hpp"
 
@@ -34,6 +35,11 @@ struct BaselineEntry {
   /// Optional pins: the cell must have exactly these steps and colliding pairs (a shorter run or a shrunken truth
   /// must not pass), and at most max_toi_late late TOIs (the results must then come from a run with --toi).
   std::optional<std::uint64_t> steps, colliding, max_toi_late;
+  /// Answers the strategy could not give (a plugin's errors, crashes, hangs; `error` in answer files) are verdicts
+  /// too: at most this many (default 0), however the plugin's `errors` key counted them.
+  std::uint64_t max_errors = 0;
+  /// Answers that differed between two passes of the same steps fail the cell unless this says they may.
+  bool allow_nondeterministic = false;
 };
 
 std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::filesystem::path& file) {
@@ -43,11 +49,14 @@ std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::files
     const json& entry = baseline[i];
     const std::string where = "entry " + std::to_string(i);
     if (!entry.is_object()) throw InputError(file, where, "must be an object");
-    static const std::vector<std::string> kKeys = {"scene", "strategy", "thickness", "max_missed", "steps", "colliding", "max_toi_late"};
+    static const std::vector<std::string> kKeys = {
+        "scene", "strategy", "thickness", "max_missed", "steps", "colliding", "max_toi_late", "max_errors", "allow_nondeterministic"};
     for (const auto& item : entry.items()) {
       if (std::find(kKeys.begin(), kKeys.end(), item.key()) == kKeys.end()) {
-        throw InputError(file, where,
-                         "unknown key '" + item.key() + "' (allowed: scene, strategy, thickness, max_missed, steps, colliding, max_toi_late)");
+        throw InputError(
+            file, where,
+            "unknown key '" + item.key() +
+                "' (allowed: scene, strategy, thickness, max_missed, steps, colliding, max_toi_late, max_errors, allow_nondeterministic)");
       }
     }
     BaselineEntry parsed;
@@ -73,6 +82,14 @@ std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::files
       if (!entry.contains(name)) continue;
       if (!entry[name].is_number_unsigned()) throw InputError(file, where + "." + name, "must be an integer >= 0");
       *field = entry[name].get<std::uint64_t>();
+    }
+    if (entry.contains("max_errors")) {
+      if (!entry["max_errors"].is_number_unsigned()) throw InputError(file, where + ".max_errors", "must be an integer >= 0");
+      parsed.max_errors = entry["max_errors"].get<std::uint64_t>();
+    }
+    if (entry.contains("allow_nondeterministic")) {
+      if (!entry["allow_nondeterministic"].is_boolean()) throw InputError(file, where + ".allow_nondeterministic", "must be true or false");
+      parsed.allow_nondeterministic = entry["allow_nondeterministic"].get<bool>();
     }
     for (const BaselineEntry& other : entries) {
       if (other.key.scene == parsed.key.scene && other.key.strategy == parsed.key.strategy && other.key.thickness == parsed.key.thickness) {
@@ -172,6 +189,19 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
     } else if (colliding == 0) {
       out << "FAIL " << name << ": no colliding pair in any step, so it cannot miss: this cell gates nothing\n";
       ok = false;
+#if CCDBENCH_GUARD_GATE
+    } else if (!result.contains("errors")) {
+      out << "FAIL " << name << ": the results say nothing of errors (made by an older ccdbench: run it again)\n";
+      ok = false;
+    } else if (const std::uint64_t errors = result_count(result, "errors", results_file, where); errors > entry->max_errors) {
+      out << "FAIL " << name << ": " << errors << " answers could not be taken (errors: crashes, hangs, refused answers), baseline allows "
+          << entry->max_errors << " (max_errors)\n";
+      ok = false;
+    } else if (result.contains("nondeterministic_at_step") && !entry->allow_nondeterministic) {
+      out << "FAIL " << name << ": its answers differed between two passes of step " << result["nondeterministic_at_step"].dump()
+          << " (nondeterministic; baseline entry allow_nondeterministic: true accepts it)\n";
+      ok = false;
+#endif
     } else if (missed > entry->max_missed) {
       out << "FAIL " << name << ": missed " << missed << " of " << colliding << " (culled " << result.value("missed_culled", json(0)).dump()
           << ", tested " << result.value("missed_tested", json(0)).dump() << "), baseline allows " << entry->max_missed << "\n";

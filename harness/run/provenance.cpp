@@ -41,6 +41,8 @@ nlohmann::json build_provenance() {
   provenance["libccd"] = CCDBENCH_VERSION_LIBCCD;
   provenance["mpi"] = CCDBENCH_WITH_MPI ? mpi_library_version() : "not built";
   provenance["opencl"] = CCDBENCH_WITH_OPENCL ? std::string("OpenCL ") + CCDBENCH_VERSION_OPENCL + " headers, ICD loader" : "not built";
+  // A build with plugin-boundary guards left out (scripts/guards-off.sh) says so in every record.
+  if (std::string(CCDBENCH_GUARDS_OFF).size() > 0) provenance["plugin_guards_off"] = CCDBENCH_GUARDS_OFF;
   return provenance;
 }
 

@@ -65,8 +65,11 @@ Table summary_table(const std::vector<json>& summaries) {
                {"missed (culled/tested)", Align::right},
                {"false alarms", Align::right}});
   const bool with_toi = std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s.contains("toi_late"); });
-  // An error is its own outcome (an answer a plugin or an answer file could not give): a column when any cell has one.
-  const bool with_errors = std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s.value("errors", 0) > 0; });
+  // An error is its own outcome (an answer a plugin or an answer file could not give), and answers that changed
+  // between two passes are a verdict too: a column when any cell has either, or comes from outside ccdbench.
+  const bool with_errors = std::any_of(summaries.begin(), summaries.end(), [](const json& s) {
+    return s.value("errors", 0) > 0 || s.contains("nondeterministic_at_step") || strategies::from_outside(s["strategy"]);
+  });
   if (with_errors) table.add_column({"errors", Align::right});
   if (with_toi) table.add_column({"TOI late (error max / mean)", Align::right});
   for (const char* header : {"candidates/step", "tests/step", "triangles", "steps"}) table.add_column({header, Align::right});
@@ -87,7 +90,11 @@ Table summary_table(const std::vector<json>& summaries) {
         count("colliding"),
         verified ? count("missed") + " (" + count("missed_culled") + "/" + count("missed_tested") + ")" : "-",
         count("false_alarms")};
-    if (with_errors) row.push_back(std::to_string(s.value("errors", 0)));
+    if (with_errors) {
+      std::string errors = std::to_string(s.value("errors", 0));
+      if (s.contains("nondeterministic_at_step")) errors += "; answers changed between passes at step " + s["nondeterministic_at_step"].dump();
+      row.push_back(errors);
+    }
     if (with_toi) {
       row.push_back(s.contains("toi_late")
                         ? std::to_string(s["toi_late"].get<std::size_t>()) + " of " + std::to_string(s["toi_checked"].get<std::size_t>()) + " (" +

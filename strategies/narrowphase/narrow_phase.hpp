@@ -9,6 +9,8 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace ccd::narrowphase {
 
@@ -58,6 +60,9 @@ class NarrowPhase {
   /// Whether it may be called from several threads at once. One that may not (a plugin without
   /// CCDBENCH_THREAD_SAFE) makes its strategy run on one thread (make_strategy), said in every record.
   virtual bool thread_safe() const { return true; }
+  /// What a result of it depends on beyond its name and the build (a plugin's code and where it ran), as name-value
+  /// pairs that its strategy's records carry (make_strategy adds them to the strategy's provenance).
+  virtual std::vector<std::pair<std::string, std::string>> provenance() const { return {}; }
 };
 
 }  // namespace ccd::narrowphase

@@ -6,20 +6,25 @@
 //   vf,VERTEX,FACE[,TOI]
 //   ee,A0,A1,B0,B1[,TOI]
 // with the scene's global vertex and face ids (0-based) and an optional TOI in [0, 1]; '#' starts a comment line.
-// An empty file is a step with no contact. Every file of the scene is read and checked in init, before any step:
+// An empty file is a step with no contact. The folder is read once per process, when its entry is made; every file of
+// the scene is parsed and checked in init, before any step:
 // a malformed line, an index out of range, a pair that cannot collide, a pair given twice or a line cut short is
 // refused as FILE:line N: REASON, a missing scene folder as FOLDER: REASON; a step past the last file is refused
 // (FILE: missing) when the run reaches it.
+#include "ccd/config.hpp"
 #include "core/error.hpp"
 #include "strategies/plugin/contact_check.hpp"
 #include "strategies/plugin/library.hpp"
 #include "strategies/plugin/plugin_strategy.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <sstream>
 
 namespace ccd::plugin {
@@ -31,11 +36,39 @@ std::string step_file_name(std::size_t step) {
   return name;
 }
 
+/// A folder of answers as read once (docs/DESIGN.md §10 "Identity"): every regular file's bytes by its path relative
+/// to the folder, and the digest of exactly those bytes. Its steps are judged from these bytes, never from a second
+/// read, so that a file rewritten during the run cannot put one answer's digest on another's verdict.
+struct FolderSnapshot {
+  std::map<std::string, std::string> files;
+  std::string digest;
+};
+
+std::shared_ptr<const FolderSnapshot> read_folder(const std::filesystem::path& folder) {
+  auto snapshot = std::make_shared<FolderSnapshot>();
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(folder)) {
+    if (entry.is_regular_file()) files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::string stream;
+  for (const std::filesystem::path& file : files) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(file, {}, "cannot be read");
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string name = std::filesystem::relative(file, folder).generic_string();
+    stream += name;
+    stream += '\0';
+    stream += bytes;
+    stream += '\0';
+    snapshot->files.emplace(name, std::move(bytes));
+  }
+  snapshot->digest = bytes_digest(stream);
+  return snapshot;
+}
+
 /// One step's file, checked against the scene. @throws InputError (the file, "line N", why).
-CollisionSet read_step_file(const std::filesystem::path& path, ContactCheck& check) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, {}, "cannot be read");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+CollisionSet read_step_file(const std::filesystem::path& path, const std::string& text, ContactCheck& check) {
   CollisionSet set;
   check.reset();
   std::size_t line_number = 0;
@@ -94,9 +127,10 @@ CollisionSet read_step_file(const std::filesystem::path& path, ContactCheck& che
 
 class AnswersStrategy final : public strategies::Strategy {
  public:
-  AnswersStrategy(std::filesystem::path folder, std::string digest) : folder_(std::move(folder)), digest_(std::move(digest)) {}
+  AnswersStrategy(std::filesystem::path folder, std::shared_ptr<const FolderSnapshot> snapshot)
+      : folder_(std::move(folder)), snapshot_(std::move(snapshot)) {}
 
-  std::string name() const override { return std::string(narrowphase::kAnswersHead) + ":" + folder_.string() + ":digest=" + digest_; }
+  std::string name() const override { return std::string(narrowphase::kAnswersHead) + ":" + folder_.string() + ":digest=" + snapshot_->digest; }
 
   void name_scene(const std::string& label) override { label_ = label; }
 
@@ -106,15 +140,17 @@ class AnswersStrategy final : public strategies::Strategy {
                                   scene.object(scene.shape_objects().front()).name + "' is one");
     }
     const std::filesystem::path folder = folder_ / label_;
-    if (label_.empty() || !std::filesystem::is_directory(folder)) {
+    auto step_file = [&](std::size_t k) { return snapshot_->files.find(std::filesystem::path(label_).generic_string() + "/" + step_file_name(k)); };
+    if (label_.empty() || step_file(0) == snapshot_->files.end()) {
       throw InputError(folder, {},
                        "no answer folder for scene '" + label_ + "' (answers:DIR reads DIR/SCENE/" + step_file_name(0) +
                            ", one file per step; README \"Answer files\")");
     }
     ContactCheck check(scene, ContactCheck::Toi::optional);
     steps_.clear();
-    for (std::size_t k = 0; std::filesystem::exists(folder / step_file_name(k)); ++k)
-      steps_.push_back(read_step_file(folder / step_file_name(k), check));
+    for (std::size_t k = 0; step_file(k) != snapshot_->files.end(); ++k) {
+      steps_.push_back(read_step_file(folder / step_file_name(k), step_file(k)->second, check));
+    }
     folder_of_scene_ = folder;
   }
 
@@ -132,7 +168,7 @@ class AnswersStrategy final : public strategies::Strategy {
 
  private:
   std::filesystem::path folder_;
-  std::string digest_;
+  std::shared_ptr<const FolderSnapshot> snapshot_;
   std::string label_;
   std::filesystem::path folder_of_scene_;
   std::vector<CollisionSet> steps_;
@@ -152,14 +188,22 @@ strategies::StrategyEntry answers_entry(const std::string& name) {
   entry.keys = {narrowphase::KeySpec::text("digest", "the folder's digest (filled in; a cell kept for other answers is never reused)")};
   entry.takes_narrow_phase = false;
   entry.explain_miss = [](const narrowphase::PairRows&, bool) { return std::string("unreported"); };
-  entry.make = [folder](strategies::StrategyRequest request) -> std::unique_ptr<strategies::Strategy> {
-    const std::string digest = content_digest(folder);
+  // Read once, when the entry is made (once per process): every cell of the run judges these bytes.
+  std::shared_ptr<const FolderSnapshot> snapshot = read_folder(folder);
+  entry.make = [folder, snapshot](strategies::StrategyRequest request) -> std::unique_ptr<strategies::Strategy> {
+#if CCDBENCH_GUARD_READ_ONCE
+    std::shared_ptr<const FolderSnapshot> judged = snapshot;
+#else
+    // Without the guard: each strategy made reads the folder again, and its name's digest is of another read.
+    auto judged = std::make_shared<FolderSnapshot>(*read_folder(folder));
+    judged->digest = content_digest(folder);
+#endif
     const std::string given_digest = request.keys.text("digest");
-    if (!given_digest.empty() && given_digest != digest) {
-      throw std::invalid_argument("answers " + folder.string() + ": its files changed (digest " + digest + ", the spec asks for " + given_digest +
-                                  ")");
+    if (!given_digest.empty() && given_digest != judged->digest) {
+      throw std::invalid_argument("answers " + folder.string() + ": its files changed (digest " + judged->digest + ", the spec asks for " +
+                                  given_digest + ")");
     }
-    return std::make_unique<AnswersStrategy>(folder, digest);
+    return std::make_unique<AnswersStrategy>(folder, judged);
   };
   return entry;
 }

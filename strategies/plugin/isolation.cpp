@@ -1,5 +1,7 @@
 #include "strategies/plugin/isolation.hpp"
 
+#include "ccd/config.hpp"
+
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -12,8 +14,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
+#include <thread>
 
 extern char** environ;
 
@@ -93,27 +97,209 @@ struct StepReply {
 
 }  // namespace
 
+namespace {
+
+/// The child's greeting: a status, a message, and the digest of the code it loaded (32 hex digits). Status 0: ready;
+/// 1: the plugin refused its configuration; kChangedStatus: its code is not the code the run was planned with (the
+/// child then calls nothing of it).
+constexpr std::size_t kDigestSize = 32;
+constexpr std::size_t kGreetingSize = kStatusSize + kDigestSize;
+constexpr std::int32_t kChangedStatus = 2;
+
+/// The child's end of the lifeline (docs/DESIGN.md §10): the parent holds the other end open and never writes, so
+/// the pipe reports its end only when the parent is gone.
+constexpr int kLifelineFd = 5;
+
+/// Ends the child when its parent is gone, even while the plugin hangs in a call on the main thread.
+void watch_the_parent() {
+#if CCDBENCH_GUARD_LIFELINE
+  std::thread([] {
+    pollfd lifeline{kLifelineFd, POLLIN, 0};
+    while (::poll(&lifeline, 1, -1) < 0 && errno == EINTR) {
+    }
+    ::_exit(3);
+  }).detach();
+#endif
+}
+
+/// A child of this program, `PROGRAM plugin-host ARGUMENTS...`, with its request pipe on fd 3, its reply pipe on
+/// fd 4 and the lifeline on fd 5; the parent's ends are close-on-exec, so that no other child holds them.
+struct Child {
+  pid_t pid = -1;
+  int to_child = -1, from_child = -1, lifeline = -1;
+};
+
+Child spawn_child(const std::vector<std::string>& plugin_host_arguments) {
+  int requests[2], replies[2], lifeline[2];
+  if (::pipe2(requests, O_CLOEXEC) != 0 || ::pipe2(replies, O_CLOEXEC) != 0 || ::pipe2(lifeline, O_CLOEXEC) != 0) {
+    throw std::runtime_error("plugin isolation: pipe failed");
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, requests[0], kRequestFd);
+  posix_spawn_file_actions_adddup2(&actions, replies[1], kReplyFd);
+  posix_spawn_file_actions_adddup2(&actions, lifeline[0], kLifelineFd);
+  std::vector<std::string> arguments{"/proc/self/exe", kPluginHostCommand};
+  arguments.insert(arguments.end(), plugin_host_arguments.begin(), plugin_host_arguments.end());
+  std::vector<char*> argv;
+  for (std::string& argument : arguments) argv.push_back(argument.data());
+  argv.push_back(nullptr);
+  // The program's own file, not a name looked up on PATH: the child is this build.
+  char self[4096] = {};
+  const ssize_t length = ::readlink("/proc/self/exe", self, sizeof self - 1);
+  Child child;
+  int spawned = ENOENT;
+  if (length > 0) spawned = ::posix_spawn(&child.pid, self, &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(requests[0]);
+  ::close(replies[1]);
+  ::close(lifeline[0]);
+  child.to_child = requests[1];
+  child.from_child = replies[0];
+  child.lifeline = lifeline[1];
+  if (spawned != 0) {
+    for (int fd : {child.to_child, child.from_child, child.lifeline}) ::close(fd);
+    throw std::runtime_error("plugin isolation: cannot start a child process: " + std::string(std::strerror(spawned)));
+  }
+  return child;
+}
+
+/// Reaps a child; what happened to it, in words.
+std::string reap(pid_t pid, bool kill_it) {
+  if (kill_it) ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(status)) {
+    return "it crashed with signal " + std::to_string(WTERMSIG(status)) + " (" + ::strsignal(WTERMSIG(status)) + ")";
+  }
+  if (WIFEXITED(status)) return "its process exited with status " + std::to_string(WEXITSTATUS(status));
+  return "its process ended";
+}
+
+/// Reads exactly `size` bytes from `fd` before `deadline` (seconds, steady clock); false at the end of the stream,
+/// an error, or the deadline (`timed_out` then says so).
+bool read_until(int fd, char* data, std::size_t size, double deadline, bool& timed_out) {
+  timed_out = false;
+  while (size > 0) {
+    const double left = deadline - now_seconds();
+    pollfd ready{fd, POLLIN, 0};
+    const int polled = left > 0 ? ::poll(&ready, 1, static_cast<int>(std::ceil(left * 1000))) : 0;
+    if (polled < 0 && errno == EINTR) continue;
+    if (polled == 0) {
+      timed_out = true;
+      return false;
+    }
+    const ssize_t n = ::read(fd, data, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+/// A description's reply is at most this long: a table with a thousand keys of long help texts fits many times.
+constexpr std::uint64_t kMaxDescriptionBytes = 16u << 20;
+/// Loading a plugin (its libraries, its constructors) may take this long in a child before it is called hung.
+constexpr double kDescribeSeconds = 120;
+
+int describe_plugin(const char* path) {
+  std::vector<char> reply;
+  try {
+    const Library library(path);
+    const std::vector<char> description = encode(library.description());
+    reply = status_reply(0, "");
+    put(reply, static_cast<std::uint64_t>(description.size()));
+    reply.insert(reply.end(), description.begin(), description.end());
+  } catch (const std::exception& error) {
+    reply = status_reply(1, error.what());
+    put(reply, std::uint64_t{0});
+  }
+  return write_all(kReplyFd, reply.data(), reply.size()) ? 0 : 1;
+}
+
+}  // namespace
+
+PluginDescription describe_in_child(const std::string& given) {
+  std::error_code error;
+  const std::filesystem::path absolute = std::filesystem::weakly_canonical(std::filesystem::absolute(given), error);
+  const std::string path = (error ? std::filesystem::absolute(given) : absolute).string();
+  if (!std::filesystem::is_regular_file(path)) throw std::invalid_argument("plugin " + path + ": no such file");
+  // A broken pipe is an answer here (the child died), never a reason for this process to die.
+  ::signal(SIGPIPE, SIG_IGN);
+  Child child = spawn_child({"--describe", path});
+  const double deadline = now_seconds() + kDescribeSeconds;
+  char head[kStatusSize + sizeof(std::uint64_t)];
+  bool timed_out = false;
+  std::string failure;
+  std::string bytes;
+  if (read_until(child.from_child, head, sizeof head, deadline, timed_out)) {
+    const char* at = head;
+    const auto status = take<std::int32_t>(at);
+    const std::string message(at, strnlen(at, CCDBENCH_MESSAGE_SIZE));
+    at += CCDBENCH_MESSAGE_SIZE;
+    const auto size = take<std::uint64_t>(at);
+    if (status != 0) {
+      failure = message.empty() ? "it was refused" : message;
+    } else if (size > kMaxDescriptionBytes) {
+      failure = "its child process sent a description of " + std::to_string(size) + " bytes";
+    } else {
+      bytes.resize(size);
+      if (!read_until(child.from_child, bytes.data(), size, deadline, timed_out)) failure = "its child process stopped while describing it";
+    }
+  } else {
+    failure = "its child process ended while loading it";
+  }
+  for (int fd : {child.to_child, child.from_child, child.lifeline}) ::close(fd);
+  const std::string ended = reap(child.pid, timed_out);
+  if (timed_out) throw std::invalid_argument("plugin " + path + ": loading it did not finish within " + std::to_string(kDescribeSeconds) + " s");
+  if (!failure.empty()) {
+    // A refusal names the plugin already; a child that died says how.
+    if (failure.rfind("plugin ", 0) == 0) throw std::invalid_argument(failure);
+    throw std::invalid_argument("plugin " + path + ": " + failure + " (" + ended + ")");
+  }
+  return decode_description(path, bytes);
+}
+
 int serve_plugin(int argc, char** argv) {
   if (argc < 3) return 2;
+  watch_the_parent();
   // Whatever the plugin prints goes to the standard error (never into ccdbench's own output, which a script may be
   // reading); its answers go to fd 4 alone.
   ::dup2(STDERR_FILENO, STDOUT_FILENO);
+  if (std::string(argv[2]) == "--describe") return argc == 4 ? describe_plugin(argv[3]) : 2;
   std::unique_ptr<Library> loaded;
   try {
     loaded = std::make_unique<Library>(argv[2]);
   } catch (const std::exception& error) {
-    const std::vector<char> greeting = status_reply(1, error.what());
+    std::vector<char> greeting = status_reply(1, error.what());
+    greeting.resize(kGreetingSize, '0');
     write_all(kReplyFd, greeting.data(), greeting.size());
     return 1;
   }
   const Library& library = *loaded;
-  std::vector<std::string> values(argv + 3, argv + argc);
+  // The plugin runs in its own process: the environment its load left stays its own (as in-process calls get it).
+  library.environment().install();
+  // argv[3] is the digest of the code the run was planned with ("-": none asked): other code is never called.
+  const std::string& digest = library.description().digest;
+  if (argc < 4) return 2;
+  if (std::string(argv[3]) != "-" && argv[3] != digest) {
+    std::vector<char> greeting = status_reply(kChangedStatus, "its code changed since the run began");
+    greeting.insert(greeting.end(), digest.begin(), digest.end());
+    greeting.resize(kGreetingSize, '0');
+    write_all(kReplyFd, greeting.data(), greeting.size());
+    return 1;
+  }
+  std::vector<std::string> values(argv + 4, argv + argc);
   std::vector<const char*> pointers;
   for (const std::string& value : values) pointers.push_back(value.c_str());
   char error[CCDBENCH_MESSAGE_SIZE] = {};
   void* context = library.table().create(pointers.data(), error);
   error[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-  const std::vector<char> greeting = status_reply(context != nullptr ? 0 : 1, context != nullptr ? "" : error);
+  std::vector<char> greeting = status_reply(context != nullptr ? 0 : 1, context != nullptr ? "" : error);
+  greeting.insert(greeting.end(), digest.begin(), digest.end());
+  greeting.resize(kGreetingSize, '0');
   if (!write_all(kReplyFd, greeting.data(), greeting.size()) || context == nullptr) return 1;
   // The scene of `begin`, kept for the step calls.
   std::vector<std::uint32_t> faces, edges, face_object, collidable;
@@ -208,19 +394,31 @@ int serve_plugin(int argc, char** argv) {
   return 0;
 }
 
-PluginInstance::PluginInstance(std::shared_ptr<const Library> library_, const narrowphase::SpecReader& keys)
-    : library(std::move(library_)), values(plugin_values(keys, *library)), host(read_host_settings(keys, *library)) {
+PluginInstance::PluginInstance(const PluginDescription& description_, const narrowphase::SpecReader& keys)
+    : description(description_), values(plugin_values(keys, description)), host(read_host_settings(keys, description)) {
   if (host.isolate) {
-    isolated = std::make_unique<IsolatedPlugin>(*library, values, host.timeout_seconds);
+    isolated = std::make_unique<IsolatedPlugin>(description, values, host.timeout_seconds);
   } else {
-    context = std::make_unique<Context>(library, values);
+    library = load_library(description);
+    context = std::make_unique<Context>(library, values, host.timeout_seconds);
   }
 }
 
-std::string PluginInstance::name() const { return resolved_name(*library, values, host); }
+std::string PluginInstance::name() const { return resolved_name(description, values, host); }
 
-IsolatedPlugin::IsolatedPlugin(const Library& library, std::vector<std::string> values, double timeout_seconds)
-    : path_(library.path()), values_(std::move(values)), timeout_seconds_(timeout_seconds) {
+std::vector<std::pair<std::string, std::string>> PluginInstance::provenance() const {
+  std::vector<std::pair<std::string, std::string>> notes{{"plugin", description.table.name + " " + description.table.version},
+                                                         {"plugin_digest", description.digest}};
+  std::string objects;
+  for (const LoadedObject& object : description.objects) objects += (objects.empty() ? "" : "; ") + object.path + " " + object.digest;
+  notes.emplace_back("plugin_objects", objects);
+  notes.emplace_back("plugin_isolated", host.isolate ? "yes (a child process)" : "no (in-process)");
+  if (!description.environment_at_load.empty()) notes.emplace_back("plugin_environment_at_load", description.environment_at_load);
+  return notes;
+}
+
+IsolatedPlugin::IsolatedPlugin(const PluginDescription& description, std::vector<std::string> values, double timeout_seconds)
+    : path_(description.path), digest_(description.digest), values_(std::move(values)), timeout_seconds_(timeout_seconds) {
   // A broken pipe is an answer here (the child died), never a reason for this process to die.
   ::signal(SIGPIPE, SIG_IGN);
 }
@@ -229,91 +427,75 @@ IsolatedPlugin::~IsolatedPlugin() {
   if (child_ > 0) stop(false);
 }
 
-void IsolatedPlugin::start() {
-  int requests[2], replies[2];
-  if (::pipe2(requests, O_CLOEXEC) != 0 || ::pipe2(replies, O_CLOEXEC) != 0) throw std::runtime_error("plugin isolation: pipe failed");
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, requests[0], kRequestFd);
-  posix_spawn_file_actions_adddup2(&actions, replies[1], kReplyFd);
-  std::vector<std::string> arguments{"/proc/self/exe", kPluginHostCommand, path_};
+bool IsolatedPlugin::start(std::string& why) {
+#if CCDBENCH_GUARD_CHILD_IDENTITY
+  std::vector<std::string> arguments{path_, digest_};
+#else
+  std::vector<std::string> arguments{path_, "-"};
+#endif
   arguments.insert(arguments.end(), values_.begin(), values_.end());
-  std::vector<char*> argv;
-  for (std::string& argument : arguments) argv.push_back(argument.data());
-  argv.push_back(nullptr);
-  // The program's own file, not a name looked up on PATH: the child is this build.
-  char self[4096] = {};
-  const ssize_t length = ::readlink("/proc/self/exe", self, sizeof self - 1);
-  if (length <= 0) throw std::runtime_error("plugin isolation: cannot find this program's file (/proc/self/exe)");
-  const int spawned = ::posix_spawn(&child_, self, &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(requests[0]);
-  ::close(replies[1]);
-  to_child_ = requests[1];
-  from_child_ = replies[0];
-  if (spawned != 0) {
-    child_ = -1;
-    throw std::runtime_error("plugin isolation: cannot start a child process: " + std::string(std::strerror(spawned)));
-  }
+  const Child child = spawn_child(arguments);
+  child_ = child.pid;
+  to_child_ = child.to_child;
+  from_child_ = child.from_child;
+  lifeline_ = child.lifeline;
   std::vector<char> greeting;
-  std::string why;
   deadline_ = now_seconds() + timeout_seconds_ + 10;  // loading and configuring may take longer than one query
-  if (!read_more(greeting, kStatusSize, why)) {
-    throw std::invalid_argument("plugin " + path_ + ": its child process did not start: " + why);
+  if (!read_more(greeting, kGreetingSize, why)) {
+    why = "its child process did not start: " + why;
+    return false;
   }
   const char* at = greeting.data();
-  if (take<std::int32_t>(at) != 0) {
-    const std::string message(at, strnlen(at, CCDBENCH_MESSAGE_SIZE));
+  const auto status = take<std::int32_t>(at);
+  const std::string message(at, strnlen(at, CCDBENCH_MESSAGE_SIZE));
+  const std::string digest(greeting.data() + kStatusSize, kDigestSize);
+  if (status == kChangedStatus) {
+    stop(true);
+    changed_ = "its code changed during the run: a child started again loaded code of digest " + digest + ", the run's is " + digest_ +
+               " (the plugin or a library it loads was replaced or rebuilt): no answer of other code stands for the run's";
+    why = changed_;
+    return false;
+  }
+  if (status != 0) {
     stop(true);
     throw std::invalid_argument("plugin " + path_ + ": its configuration was refused: " + (message.empty() ? "no reason given" : message));
   }
+  return true;
 }
 
 std::string IsolatedPlugin::stop(bool kill_it) {
-  if (to_child_ >= 0) ::close(to_child_);
-  if (from_child_ >= 0) ::close(from_child_);
-  to_child_ = from_child_ = -1;
+  for (int* fd : {&to_child_, &from_child_, &lifeline_}) {
+    if (*fd >= 0) ::close(*fd);
+    *fd = -1;
+  }
   if (child_ <= 0) return "it was not running";
-  if (kill_it) ::kill(child_, SIGKILL);
-  int status = 0;
-  while (::waitpid(child_, &status, 0) < 0 && errno == EINTR) {
-  }
+  const std::string ended = reap(child_, kill_it);
   child_ = -1;
-  if (WIFSIGNALED(status)) {
-    return "it crashed with signal " + std::to_string(WTERMSIG(status)) + " (" + ::strsignal(WTERMSIG(status)) + ")";
-  }
-  if (WIFEXITED(status)) return "its process exited with status " + std::to_string(WEXITSTATUS(status));
-  return "its process ended";
+  return ended;
 }
 
 bool IsolatedPlugin::read_more(std::vector<char>& reply, std::size_t size, std::string& why) {
   const std::size_t start = reply.size();
   reply.resize(start + size);
-  std::size_t got = 0;
-  while (got < size) {
-    const double left = deadline_ - now_seconds();
-    pollfd ready{from_child_, POLLIN, 0};
-    const int polled = left > 0 ? ::poll(&ready, 1, static_cast<int>(std::ceil(left * 1000))) : 0;
-    if (polled < 0 && errno == EINTR) continue;
-    if (polled == 0) {
-      stop(true);
-      why = "it did not answer within its timeout of " + std::to_string(timeout_seconds_) + " s (killed)";
-      return false;
-    }
-    const ssize_t n = ::read(from_child_, reply.data() + start + got, size - got);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      why = stop(false);
-      return false;
-    }
-    got += static_cast<std::size_t>(n);
+  bool timed_out = false;
+  if (read_until(from_child_, reply.data() + start, size, deadline_, timed_out)) return true;
+  if (timed_out) {
+    stop(true);
+    why = "it did not answer within its timeout of " + narrowphase::format_spec_number(timeout_seconds_) + " s (killed)";
+  } else {
+    why = stop(false);
   }
-  return true;
+  return false;
 }
 
 bool IsolatedPlugin::exchange(const std::vector<char>& request, std::vector<char>& reply, std::size_t reply_size, std::string& why) {
+  if (!changed_.empty()) {
+    why = changed_;
+    return false;
+  }
   if (child_ <= 0) {
-    start();
+    // A child that dies while starting (the plugin's constructor or create crashed) is this request's error.
+    if (!start(why)) return false;
     if (!scene_request_.empty() && request.front() != kBegin && !send_scene(why)) return false;
   }
   deadline_ = now_seconds() + timeout_seconds_;

@@ -1,10 +1,18 @@
 #pragma once
 /// @file
-/// A plugin run in a child process (the `isolate=on` key): a crash, an abort or a hang of the plugin becomes an
-/// error of the one query or step that caused it, and the run goes on with a fresh child. The child is this
-/// program started again as `PROGRAM plugin-host PATH VALUE...` (harness/main.cpp hands that to serve_plugin before
-/// anything else); it loads the plugin, creates its context and answers requests on file descriptors 3 and 4, so
-/// that whatever the plugin prints on its standard output never mixes with its answers.
+/// A plugin run in a child process (the `isolate=on` key): a crash, an exit, an abort or a hang of the plugin
+/// becomes an error of the one query or step that caused it, and the run goes on with a fresh child. The child is
+/// this program started again as `PROGRAM plugin-host PATH DIGEST VALUE...` (harness/main.cpp hands that to serve_plugin
+/// before anything else); it loads the plugin, creates its context and answers requests on file descriptors 3 and
+/// 4, so that whatever the plugin prints on its standard output never mixes with its answers.
+///
+/// What the parent holds the child to (docs/DESIGN.md §10, "Isolated"):
+/// - `PROGRAM plugin-host --describe PATH` describes a plugin (its table and the digest of its code as loaded), so
+///   that this process never loads a plugin it runs isolated, nor one whose load crashes;
+/// - every child is told the digest of the code the run was planned with, and one that loaded other code (the file
+///   was replaced or rebuilt during the run) calls none of it and says so: from then on each request is an error;
+/// - a child dies with its parent: it watches a pipe that only the parent holds open (fd 5), and exits when the
+///   parent is gone, even while the plugin hangs in a call.
 
 #include "strategies/plugin/ccdbench_plugin.h"
 #include "strategies/plugin/library.hpp"
@@ -18,16 +26,22 @@
 
 namespace ccd::plugin {
 
-/// The child's side: argv = PROGRAM plugin-host PATH VALUE... Returns the process's exit status.
+/// The child's side: argv = PROGRAM plugin-host PATH DIGEST VALUE... (DIGEST: the code it may run, "-" for any), or
+/// PROGRAM plugin-host --describe PATH. Returns the process's exit status.
 int serve_plugin(int argc, char** argv);
 
 /// The first argument that makes ccdbench a plugin's child process.
 inline constexpr const char* kPluginHostCommand = "plugin-host";
 
+/// The plugin at `path` described by a child process (plugin-host --describe).
+/// @throws std::invalid_argument "plugin PATH: REASON": its table is refused, or the child crashed, exited or hung
+///         while loading it.
+PluginDescription describe_in_child(const std::string& path);
+
 class IsolatedPlugin {
  public:
   /// The child is started at the first request (and again after a crash or a hang).
-  IsolatedPlugin(const Library& library, std::vector<std::string> values, double timeout_seconds);
+  IsolatedPlugin(const PluginDescription& description, std::vector<std::string> values, double timeout_seconds);
   ~IsolatedPlugin();
   IsolatedPlugin(const IsolatedPlugin&) = delete;
   IsolatedPlugin& operator=(const IsolatedPlugin&) = delete;
@@ -42,9 +56,10 @@ class IsolatedPlugin {
   void end();
 
  private:
-  /// Starts the child and reads its greeting (whether the plugin accepted its configuration).
-  /// @throws std::invalid_argument when the plugin refuses its configuration.
-  void start();
+  /// Starts the child and reads its greeting; false (with `why`) when it died while starting, or loaded other code
+  /// than the run's (every later request is then an error too). @throws std::invalid_argument when the plugin
+  /// refuses its configuration.
+  bool start(std::string& why);
   /// Kills and reaps the child; returns what happened to it ("crashed with signal 11 (Segmentation fault)").
   std::string stop(bool kill_it);
   /// Writes a request and reads `reply_size` bytes of its reply within the timeout; false (with `why`) when the
@@ -55,27 +70,34 @@ class IsolatedPlugin {
   bool send_scene(std::string& message);
 
   std::string path_;
+  std::string digest_;
   std::vector<std::string> values_;
   double timeout_seconds_;
   std::mutex mutex_;
   pid_t child_ = -1;
-  int to_child_ = -1, from_child_ = -1;
+  int to_child_ = -1, from_child_ = -1, lifeline_ = -1;
   double deadline_ = 0;
   /// The scene of `begin`, as sent (empty: none yet).
   std::vector<char> scene_request_;
+  /// Why no child may answer any more ("its code changed during the run: ..."): every request is then an error.
+  std::string changed_;
 };
 
-/// One plugin as a narrow phase or a strategy holds it: the library, its key values and ccdbench's settings, and
-/// where it runs, in-process (`context`) or, with isolate=on, in a child process (`isolated`); the other is null.
+/// One plugin as a narrow phase or a strategy holds it: its description, its key values and ccdbench's settings,
+/// and where it runs, in-process (`context`, with `library`) or, with isolate=on, in a child process (`isolated`).
 struct PluginInstance {
-  /// From a spec's keys (the library's, then host_keys).
-  PluginInstance(std::shared_ptr<const Library> library_, const narrowphase::SpecReader& keys);
+  /// From a spec's keys (the plugin's, then host_keys).
+  PluginInstance(const PluginDescription& description_, const narrowphase::SpecReader& keys);
   /// The resolved name (resolved_name).
   std::string name() const;
+  /// Name, version, digest of every object of its code, where it ran and the floating-point environment of its
+  /// calls, for every record's provenance.
+  std::vector<std::pair<std::string, std::string>> provenance() const;
 
-  std::shared_ptr<const Library> library;
+  const PluginDescription& description;
   std::vector<std::string> values;
   HostSettings host;
+  std::shared_ptr<const Library> library;
   std::unique_ptr<Context> context;
   std::unique_ptr<IsolatedPlugin> isolated;
 };

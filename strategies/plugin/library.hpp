@@ -1,24 +1,91 @@
 #pragma once
 /// @file
-/// A plugin library (ccdbench_plugin.h) loaded and checked: its table, its keys as the registries declare keys, and
-/// what a result must record of it (its file's digest). The adapters (plugin_narrow_phase.cpp, plugin_strategy.cpp)
-/// enter it into the registries beside the built-ins.
+/// A plugin (ccdbench_plugin.h) as ccdbench knows it: its description (what its table says, checked, and the digest
+/// of its code as loaded), and, for in-process use, the library loaded into this process. The adapters
+/// (plugin_narrow_phase.cpp, plugin_strategy.cpp) enter it into the registries beside the built-ins.
+///
+/// ccdbench describes a plugin from a child process (docs/DESIGN.md §10): this process loads a plugin's code only
+/// to run it in-process (isolate=off), so that a plugin whose load crashes, or that changes the process as it is
+/// loaded, is refused or contained before it can touch a run.
 
 #include "strategies/narrowphase/spec.hpp"
+#include "strategies/plugin/call_guard.hpp"
 #include "strategies/plugin/ccdbench_plugin.h"
+#include "strategies/plugin/fp_environment.hpp"
+#include "strategies/plugin/loaded_code.hpp"
 
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace ccd::plugin {
 
+/// A key of a plugin's table, as plain data.
+struct TableKey {
+  std::string name;
+  int kind = 0;
+  std::string default_value;
+  double minimum = 0, maximum = 0;
+  std::string choices;
+  std::string help;
+};
+
+/// What a plugin's table says of it, as plain data (copied out of the loaded library, or received from a child).
+struct PluginTable {
+  std::uint64_t size = 0;
+  std::uint32_t abi_version = 0;
+  std::string name, version, help;
+  std::uint32_t capabilities = 0;
+  std::vector<TableKey> keys;
+  bool has_create = false, has_destroy = false, has_vertex_face = false, has_edge_edge = false, has_step = false;
+};
+
+/// A plugin described and checked: its table, its keys as the registries declare keys, and the code it brought into
+/// the process that described it, with their digests (loaded_code.hpp).
+struct PluginDescription {
+  /// The absolute path it is loaded from.
+  std::string path;
+  PluginTable table;
+  std::vector<narrowphase::KeySpec> keys;
+  /// Its file and each library it brought in, as loaded; `digest` is theirs together (its version in cell keys).
+  std::vector<LoadedObject> objects;
+  std::string digest;
+  /// How its load changed the floating-point environment ("" when it did not): its calls run so in-process.
+  std::string environment_at_load;
+
+  bool thread_safe() const { return (table.capabilities & CCDBENCH_THREAD_SAFE) != 0; }
+  bool reports_toi() const { return (table.capabilities & CCDBENCH_REPORTS_TOI) != 0; }
+  bool conservative() const { return (table.capabilities & CCDBENCH_CONSERVATIVE) != 0; }
+  bool answers_queries() const { return table.has_vertex_face && table.has_edge_edge; }
+  bool answers_steps() const { return table.has_step; }
+  /// "NAME VERSION: HELP (reports TOIs; thread-safe)": what listings say of it.
+  std::string description() const;
+  /// "plugin NAME (PATH)": how messages name it.
+  std::string label() const;
+};
+
+/// Checks a table (the entry point's ABI version, the table's size, query or step functions, create and destroy,
+/// its keys) and makes the description. @throws std::invalid_argument "plugin PATH: REASON".
+PluginDescription describe(const std::string& path, const PluginTable& table, std::vector<LoadedObject> objects, std::string environment_at_load);
+
+/// The description of the plugin at `path`, made once per process (by a child process: plugin-host --describe).
+/// @throws std::invalid_argument "plugin PATH: REASON" when it cannot be loaded, its table is refused, or its child
+///         crashed or hung while loading it.
+const PluginDescription& plugin_description(const std::string& path);
+
+/// A description sent between processes, and read back (checked as `describe` checks). A reply that is not one is
+/// refused: @throws std::invalid_argument.
+std::vector<char> encode(const PluginDescription& description);
+PluginDescription decode_description(const std::string& path, std::string_view bytes);
+
 class Library {
  public:
-  /// Loads `path` (dlopen) and checks its table: the entry point, the ABI version (a plugin built for another is
-  /// refused naming both), the table's size, at least query or step functions, create and destroy, and its keys.
+  /// Loads `path` (dlopen) into this process with chdir refused and exit caught (call_guard.hpp), keeps the
+  /// floating-point environment its load left as its calls' and puts ccdbench's back, and describes it.
   /// @throws std::invalid_argument "plugin FILE: REASON".
   explicit Library(const std::filesystem::path& path);
   ~Library();
@@ -26,46 +93,39 @@ class Library {
   Library& operator=(const Library&) = delete;
 
   const ccdbench_plugin& table() const { return *table_; }
-  /// The absolute path it was loaded from, and the digest of that file's bytes (its version in cell keys).
-  const std::string& path() const { return path_; }
-  const std::string& digest() const { return digest_; }
-  /// The plugin's own keys, as the registries declare keys.
-  const std::vector<narrowphase::KeySpec>& keys() const { return keys_; }
-
-  bool thread_safe() const { return (table_->capabilities & CCDBENCH_THREAD_SAFE) != 0; }
-  bool reports_toi() const { return (table_->capabilities & CCDBENCH_REPORTS_TOI) != 0; }
-  bool conservative() const { return (table_->capabilities & CCDBENCH_CONSERVATIVE) != 0; }
-  bool answers_queries() const { return table_->vertex_face != nullptr && table_->edge_edge != nullptr; }
-  bool answers_steps() const { return table_->step != nullptr; }
-  /// "NAME VERSION: HELP (reports TOIs; thread-safe)": what listings say of it.
-  std::string description() const;
+  const PluginDescription& description() const { return description_; }
+  /// The floating-point environment its load left, which its calls run in.
+  const FpEnvironment& environment() const { return environment_; }
 
  private:
-  std::string path_;
-  std::string digest_;
   void* handle_ = nullptr;
   const ccdbench_plugin* table_ = nullptr;
-  std::vector<narrowphase::KeySpec> keys_;
+  PluginDescription description_;
+  FpEnvironment environment_;
 };
 
+/// XXH3-128 of bytes, as 32 hex digits.
+std::string bytes_digest(std::string_view bytes);
+
 /// XXH3-128 of a file's bytes, or of every file under a folder (their relative paths and bytes, in path order), as
-/// 32 hex digits: what a result records of code or answers made outside ccdbench, so a changed one is never reused.
+/// 32 hex digits: what a result records of answers made outside ccdbench, so a changed one is never reused.
 std::string content_digest(const std::filesystem::path& path);
 
-/// The library at `path`, loaded once per process and kept (a loaded library is never unloaded while an entry may
-/// point into it). @throws std::invalid_argument as Library's constructor.
-std::shared_ptr<const Library> load_library(const std::string& path);
+/// The library described by `description`, loaded into this process once and kept (a loaded library is never
+/// unloaded while an entry may point into it), after checking that the code loaded here is the code described.
+/// @throws std::invalid_argument as Library's constructor, or when the code differs from the description's.
+std::shared_ptr<const Library> load_library(const PluginDescription& description);
 
 /// The keys ccdbench adds to every plugin, after the plugin's own:
-/// - digest: the plugin file's digest; filled in by the resolved name, and checked when given, so that a cell kept
-///   for one build of a plugin is never reused for another;
+/// - digest: the digest of the plugin's code; filled in by the resolved name, and checked when given, so that a cell
+///   kept for one build of a plugin is never reused for another;
 /// - errors=miss|hit: how an error or undecided answer counts for the verdicts and the gate (it is counted apart too);
 /// - isolate=on|off: run the plugin in a child process (a crash or a hang becomes an error, not the end of the run);
-/// - timeout: with isolate=on, the seconds a query or a step may take.
+/// - timeout: the seconds a query or a step may take (isolated: that call's error; in-process: the end of the run).
 std::vector<narrowphase::KeySpec> host_keys();
 
 /// What a plugin's registry entry declares: its own keys, then ccdbench's (host_keys).
-std::vector<narrowphase::KeySpec> entry_keys(const Library& library);
+std::vector<narrowphase::KeySpec> entry_keys(const PluginDescription& description);
 
 /// The host's settings of a plugin spec (the keys above).
 struct HostSettings {
@@ -74,30 +134,33 @@ struct HostSettings {
   bool isolate = false;
   double timeout_seconds = 10;
 };
-/// @throws std::invalid_argument when `keys` gives a digest other than the library's.
-HostSettings read_host_settings(const narrowphase::SpecReader& keys, const Library& library);
+/// @throws std::invalid_argument when `keys` gives a digest other than the description's.
+HostSettings read_host_settings(const narrowphase::SpecReader& keys, const PluginDescription& description);
 
 /// The plugin's own key values, in its table's order, as the configure call takes them.
-std::vector<std::string> plugin_values(const narrowphase::SpecReader& keys, const Library& library);
+std::vector<std::string> plugin_values(const narrowphase::SpecReader& keys, const PluginDescription& description);
 
 /// "plugin:PATH:key=value...:digest=HEX:errors=miss[:isolate=on:timeout=T]": the resolved name, every key filled in.
-std::string resolved_name(const Library& library, const std::vector<std::string>& values, const HostSettings& host);
+std::string resolved_name(const PluginDescription& description, const std::vector<std::string>& values, const HostSettings& host);
 
-/// A context of the plugin, created from `values` and destroyed with the object; a plugin that is not thread-safe
-/// is called under the mutex.
+/// A context of an in-process plugin, created from `values` (inside a guarded call) and destroyed with the object;
+/// a plugin that is not thread-safe is called under the mutex.
 class Context {
  public:
   /// @throws std::invalid_argument "plugin NAME: REASON" when the plugin refuses the values.
-  Context(std::shared_ptr<const Library> library, const std::vector<std::string>& values);
+  Context(std::shared_ptr<const Library> library, const std::vector<std::string>& values, double timeout_seconds);
   ~Context();
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
   const Library& library() const { return *library_; }
   void* handle() const { return handle_; }
   std::mutex& mutex() const { return mutex_; }
+  /// What every call of this context needs (call_guard.hpp).
+  const CallSite& call_site() const { return site_; }
 
  private:
   std::shared_ptr<const Library> library_;
+  CallSite site_;
   void* handle_ = nullptr;
   mutable std::mutex mutex_;
 };

@@ -1,9 +1,11 @@
 #include "strategies/plugin/plugin_narrow_phase.hpp"
 
+#include "strategies/plugin/call_guard.hpp"
 #include "strategies/plugin/isolation.hpp"
 #include "strategies/plugin/library.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -17,12 +19,13 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 class PluginNarrowPhase final : public narrowphase::NarrowPhase {
  public:
-  PluginNarrowPhase(std::shared_ptr<const Library> library, const narrowphase::SpecReader& keys) : plugin_(std::move(library), keys) {}
+  PluginNarrowPhase(const PluginDescription& description, const narrowphase::SpecReader& keys) : plugin_(description, keys) {}
 
   std::string name() const override { return plugin_.name(); }
-  bool conservative() const override { return plugin_.library->conservative(); }
+  bool conservative() const override { return plugin_.description.conservative(); }
   /// Isolated, one child answers one query at a time: the strategy runs on one thread then too.
-  bool thread_safe() const override { return plugin_.library->thread_safe() && !plugin_.host.isolate; }
+  bool thread_safe() const override { return plugin_.description.thread_safe() && !plugin_.host.isolate; }
+  std::vector<std::pair<std::string, std::string>> provenance() const override { return plugin_.provenance(); }
 
   narrowphase::NarrowPhaseResult vertex_face(const narrowphase::PairRows& rows, double thickness) const override {
     return answer(true, rows, thickness);
@@ -48,10 +51,17 @@ class PluginNarrowPhase final : public narrowphase::NarrowPhase {
       answer.toi = kNaN;
       const ccdbench_plugin& table = plugin_.library->table();
       std::unique_lock lock(plugin_.context->mutex(), std::defer_lock);
-      if (!plugin_.library->thread_safe()) lock.lock();
+      if (!plugin_.description.thread_safe()) lock.lock();
+      PluginCall call(plugin_.context->call_site(), vertex_face ? "a vertex-face query" : "an edge-edge query");
       (vertex_face ? table.vertex_face : table.edge_edge)(plugin_.context->handle(), flat, thickness, &answer);
+      const std::string fault = call.finish();
+      if (!fault.empty()) {
+        // Whatever it answered, the call did something else too: it is the call's error, never an answer.
+        answer.outcome = CCDBENCH_ERROR;
+        std::snprintf(answer.message, CCDBENCH_MESSAGE_SIZE, "%s", fault.c_str());
+      }
     }
-    return checked_answer(answer, plugin_.library->reports_toi(), plugin_.host.errors_count_as_hits);
+    return checked_answer(answer, plugin_.description.reports_toi(), plugin_.host.errors_count_as_hits);
   }
 
   PluginInstance plugin_;
@@ -101,18 +111,18 @@ narrowphase::NarrowPhaseResult checked_answer(const ccdbench_answer& answer, boo
 
 narrowphase::NarrowPhaseEntry narrow_phase_entry(const std::string& name) {
   const std::string path = name.substr(std::strlen(narrowphase::kPluginHead) + 1);
-  std::shared_ptr<const Library> library = load_library(path);
-  if (!library->answers_queries()) {
-    throw std::invalid_argument("plugin " + library->path() + " answers whole steps, not queries: run it as --strategy " + name +
+  const PluginDescription& description = plugin_description(path);
+  if (!description.answers_queries()) {
+    throw std::invalid_argument("plugin " + description.path + " answers whole steps, not queries: run it as --strategy " + name +
                                 " (its whole step), not as a narrow phase");
   }
   narrowphase::NarrowPhaseEntry entry;
   entry.name = name;
-  entry.help = library->description();
-  entry.keys = entry_keys(*library);
-  entry.conservative = library->conservative();
-  entry.make = [library](const narrowphase::SpecReader& keys) -> std::unique_ptr<narrowphase::NarrowPhase> {
-    return std::make_unique<PluginNarrowPhase>(library, keys);
+  entry.help = description.description();
+  entry.keys = entry_keys(description);
+  entry.conservative = description.conservative();
+  entry.make = [&description](const narrowphase::SpecReader& keys) -> std::unique_ptr<narrowphase::NarrowPhase> {
+    return std::make_unique<PluginNarrowPhase>(description, keys);
   };
   return entry;
 }

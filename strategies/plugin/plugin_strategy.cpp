@@ -1,6 +1,8 @@
 #include "strategies/plugin/plugin_strategy.hpp"
 
+#include "ccd/config.hpp"
 #include "core/stage_timer.hpp"
+#include "strategies/plugin/call_guard.hpp"
 #include "strategies/plugin/contact_check.hpp"
 #include "strategies/plugin/isolation.hpp"
 #include "strategies/plugin/library.hpp"
@@ -46,7 +48,7 @@ struct Reported {
 
 class WholeStepPlugin final : public strategies::Strategy {
  public:
-  WholeStepPlugin(std::shared_ptr<const Library> library, const narrowphase::SpecReader& keys) : plugin_(std::move(library), keys) {}
+  WholeStepPlugin(const PluginDescription& description, const narrowphase::SpecReader& keys) : plugin_(description, keys) {}
   ~WholeStepPlugin() override { finish(); }
 
   std::string name() const override { return plugin_.name(); }
@@ -62,7 +64,7 @@ class WholeStepPlugin final : public strategies::Strategy {
     check_scene(scene);
     finish();
     tables_ = std::make_unique<SceneTables>(scene);
-    check_ = std::make_unique<ContactCheck>(scene, plugin_.library->reports_toi() ? ContactCheck::Toi::required : ContactCheck::Toi::ignored);
+    check_ = std::make_unique<ContactCheck>(scene, plugin_.description.reports_toi() ? ContactCheck::Toi::required : ContactCheck::Toi::ignored);
     begin_error_.clear();
     std::string message;
     int status = 0;
@@ -70,8 +72,13 @@ class WholeStepPlugin final : public strategies::Strategy {
       status = plugin_.isolated->begin(tables_->scene, message);
     } else if (plugin_.library->table().begin) {
       char error[CCDBENCH_MESSAGE_SIZE] = {};
+      PluginCall call(plugin_.context->call_site(), "begin");
       status = plugin_.library->table().begin(plugin_.context->handle(), &tables_->scene, error);
       message.assign(error, strnlen(error, CCDBENCH_MESSAGE_SIZE));
+      if (const std::string fault = call.finish(); !fault.empty()) {
+        status = 1;
+        message = fault;
+      }
     }
     // A plugin that refuses the scene answers no step: each step is then its fault (the run goes on).
     if (status != 0) begin_error_ = "begin failed: " + (message.empty() ? std::string("no reason given") : message);
@@ -88,9 +95,22 @@ class WholeStepPlugin final : public strategies::Strategy {
     Reported reported;
     std::string message;
     int status = 0;
+    const double* x0 = view.x0.data()->data();
+    const double* x1 = view.x1.data()->data();
+#if CCDBENCH_GUARD_INPUT_COPIES
+    if (!plugin_.isolated) {
+      // In-process the plugin gets copies: what it writes through its const pointers changes no frame of the run
+      // (isolated, the positions cross a pipe anyway).
+      ScopedStageTimer timer(result.stages, "copy positions");
+      x0_copy_.assign(x0, x0 + 3 * view.x0.size());
+      x1_copy_.assign(x1, x1 + 3 * view.x1.size());
+      x0 = x0_copy_.data();
+      x1 = x1_copy_.data();
+    }
+#endif
     {
       ScopedStageTimer timer(result.stages, "plugin step");
-      const ccdbench_step step{view.index, view.x0.data()->data(), view.x1.data()->data(), view.scene->thickness()};
+      const ccdbench_step step{view.index, x0, x1, view.scene->thickness()};
       const ccdbench_contacts contacts{&reported,
                                        [](void* host, std::uint32_t v, std::uint32_t f, double toi) {
                                          static_cast<Reported*>(host)->vertex_face.push_back({v, f, toi});
@@ -102,8 +122,13 @@ class WholeStepPlugin final : public strategies::Strategy {
         status = plugin_.isolated->step(step, view.x0.size(), contacts, message);
       } else {
         char error[CCDBENCH_MESSAGE_SIZE] = {};
+        PluginCall call(plugin_.context->call_site(), "its step");
         status = plugin_.library->table().step(plugin_.context->handle(), &step, &contacts, error);
         message.assign(error, strnlen(error, CCDBENCH_MESSAGE_SIZE));
+        if (const std::string fault = call.finish(); !fault.empty()) {
+          status = 1;
+          message = fault;
+        }
       }
     }
     if (status != 0) {
@@ -141,12 +166,7 @@ class WholeStepPlugin final : public strategies::Strategy {
     return result;
   }
 
-  std::vector<std::pair<std::string, std::string>> provenance() const override {
-    const ccdbench_plugin& table = plugin_.library->table();
-    return {{"plugin", std::string(table.name) + " " + (table.version ? table.version : "")},
-            {"plugin_file_digest", plugin_.library->digest()},
-            {"plugin_isolated", plugin_.host.isolate ? "yes (a child process)" : "no"}};
-  }
+  std::vector<std::pair<std::string, std::string>> provenance() const override { return plugin_.provenance(); }
 
  private:
   static void add_fault(strategies::StepResult& result, const std::string& why, std::optional<std::array<Vec3, 8>> rows, bool vertex_face) {
@@ -161,6 +181,7 @@ class WholeStepPlugin final : public strategies::Strategy {
     if (plugin_.isolated) {
       plugin_.isolated->end();
     } else if (plugin_.library->table().end) {
+      PluginCall call(plugin_.context->call_site(), "end");
       plugin_.library->table().end(plugin_.context->handle());
     }
   }
@@ -170,26 +191,27 @@ class WholeStepPlugin final : public strategies::Strategy {
   std::unique_ptr<ContactCheck> check_;
   std::string begin_error_;
   bool begun_ = false;
+  std::vector<double> x0_copy_, x1_copy_;
 };
 
 }  // namespace
 
 strategies::StrategyEntry whole_step_entry(const std::string& name) {
   const std::string path = name.substr(std::strlen(narrowphase::kPluginHead) + 1);
-  std::shared_ptr<const Library> library = load_library(path);
-  if (!library->answers_steps()) {
-    throw std::invalid_argument("plugin " + library->path() + " answers queries, not whole steps: run it as a narrow phase (--strategy full+" + name +
-                                ", or apccd+" + name + ")");
+  const PluginDescription& description = plugin_description(path);
+  if (!description.answers_steps()) {
+    throw std::invalid_argument("plugin " + description.path + " answers queries, not whole steps: run it as a narrow phase (--strategy full+" +
+                                name + ", or apccd+" + name + ")");
   }
   strategies::StrategyEntry entry;
   entry.name = name;
-  entry.help = library->description();
-  entry.keys = entry_keys(*library);
+  entry.help = description.description();
+  entry.keys = entry_keys(description);
   entry.takes_narrow_phase = false;
   // Its misses have one cause ccdbench can tell: the plugin did not report the pair (it tests no pair ccdbench sees).
   entry.explain_miss = [](const narrowphase::PairRows&, bool) { return std::string("unreported"); };
-  entry.make = [library](strategies::StrategyRequest request) -> std::unique_ptr<strategies::Strategy> {
-    return std::make_unique<WholeStepPlugin>(library, request.keys);
+  entry.make = [&description](strategies::StrategyRequest request) -> std::unique_ptr<strategies::Strategy> {
+    return std::make_unique<WholeStepPlugin>(description, request.keys);
   };
   return entry;
 }
