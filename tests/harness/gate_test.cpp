@@ -14,9 +14,8 @@ using testing::run_ccdbench;
 /// A verified summary as `ccdbench run --json` writes it (only the fields the gate reads).
 nlohmann::json summary(const std::string& strategy, std::size_t missed, std::size_t colliding, const std::string& thickness_from = "scene",
                        double thickness = 0.01) {
-  return {{"scene", "s"},          {"strategy", strategy}, {"thickness", thickness},  {"thickness_from", thickness_from},
-          {"verified", true},      {"missed", missed},     {"missed_culled", missed}, {"missed_tested", 0},
-          {"colliding", colliding}};
+  return {{"scene", "s"},     {"strategy", strategy},    {"thickness", thickness}, {"thickness_from", thickness_from}, {"verified", true},
+          {"missed", missed}, {"missed_culled", missed}, {"missed_tested", 0},     {"colliding", colliding},           {"errors", 0}};
 }
 
 nlohmann::json entry(const std::string& strategy, const nlohmann::json& max_missed, const nlohmann::json& thickness = "scene") {
@@ -50,6 +49,40 @@ TEST_F(Gate, FailsAResultWithoutAnEntryAndAnEntryWithoutAResult) {
   const auto orphan = check({entry("full", 0), entry("apccd", 0)}, {summary("full", 0, 10)});
   EXPECT_EQ(orphan.exit_code, 1);
   EXPECT_NE(orphan.output.find("apccd / δ scene's: in the baseline but has no result"), std::string::npos) << orphan.output;
+}
+
+// Errors (answers a plugin could not give: crashes, hangs, refused answers) and answers that changed between two
+// passes are verdicts: a cell with either fails unless its entry allows them, whatever the plugin's errors= key did
+// with the misses (a method that hung on every colliding pair, counted as hits, misses nothing).
+TEST_F(Gate, ErrorsAndNondeterminismFailACellUnlessItsEntryAllowsThem) {
+  nlohmann::json erring = summary("plugin:p", 0, 10);
+  erring["errors"] = 5;
+  const auto failed = check({entry("plugin:p", 0)}, {erring});
+  EXPECT_EQ(failed.exit_code, 1) << failed.output;
+  EXPECT_NE(failed.output.find("FAIL s / plugin:p / δ scene's 0.01: 5 answers could not be taken"), std::string::npos) << failed.output;
+  nlohmann::json allowing = entry("plugin:p", 0);
+  allowing["max_errors"] = 5;
+  EXPECT_EQ(check({allowing}, {erring}).exit_code, 0);
+  allowing["max_errors"] = 4;
+  EXPECT_EQ(check({allowing}, {erring}).exit_code, 1);
+
+  nlohmann::json changing = summary("plugin:p", 0, 10);
+  changing["nondeterministic_at_step"] = 2;
+  const auto nondeterministic = check({entry("plugin:p", 0)}, {changing});
+  EXPECT_EQ(nondeterministic.exit_code, 1) << nondeterministic.output;
+  EXPECT_NE(nondeterministic.output.find("answers differed between two passes of step 2"), std::string::npos) << nondeterministic.output;
+  nlohmann::json allowed = entry("plugin:p", 0);
+  allowed["allow_nondeterministic"] = true;
+  EXPECT_EQ(check({allowed}, {changing}).exit_code, 0);
+
+  // A result that says nothing of errors cannot be gated on them; malformed allowances are bad input.
+  nlohmann::json silent = summary("plugin:p", 0, 10);
+  silent.erase("errors");
+  EXPECT_EQ(check({entry("plugin:p", 0)}, {silent}).exit_code, 1);
+  allowed["allow_nondeterministic"] = "yes";
+  EXPECT_EQ(check({allowed}, {changing}).exit_code, 2);
+  allowing["max_errors"] = -1;
+  EXPECT_EQ(check({allowing}, {erring}).exit_code, 2);
 }
 
 TEST_F(Gate, FailsEmptyResults) {

@@ -9,19 +9,80 @@
 //   BROKEN_SILENT       writes no outcome at all into its answers (it returns without a word);
 //   ONE_THREAD          not broken, but not thread-safe (no CCDBENCH_THREAD_SAFE): it answers "error" to a query
 //                       that comes from another thread than the first one did.
+// and, for the plugin boundary (tests/plugins/boundary_test.cpp, docs/DESIGN.md §10):
+//   (built with -Ofast) the plugin `ofast`: GCC links crtfastmath.o into it, which sets flush-to-zero and
+//                       denormals-are-zero for the thread that loads it;
+//   BROKEN_ROUNDING     every call leaves the rounding mode upward;
+//   BROKEN_WRITES_INPUTS its whole step writes its end positions over its start positions (no motion) through the
+//                       const pointers it is given, and its queries write over their rows;
+//   BROKEN_EXIT_ON=N    its Nth call (query or step, counted in its process) calls exit(0);
+//   BROKEN_CHDIR        every call moves to the folder CCDBENCH_TEST_CHDIR names (or /);
+//   BROKEN_FIRST_CALLS=N answers "contact" to every query, at t = 0 for its first N queries (counted in its process)
+//                       and at the smallest double after them: its answers depend on what it was asked before, and
+//                       it misses nothing (not thread-safe, so the order is the run's);
+//   BROKEN_REPLACE_SELF_ON=N on its Nth query (counted in its process) replaces its own file with the one
+//                       CCDBENCH_TEST_REPLACEMENT names, and then crashes: the next child loads other code;
+//   BROKEN_CRASH_AT_LOAD its constructor dereferences a null pointer when the library is loaded.
 #include <ccdbench/ccdbench_plugin.h>
 
+#include <dlfcn.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <cfenv>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
 #include <thread>
 
 namespace {
 
+#ifdef BROKEN_CRASH_AT_LOAD
+struct CrashAtLoad {
+  CrashAtLoad() { std::raise(SIGSEGV); }
+} crash_at_load;
+#endif
+
 int queries_answered = 0;
+int calls = 0;
 std::size_t face_count = 0;
+std::size_t vertex_count = 0;
+
+/// What every call of the boundary's broken plugins does besides answering.
+void misbehave() {
+  ++calls;
+#ifdef BROKEN_ROUNDING
+  std::fesetround(FE_UPWARD);
+#endif
+#ifdef BROKEN_EXIT_ON
+  if (calls == BROKEN_EXIT_ON) std::exit(0);
+#endif
+#ifdef BROKEN_CHDIR
+  const char* folder = std::getenv("CCDBENCH_TEST_CHDIR");
+  if (::chdir(folder != nullptr ? folder : "/") != 0) std::perror("broken plugin: chdir");
+#endif
+}
+
+#ifdef BROKEN_REPLACE_SELF_ON
+/// Writes the file CCDBENCH_TEST_REPLACEMENT names over this plugin's own file (a new file renamed over it, as a
+/// build does).
+void replace_self() {
+  Dl_info self{};
+  const char* replacement = std::getenv("CCDBENCH_TEST_REPLACEMENT");
+  if (::dladdr(reinterpret_cast<void*>(&replace_self), &self) == 0 || replacement == nullptr) return;
+  std::ifstream in(replacement, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string temporary = std::string(self.dli_fname) + ".new";
+  std::ofstream(temporary, std::ios::binary) << bytes;
+  std::rename(temporary.c_str(), self.dli_fname);
+}
+#endif
 
 void* create(const char* const*, char*) { return &queries_answered; }
 void destroy(void*) {}
@@ -30,8 +91,26 @@ void destroy(void*) {}
 std::atomic<std::thread::id> first_thread{};
 #endif
 
-void answer(void*, const double*, double, ccdbench_answer* out) {
+void answer(void*, const double* rows, double, ccdbench_answer* out) {
   ++queries_answered;
+  misbehave();
+#ifdef BROKEN_WRITES_INPUTS
+  double* writable = const_cast<double*>(rows);
+  for (int i = 0; i < 24; ++i) writable[i] = 0.0;
+#else
+  (void)rows;
+#endif
+#ifdef BROKEN_REPLACE_SELF_ON
+  if (queries_answered == BROKEN_REPLACE_SELF_ON) {
+    replace_self();
+    std::abort();
+  }
+#endif
+#ifdef BROKEN_FIRST_CALLS
+  out->outcome = CCDBENCH_CONTACT;
+  out->toi = queries_answered <= BROKEN_FIRST_CALLS ? 0.0 : 4.9406564584124654e-324;
+  return;
+#endif
 #ifdef ONE_THREAD
   std::thread::id none{};
   first_thread.compare_exchange_strong(none, std::this_thread::get_id());
@@ -65,11 +144,19 @@ void answer(void*, const double*, double, ccdbench_answer* out) {
 
 int begin(void*, const ccdbench_scene* scene, char*) {
   face_count = scene->face_count;
+  vertex_count = scene->vertex_count;
   return 0;
 }
 
 // The whole step: nothing, or (broken) a face index one past the last.
-int step(void*, const ccdbench_step*, const ccdbench_contacts* contacts, char*) {
+int step(void*, const ccdbench_step* step, const ccdbench_contacts* contacts, char*) {
+  misbehave();
+#ifdef BROKEN_WRITES_INPUTS
+  double* start = const_cast<double*>(step->x0);
+  for (std::size_t i = 0; i < 3 * vertex_count; ++i) start[i] = step->x1[i];
+#else
+  (void)step;
+#endif
 #ifdef BROKEN_FACE_RANGE
   contacts->vertex_face(contacts->host, 0, static_cast<std::uint32_t>(face_count), 0.0);
 #else
@@ -84,7 +171,7 @@ constexpr std::uint32_t kAbi = BROKEN_ABI;
 constexpr std::uint32_t kAbi = CCDBENCH_PLUGIN_ABI_VERSION;
 #endif
 
-#ifdef ONE_THREAD
+#if defined(ONE_THREAD) || defined(BROKEN_FIRST_CALLS)
 constexpr std::uint32_t kCapabilities = CCDBENCH_REPORTS_TOI;
 #else
 constexpr std::uint32_t kCapabilities = CCDBENCH_REPORTS_TOI | CCDBENCH_THREAD_SAFE;
