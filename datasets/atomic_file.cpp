@@ -71,6 +71,15 @@ void require_writable_directory(const std::filesystem::path& directory) {
   std::filesystem::remove(probe, error);
 }
 
+void require_creatable_directory(const std::filesystem::path& directory) {
+  std::error_code error;
+  std::filesystem::path existing = std::filesystem::absolute(directory);
+  while (!std::filesystem::exists(existing, error) && existing.has_parent_path() && existing != existing.parent_path())
+    existing = existing.parent_path();
+  if (!std::filesystem::is_directory(existing, error)) throw InputError(existing, {}, "cannot write output here: it is a file, a folder is expected");
+  if (::access(existing.c_str(), W_OK) != 0) throw InputError(existing, {}, "cannot write output here (permission denied or read-only?)");
+}
+
 void require_writable_file(const std::filesystem::path& file) {
   std::error_code error;
   if (std::filesystem::is_directory(file, error)) {

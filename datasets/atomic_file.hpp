@@ -51,6 +51,10 @@ void write_json_file(const std::filesystem::path& path, const nlohmann::json& do
 /// @throws InputError (directory) naming why not.
 void require_writable_directory(const std::filesystem::path& directory);
 
+/// That `directory` can be made or written later, without making it now: it is a writable folder, or its nearest
+/// existing ancestor is one. @throws InputError naming it otherwise.
+void require_creatable_directory(const std::filesystem::path& directory);
+
 /// Checks before any work that `file` can be written later (atomically, beside itself): it is not a folder and its
 /// folder can be written. @throws InputError (file) naming why not.
 void require_writable_file(const std::filesystem::path& file);

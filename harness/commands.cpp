@@ -80,9 +80,6 @@ void write_query_faults(const std::vector<QueryScore>& scores, const std::vector
 
 int run_queries(const QueriesOptions& options, std::ostream& out) {
   std::vector<std::string> methods = options.sweep ? sweep_methods(options.methods) : options.methods;
-  if (options.isolate) {
-    for (std::string& method : methods) method = plugin::isolated_spec(method);
-  }
   auto answer_file = [](const std::string& method) { return method.rfind("answers:", 0) == 0; };
   // Outputs are checked before any work and before any plugin is loaded; then unknown names fail, answer files once
   // they are matched to the queries, below.
@@ -90,6 +87,12 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
     if (options.json) datasets::require_writable_file(*options.json);
     if (options.report) datasets::require_writable_directory(*options.report);
     if (options.write_answers) datasets::require_writable_file(*options.write_answers);
+    // Where faults would go, when a method can have some (code or answers from outside ccdbench): made only when
+    // there are faults, but it must be possible to make it.
+    const bool from_outside = std::any_of(methods.begin(), methods.end(), [&](const std::string& method) {
+      return answer_file(method) || method.find(std::string(narrowphase::kPluginHead) + ":") != std::string::npos;
+    });
+    if (from_outside) datasets::require_creatable_directory(options.faults);
   }
   for (const std::string& method : methods) {
     if (!answer_file(method)) make_query_method(method);

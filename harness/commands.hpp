@@ -36,8 +36,6 @@ struct QueriesOptions {
   std::optional<std::filesystem::path> report;
   /// Write every method's answers as an answer file (query_answers.hpp).
   std::optional<std::filesystem::path> write_answers;
-  /// Run every plugin in a child process (isolate=on).
-  bool isolate = false;
   /// Where queries without an answer (faults) are written as query files.
   std::filesystem::path faults = "ccdbench-faults";
   std::string command_line;

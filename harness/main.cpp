@@ -129,9 +129,17 @@ int run_command_line(int argc, char** argv) {
   queries->add_option("--write-answers", queries_options.write_answers,
                       "write every method's answer and TOI per query, with the label and the exact TOI floor, as an\n"
                       "answer file (CSV) that --answers reads back");
-  queries->add_flag("--isolate", queries_options.isolate,
-                    "run every plugin in a child process (isolate=on): a crash or a hang is that query's error, and\n"
-                    "the run goes on");
+  // Where plugins run when their spec does not say (isolate=on|off): isolated unless --in-process.
+  bool isolate_flag = false, in_process = false;
+  auto add_isolation_flags = [&](CLI::App* command) {
+    command->add_flag("--isolate", isolate_flag,
+                      "run every plugin whose spec does not say isolate=off in a child process (the default): a crash, an\n"
+                      "exit or a hang is that query's or step's error, and the run goes on");
+    command->add_flag("--in-process", in_process,
+                      "run every plugin whose spec does not say isolate=on inside ccdbench (faster for tiny queries; a\n"
+                      "crash ends the run, an exit or a hang past timeout= ends it with status 1: README \"Audit your CCD\")");
+  };
+  add_isolation_flags(queries);
   queries->add_option("--faults", queries_options.faults, "where queries a method gave no answer to are written as query files, to replay")
       ->capture_default_str();
   queries->add_option("--thickness", queries_options.thickness, "thickness δ >= 0 (the data's truth is for 0)")
@@ -194,6 +202,7 @@ int run_command_line(int argc, char** argv) {
   std::string stress_families;
   stress->add_option("--family", stress_families, "only these families of the suite, comma-separated (default: every family)");
   stress->add_option("--json", stress_options.json, "also write the rows as a JSON array to this file");
+  add_isolation_flags(stress);
   stress->add_option("--write-queries", stress_options.write_queries,
                      "also write the suite as rational query files (zero-thickness truth) under this folder");
 
@@ -243,16 +252,13 @@ int run_command_line(int argc, char** argv) {
                   "edge-edge}/CAUSE.csv; cause culled or tested, or for fcl why FCL's test said no), to replay with "
                   "`ccdbench queries`");
   std::vector<std::string> run_answer_folders;
-  bool run_isolate = false;
   run->add_option("--answers", run_answer_folders,
                   "also judge the answers in this folder as a strategy, answers:DIR: DIR/SCENE/step_0000.csv, ... one\n"
                   "colliding pair per line (README: Answer files)");
   run->add_option("--write-answers", run_options.write_answers,
                   "write each cell's answers here as DIR/STRATEGY/SCENE/step_0000.csv, ..., as --answers DIR/STRATEGY\n"
                   "reads them (STRATEGY@δ when the run has several δ: a folder of answers is for one δ)");
-  run->add_flag("--isolate", run_isolate,
-                "run every plugin in a child process (isolate=on): a crash or a hang is that query's or step's\n"
-                "error, and the run goes on");
+  add_isolation_flags(run);
   run->add_option("--faults", run_options.faults,
                   "where what a step could not answer (a plugin's errors, crashes, hangs) is written to replay\n"
                   "(default: OUT/faults)");
@@ -317,6 +323,10 @@ int run_command_line(int argc, char** argv) {
     return refuse({}, error.what() + std::string(" (see ccdbench --help)"));
   }
 
+  if (isolate_flag && in_process) return refuse({}, "--isolate and --in-process say opposite things: give one");
+  // Before any plugin's entry is made (its keys' defaults are read then).
+  ccd::plugin::set_default_isolation(!in_process);
+
   if (version) {
     std::cout << version_text() << '\n';
     if (verbose) {
@@ -340,6 +350,11 @@ int run_command_line(int argc, char** argv) {
        {&run_options.json, &run_options.report, &run_options.misses, &run_options.faults, &run_options.write_answers, &queries_options.json,
         &queries_options.report, &queries_options.write_answers, &stress_options.json, &stress_options.write_queries}) {
     if (*output) **output = std::filesystem::absolute(**output);
+  }
+  // And the caches (first used after plugins may have run): a working directory moved by a plugin (a chdir by system
+  // call, which no interposer sees) cannot swap them. Scenes are loaded from absolute paths too (below).
+  if (const char* cache = std::getenv("CCDBENCH_CACHE_DIR"); cache != nullptr && *cache != '\0') {
+    ::setenv("CCDBENCH_CACHE_DIR", std::filesystem::absolute(cache).c_str(), 1);
   }
 #endif
 
@@ -365,11 +380,15 @@ int run_command_line(int argc, char** argv) {
       const int sources = (run_suite.empty() ? 0 : 1) + (run_scenes.empty() ? 0 : 1) + (run_frames.empty() ? 0 : 1);
       if (sources != 1) return refuse({}, "give exactly one of --suite, --scene, --frames");
       if (!run_suite.empty()) run_options.scenes = ccd::harness::suite_scenes(run_suite);
+      // Labels from the paths as given; loads from their absolute paths, fixed now (a scene is loaded when its first
+      // cell comes, after plugins may have run).
       for (const std::string& run_scene : run_scenes) {
-        run_options.scenes.push_back({ccd::harness::scene_file_label(run_scene), [run_scene] { return ccd::datasets::load_scene_file(run_scene); }});
+        const std::filesystem::path absolute = std::filesystem::absolute(run_scene);
+        run_options.scenes.push_back({ccd::harness::scene_file_label(run_scene), [absolute] { return ccd::datasets::load_scene_file(absolute); }});
       }
       if (!run_frames.empty()) {
-        const std::vector<std::filesystem::path> files(run_frames.begin(), run_frames.end());
+        std::vector<std::filesystem::path> files;
+        for (const std::string& frame : run_frames) files.push_back(std::filesystem::absolute(frame));
         const std::filesystem::path first(run_frames[0]);
         const std::string folder = first.parent_path().filename().string();
         run_options.scenes.push_back({(folder.empty() ? "" : folder + "/") + first.filename().string(),
@@ -398,9 +417,6 @@ int run_command_line(int argc, char** argv) {
       // Answers alone (no --strategy) are judged alone: the default `full` is for runs that name no strategy at all.
       if (!run_answer_folders.empty() && run->count("--strategy") == 0) run_options.strategies.clear();
       for (const std::string& folder : run_answer_folders) run_options.strategies.push_back("answers:" + folder);
-      if (run_isolate) {
-        for (std::string& spec : run_options.strategies) spec = ccd::plugin::isolated_spec(spec);
-      }
       ccd::harness::check_run_outputs(run_options);
       for (const std::string& spec : run_options.strategies) {
         try {

@@ -46,6 +46,11 @@ class ExactQueryMethod final : public QueryMethod {
   }
 };
 
+/// A narrow phase's result as a query's answer.
+QueryAnswer query_answer(narrowphase::NarrowPhaseResult result) {
+  return {result.collides, result.collides ? result.toi : std::numeric_limits<double>::quiet_NaN(), std::move(result.fault)};
+}
+
 /// A narrow-phase variant on the doubles the query's rationals round to (what a simulator would hand it).
 class NarrowPhaseQueryMethod final : public QueryMethod {
  public:
@@ -53,9 +58,20 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
   std::string name() const override { return narrow_phase_->name(); }
   QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const override {
     const datasets::Query& query = file.queries[index];
-    narrowphase::NarrowPhaseResult result = file.kind == datasets::QueryKind::vertex_face ? narrow_phase_->vertex_face(query.rounded, thickness)
-                                                                                          : narrow_phase_->edge_edge(query.rounded, thickness);
-    return {result.collides, result.collides ? result.toi : std::numeric_limits<double>::quiet_NaN(), std::move(result.fault)};
+    return query_answer(file.kind == datasets::QueryKind::vertex_face ? narrow_phase_->vertex_face(query.rounded, thickness)
+                                                                      : narrow_phase_->edge_edge(query.rounded, thickness));
+  }
+  std::vector<QueryAnswer> answer_all(const datasets::QueryFile& file, double thickness) const override {
+    if (!narrow_phase_->prefers_batches()) return QueryMethod::answer_all(file, thickness);
+    std::vector<narrowphase::NarrowPhase::BatchPair> pairs;
+    pairs.reserve(file.queries.size());
+    for (const datasets::Query& query : file.queries) pairs.push_back({&query.rounded, file.kind == datasets::QueryKind::vertex_face, thickness});
+    std::vector<narrowphase::NarrowPhaseResult> results(pairs.size());
+    narrow_phase_->answer_batch(pairs, results);
+    std::vector<QueryAnswer> answers;
+    answers.reserve(results.size());
+    for (narrowphase::NarrowPhaseResult& result : results) answers.push_back(query_answer(std::move(result)));
+    return answers;
   }
 
  private:
@@ -131,6 +147,15 @@ class AnswerFileMethod final : public QueryMethod {
 };
 
 }  // namespace
+
+std::vector<QueryAnswer> QueryMethod::answer_all(const datasets::QueryFile& file, double thickness) const {
+  std::vector<QueryAnswer> answers(file.queries.size());
+  for (std::size_t q = 0; q < file.queries.size(); ++q) {
+    plugin::set_activity_item(q + 1);  // which query a plugin that ends the process was answering
+    answers[q] = answer(file, q, thickness);
+  }
+  return answers;
+}
 
 void bind_answer_files(const std::vector<std::string>& methods, const std::vector<datasets::QueryFile>& files) {
   for (const std::string& spec : methods) {
@@ -228,14 +253,11 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
     // What a plugin that ends the process was doing: this file, and (per query, one relaxed store) which query.
     plugin::set_activity("file " + file.path.string() + " (method " + score.method + ")", "query");
     for (int repeat = 0; repeat < std::max(1, request.repeats); ++repeat) {
-      std::vector<QueryAnswer> answers(file.queries.size());
+      std::vector<QueryAnswer> answers;
       const auto start = std::chrono::steady_clock::now();
       {
         const TimedRegion timed;
-        for (std::size_t q = 0; q < file.queries.size(); ++q) {
-          plugin::set_activity_item(q + 1);
-          answers[q] = method->answer(file, q, request.thickness);
-        }
+        answers = method->answer_all(file, request.thickness);
       }
       const std::chrono::duration<double, std::nano> elapsed = std::chrono::steady_clock::now() - start;
       per_query.push_back(file.queries.empty() ? 0.0 : elapsed.count() / static_cast<double>(file.queries.size()));

@@ -38,6 +38,9 @@ class QueryMethod {
   /// The answer for query `index` of `file` at thickness δ (the method decides whether it uses the exact rationals
   /// or the doubles they round to).
   virtual QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const = 0;
+  /// Every query of `file`, in order: one `answer` each, or, for a method that prefers batches (an isolated
+  /// plugin), the whole file in batches. What is timed as the method's work on the file.
+  virtual std::vector<QueryAnswer> answer_all(const datasets::QueryFile& file, double thickness) const;
 };
 
 /// The method that is the reference itself (certified filter, then exact root isolation, on the rationals).

@@ -99,6 +99,8 @@ void check_run_outputs(const RunOptions& options) {
   if (options.json) datasets::require_writable_file(*options.json);
   if (options.report) datasets::require_writable_directory(*options.report);
   if (options.misses) datasets::require_writable_directory(*options.misses);
+  if (options.faults) datasets::require_writable_directory(*options.faults);
+  if (options.write_answers) datasets::require_writable_directory(*options.write_answers);
 }
 
 std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {

@@ -31,13 +31,30 @@ std::vector<StressRow> run_stress(const std::vector<datasets::ExtremeQuery>& sui
   for (const char* pass : {"zero", "positive"}) {
     std::map<std::pair<std::string, std::string>, StressRow> by_family;  // (family, method)
     std::map<std::string, StressRow> totals;
+    // Every case's δ and truth first; then each method on every case (in one batch where it prefers batches: an
+    // isolated plugin), its answers tallied by family.
+    std::vector<narrowphase::NarrowPhase::BatchPair> pairs;
+    std::vector<bool> truths;
     for (const datasets::ExtremeQuery& query : suite) {
       const double thickness = std::string(pass) == "zero" ? 0.0 : query.positive_thickness;
-      const bool truth = reference::decide(reference_kind(query.kind), query.rows, thickness).collides;
-      plugin::set_activity("the extremes suite (stress), " + query.family + ": " + query.name + ", δ " + pass);
-      for (const auto& variant : variants) {
-        const narrowphase::NarrowPhaseResult answer =
-            query.kind == datasets::QueryKind::vertex_face ? variant->vertex_face(query.rows, thickness) : variant->edge_edge(query.rows, thickness);
+      truths.push_back(reference::decide(reference_kind(query.kind), query.rows, thickness).collides);
+      pairs.push_back({&query.rows, query.kind == datasets::QueryKind::vertex_face, thickness});
+    }
+    for (const auto& variant : variants) {
+      std::vector<narrowphase::NarrowPhaseResult> answers(pairs.size());
+      if (variant->prefers_batches()) {
+        variant->answer_batch(pairs, answers);
+      } else {
+        for (std::size_t i = 0; i < pairs.size(); ++i) {
+          plugin::set_activity("the extremes suite (stress), " + suite[i].family + ": " + suite[i].name + ", δ " + pass);
+          answers[i] = pairs[i].vertex_face ? variant->vertex_face(*pairs[i].rows, pairs[i].thickness)
+                                            : variant->edge_edge(*pairs[i].rows, pairs[i].thickness);
+        }
+      }
+      for (std::size_t i = 0; i < pairs.size(); ++i) {
+        const datasets::ExtremeQuery& query = suite[i];
+        const bool truth = truths[i];
+        const narrowphase::NarrowPhaseResult& answer = answers[i];
         for (StressRow* row : {&by_family[{query.family, variant->name()}], &totals[variant->name()]}) {
           row->family = row == &totals[variant->name()] ? "(all)" : query.family;
           row->method = variant->name();

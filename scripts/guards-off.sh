@@ -20,8 +20,8 @@ declare -A tests=(
   [child_identity]="Boundary.AFileReplacedDuringARunGivesNoAnswersUnderTheOldDigest"
   [describe_in_child]="Boundary.APluginWhoseLoadCrashesIsRefusedNotTheRunsCrash"
   [lifeline]="Boundary.AChildDiesWithItsParentEvenWhileThePluginHangs"
-  [read_once]="Boundary.AnswersRewrittenWhileReadPutNoOtherDigestOnTheirVerdict"
-  [repeats]="Boundary.AnswersThatChangeBetweenPassesAreAVerdictTheGateSees"
+  [read_once]="Boundary.AnswersRewrittenWhileReadPutNoOtherDigestOnTheirVerdict Boundary.FoldersOfAnswersThatDifferHaveDifferentDigests"
+  [repeats]="Boundary.AnswersThatChangeBetweenPassesAreAVerdictTheGateSees Boundary.ErrorsThatAppearInALaterPassAreNondeterminism"
   [gate]="Boundary.ErrorsCountedAsHitsStillFailTheGate Gate.ErrorsAndNondeterminismFailACellUnlessItsEntryAllowsThem"
 )
 order=(fenv input_copies exit chdir timeout identity child_identity describe_in_child lifeline read_once repeats gate)
@@ -38,16 +38,20 @@ for guard in "${guards[@]}"; do
   # One build per guard, with that guard alone left out: each test then fails for its own guard's reason.
   build=build/guards-off-$guard
   cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCCDBENCH_BUILD_BENCHMARKS=OFF "-DCCDBENCH_PLUGIN_GUARDS_OFF=$guard" >/dev/null 2>&1
-  cmake --build "$build" -j "$(nproc)" --target plugins_tests harness_tests >/dev/null
+  targets=(plugins_tests)
+  [[ $guard == gate ]] && targets+=(harness_tests)
+  cmake --build "$build" -j "$(nproc)" --target "${targets[@]}" >/dev/null
   echo "guards-off: $build: $("$build/bin/ccdbench" --version)"
   for test in ${tests[$guard]}; do
     binary=$build/bin/plugins_tests
     [[ $test == Gate.* ]] && binary=$build/bin/harness_tests
-    if "$binary" --gtest_filter="$test" >"$build/$test.log" 2>&1; then
+    # A test whose guard is off may hang (a reference in flush-to-zero may never finish): that is a failure too.
+    if timeout 300 "$binary" --gtest_filter="$test" >"$build/$test.log" 2>&1; then
       result="PASSED (it should have failed: see $build/$test.log)"
       all_failed=0
     else
-      result="FAILED: $(grep -m1 -A3 ': Failure' "$build/$test.log" | tail -n +2 | tr -s ' \n' ' ' | cut -c1-150)"
+      result="FAILED: $(grep -m1 -A3 ': Failure' "$build/$test.log" | tail -n +2 | tr -s ' \n' ' ' | cut -c1-150 || true)"
+      grep -q ': Failure' "$build/$test.log" || result="FAILED: $(tail -n 3 "$build/$test.log" | tr -s ' \n' ' ' | cut -c1-150 || true)"
     fi
     rows+=("$(printf '%-18s %-75s %s' "$guard" "$test" "$result")")
   done

@@ -90,13 +90,11 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   const auto& x1 = step.x1;
   PrimitiveBoxes boxes;
   tbb::enumerable_thread_specific<Local> locals;
-  // The narrow phase on one elementary pair (VertexFacePair or EdgeEdgePair).
-  auto test = [&](Local& local, const auto& pair) {
+  // The narrow phase's answer `r` on one elementary pair (VertexFacePair or EdgeEdgePair), recorded.
+  auto record = [&](Local& local, const auto& pair, const narrowphase::PairRows& rows, const narrowphase::NarrowPhaseResult& r) {
     constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
-    const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
     ++local.tests;
     if (audit) list_of<vertex_face>(local.tested).push_back(pair);
-    const narrowphase::NarrowPhaseResult r = vertex_face ? narrow_phase.vertex_face(rows, thickness) : narrow_phase.edge_edge(rows, thickness);
     if (r.collides) local.collisions.add(pair, r.toi);
     if (!r.fault.empty()) {
       ++local.fault_count;
@@ -107,6 +105,12 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
         local.faults.resize(kKeptFaults);
       }
     }
+  };
+  // The narrow phase on one elementary pair.
+  auto test = [&](Local& local, const auto& pair) {
+    constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
+    const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
+    record(local, pair, rows, vertex_face ? narrow_phase.vertex_face(rows, thickness) : narrow_phase.edge_edge(rows, thickness));
   };
   // The primitives' swept boxes, then every elementary pair of every candidate handed to visit(local, pair), in
   // parallel.
@@ -135,7 +139,53 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
       }
     });
   };
-  if (!separation_filter) {
+  if (narrow_phase.prefers_batches()) {
+    // A narrow phase that answers batches far cheaper than single pairs (an isolated plugin: one round trip to its
+    // process per batch): every pair gathered (and filtered), then asked in batches from this thread, in order.
+    TestedPairs kept;
+    {
+      ScopedStageTimer timer(stages, separation_filter ? "distance heuristic" : "gather pairs");
+      visit_candidates([&](Local& local, const auto& pair) {
+        constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
+        if (separation_filter && provably_apart(pair_rows(topology, x0, x1, pair), vertex_face, thickness)) {
+          ++local.filtered;
+        } else {
+          list_of<vertex_face>(local.kept).push_back(pair);
+        }
+      });
+      for (Local& local : locals) {
+        kept.vertex_face.insert(kept.vertex_face.end(), local.kept.vertex_face.begin(), local.kept.vertex_face.end());
+        kept.edge_edge.insert(kept.edge_edge.end(), local.kept.edge_edge.begin(), local.kept.edge_edge.end());
+        local.kept = {};
+      }
+      // In pair order, whatever thread found each: the plugin is asked the same questions in the same order on every
+      // run and thread count (a plugin that counts its calls answers alike).
+      tbb::parallel_sort(kept.vertex_face.begin(), kept.vertex_face.end());
+      tbb::parallel_sort(kept.edge_edge.begin(), kept.edge_edge.end());
+    }
+    ScopedStageTimer timer(stages, narrow_stage);
+    Local& local = locals.local();
+    auto batches = [&](const auto& pairs, bool vertex_face) {
+      constexpr std::size_t kBatch = 4096;
+      std::vector<narrowphase::PairRows> rows;
+      std::vector<narrowphase::NarrowPhase::BatchPair> asked;
+      std::vector<narrowphase::NarrowPhaseResult> results;
+      for (std::size_t first = 0; first < pairs.size(); first += kBatch) {
+        const std::size_t count = std::min(kBatch, pairs.size() - first);
+        rows.resize(count);
+        asked.resize(count);
+        results.assign(count, {});
+        for (std::size_t i = 0; i < count; ++i) {
+          rows[i] = pair_rows(topology, x0, x1, pairs[first + i]);
+          asked[i] = {&rows[i], vertex_face, thickness};
+        }
+        narrow_phase.answer_batch(asked, results);
+        for (std::size_t i = 0; i < count; ++i) record(local, pairs[first + i], rows[i], results[i]);
+      }
+    };
+    batches(kept.vertex_face, true);
+    batches(kept.edge_edge, false);
+  } else if (!separation_filter) {
     ScopedStageTimer timer(stages, narrow_stage);
     visit_candidates(test);
   } else {

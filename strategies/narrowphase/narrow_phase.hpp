@@ -8,6 +8,7 @@
 #include <array>
 #include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -63,6 +64,22 @@ class NarrowPhase {
   /// What a result of it depends on beyond its name and the build (a plugin's code and where it ran), as name-value
   /// pairs that its strategy's records carry (make_strategy adds them to the strategy's provenance).
   virtual std::vector<std::pair<std::string, std::string>> provenance() const { return {}; }
+
+  /// One pair of a batch: its rows (alive for the call), whether it is vertex-face, and δ.
+  struct BatchPair {
+    const PairRows* rows;
+    bool vertex_face;
+    double thickness;
+  };
+  /// Whether answering many pairs in one call costs much less than one call each (an isolated plugin: one round
+  /// trip to its process per batch instead of per pair): callers then gather pairs and call `answer_batch`.
+  virtual bool prefers_batches() const { return false; }
+  /// The answers of `pairs`, in order, into `results` (as large): the same answers as one call each.
+  virtual void answer_batch(std::span<const BatchPair> pairs, std::span<NarrowPhaseResult> results) const {
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      results[i] = pairs[i].vertex_face ? vertex_face(*pairs[i].rows, pairs[i].thickness) : edge_edge(*pairs[i].rows, pairs[i].thickness);
+    }
+  }
 };
 
 }  // namespace ccd::narrowphase

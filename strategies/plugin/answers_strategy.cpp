@@ -37,8 +37,9 @@ std::string step_file_name(std::size_t step) {
 }
 
 /// A folder of answers as read once (docs/DESIGN.md §10 "Identity"): every regular file's bytes by its path relative
-/// to the folder, and the digest of exactly those bytes. Its steps are judged from these bytes, never from a second
-/// read, so that a file rewritten during the run cannot put one answer's digest on another's verdict.
+/// to the folder (folders linked into it followed), and the digest of exactly those bytes. Its steps are judged from
+/// these bytes, never from a second read, so that a file rewritten during the run cannot put one answer's digest on
+/// another's verdict. The whole folder is held in memory for the process (answers are text, a few bytes a pair).
 struct FolderSnapshot {
   std::map<std::string, std::string> files;
   std::string digest;
@@ -47,20 +48,25 @@ struct FolderSnapshot {
 std::shared_ptr<const FolderSnapshot> read_folder(const std::filesystem::path& folder) {
   auto snapshot = std::make_shared<FolderSnapshot>();
   std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(folder)) {
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(folder, std::filesystem::directory_options::follow_directory_symlink)) {
     if (entry.is_regular_file()) files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
+  // Each name and each file's bytes with its length before it: no two folders give the same stream (a file's bytes
+  // may hold anything, a name's end included).
   std::string stream;
+  auto append = [&](const std::string& part) {
+    const std::uint64_t size = part.size();
+    stream.append(reinterpret_cast<const char*>(&size), sizeof size);
+    stream += part;
+  };
   for (const std::filesystem::path& file : files) {
     std::ifstream in(file, std::ios::binary);
     if (!in) throw InputError(file, {}, "cannot be read");
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     const std::string name = std::filesystem::relative(file, folder).generic_string();
-    stream += name;
-    stream += '\0';
-    stream += bytes;
-    stream += '\0';
+    append(name);
+    append(bytes);
     snapshot->files.emplace(name, std::move(bytes));
   }
   snapshot->digest = bytes_digest(stream);

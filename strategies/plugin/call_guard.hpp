@@ -48,14 +48,22 @@ class PluginCall {
   const char* what() const { return what_; }
   /// A refusal made during the call (chdir); the first one is kept.
   void refuse(const std::string& why);
+  /// The environment the plugin left when the call finished (after `finish`).
+  const FpEnvironment& left() const { return left_; }
+  /// What was refused during the call ("" when nothing).
+  const std::string& refused() const { return refused_; }
 
  private:
   const CallSite& site_;
   const char* what_;
   FpEnvironment harness_;
+  FpEnvironment left_;
   std::string refused_;
   bool finished_ = false;
 };
+
+/// How long loading a plugin (its libraries, its constructors, its entry point) may take before it is called hung.
+inline constexpr double kLoadSeconds = 120;
 
 /// Loading a plugin (dlopen, its entry point): chdir refused and exit caught as in a call; the floating-point
 /// environment the load leaves is returned by `finish` (it is the plugin's from then on), and ccdbench's put back.
@@ -65,21 +73,48 @@ class PluginLoad {
   ~PluginLoad();
   PluginLoad(const PluginLoad&) = delete;
   PluginLoad& operator=(const PluginLoad&) = delete;
-  /// The environment the load left (then ccdbench's is installed again) and what it refused ("" when nothing).
-  FpEnvironment finish(std::string& refused);
+  struct Finished {
+    /// The environment the load left: its calls' from now on (ccdbench's is installed again).
+    FpEnvironment environment;
+    /// What the load did that ccdbench refused ("" when nothing).
+    std::string refused;
+  };
+  Finished finish();
 
  private:
   CallSite site_;
   PluginCall call_;
 };
 
+/// Runs `call` (a call into the plugin) as a PluginCall: returns the call's fault ("" when none), a C++ exception
+/// thrown through the plugin's C functions among them.
+template <class Call>
+std::string guarded_call(const CallSite& site, const char* what, Call&& call) {
+  PluginCall guard(site, what);
+  std::string thrown;
+  try {
+    call();
+  } catch (const std::exception& error) {
+    thrown = std::string("it threw a C++ exception through the C ABI: ") + error.what();
+  } catch (...) {
+    thrown = "it threw an exception through the C ABI";
+  }
+  std::string fault = guard.finish();
+  if (!thrown.empty()) fault = fault.empty() ? thrown : thrown + "; " + fault;
+  return fault;
+}
+
 /// What the process is doing, for messages about a plugin that ended it: set by the harness ("cell fold8 /
 /// full+plugin:libx.so, step 3 of 7", "file sample.csv") and, per item, `set_activity_item` ("query 17").
 void set_activity(const std::string& text, const char* item_name = nullptr);
 void set_activity_item(std::size_t item);
 
-/// The call in progress on this thread, or nullptr (harness/interposers.cpp asks).
+/// The call in progress on this thread, or nullptr (harness/interposers.cpp asks); always nullptr in a plugin's child
+/// process, where the plugin's exits and crashes are its own and the parent sees them.
 PluginCall* current_plugin_call();
+
+/// Says that this process is a plugin's child process (isolation.hpp): nothing is guarded here.
+void set_plugin_host_process();
 
 /// Ends the process because the plugin of the current call did `what` ("called exit(0)"): prints which plugin, what
 /// it was doing, and where, on stderr, and exits with status 1. The cells finished so far are on disk already.

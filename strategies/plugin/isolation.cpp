@@ -1,6 +1,8 @@
 #include "strategies/plugin/isolation.hpp"
 
 #include "ccd/config.hpp"
+#include "strategies/plugin/child_protocol.hpp"
+#include "strategies/plugin/query_batch.hpp"
 
 #include <fcntl.h>
 #include <poll.h>
@@ -16,111 +18,19 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
 extern char** environ;
 
 namespace ccd::plugin {
-namespace {
 
-// Requests (one byte, then their payload; replies start with a 32-bit status or outcome, then a message).
-constexpr char kQuery = 'Q';
-constexpr char kBegin = 'B';
-constexpr char kStep = 'S';
-constexpr char kEnd = 'E';
-/// The child's ends of the two pipes.
-constexpr int kRequestFd = 3;
-constexpr int kReplyFd = 4;
+using namespace child_protocol;
 
-constexpr std::size_t kStatusSize = sizeof(std::int32_t) + CCDBENCH_MESSAGE_SIZE;
-
-double now_seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-template <class T>
-void put(std::vector<char>& out, const T& value) {
-  const char* bytes = reinterpret_cast<const char*>(&value);
-  out.insert(out.end(), bytes, bytes + sizeof(T));
-}
-template <class T>
-void put_array(std::vector<char>& out, const T* values, std::size_t count) {
-  put(out, static_cast<std::uint64_t>(count));
-  const char* bytes = reinterpret_cast<const char*>(values);
-  out.insert(out.end(), bytes, bytes + count * sizeof(T));
-}
-
-template <class T>
-T take(const char*& at) {
-  T value;
-  std::memcpy(&value, at, sizeof(T));
-  at += sizeof(T);
-  return value;
-}
-
-bool write_all(int fd, const char* data, std::size_t size) {
-  while (size > 0) {
-    const ssize_t written = ::write(fd, data, size);
-    if (written < 0 && errno == EINTR) continue;
-    if (written <= 0) return false;
-    data += written;
-    size -= static_cast<std::size_t>(written);
-  }
-  return true;
-}
-
-/// Reads exactly `size` bytes; false at the end of the stream or an error.
-bool read_all(int fd, char* data, std::size_t size) {
-  while (size > 0) {
-    const ssize_t got = ::read(fd, data, size);
-    if (got < 0 && errno == EINTR) continue;
-    if (got <= 0) return false;
-    data += got;
-    size -= static_cast<std::size_t>(got);
-  }
-  return true;
-}
-
-std::vector<char> status_reply(std::int32_t status, const char* message) {
-  std::vector<char> reply;
-  put(reply, status);
-  char text[CCDBENCH_MESSAGE_SIZE] = {};
-  std::strncpy(text, message, CCDBENCH_MESSAGE_SIZE - 1);
-  reply.insert(reply.end(), text, text + CCDBENCH_MESSAGE_SIZE);
-  return reply;
-}
-
-/// The child's collected contacts of a step, as sent back.
-struct StepReply {
-  std::vector<char> vertex_face, edge_edge;
-  std::uint64_t vertex_face_count = 0, edge_edge_count = 0;
-};
-
-}  // namespace
+namespace {}  // namespace
 
 namespace {
-
-/// The child's greeting: a status, a message, and the digest of the code it loaded (32 hex digits). Status 0: ready;
-/// 1: the plugin refused its configuration; kChangedStatus: its code is not the code the run was planned with (the
-/// child then calls nothing of it).
-constexpr std::size_t kDigestSize = 32;
-constexpr std::size_t kGreetingSize = kStatusSize + kDigestSize;
-constexpr std::int32_t kChangedStatus = 2;
-
-/// The child's end of the lifeline (docs/DESIGN.md §10): the parent holds the other end open and never writes, so
-/// the pipe reports its end only when the parent is gone.
-constexpr int kLifelineFd = 5;
-
-/// Ends the child when its parent is gone, even while the plugin hangs in a call on the main thread.
-void watch_the_parent() {
-#if CCDBENCH_GUARD_LIFELINE
-  std::thread([] {
-    pollfd lifeline{kLifelineFd, POLLIN, 0};
-    while (::poll(&lifeline, 1, -1) < 0 && errno == EINTR) {
-    }
-    ::_exit(3);
-  }).detach();
-#endif
-}
 
 /// A child of this program, `PROGRAM plugin-host ARGUMENTS...`, with its request pipe on fd 3, its reply pipe on
 /// fd 4 and the lifeline on fd 5; the parent's ends are close-on-exec, so that no other child holds them.
@@ -129,34 +39,68 @@ struct Child {
   int to_child = -1, from_child = -1, lifeline = -1;
 };
 
-Child spawn_child(const std::vector<std::string>& plugin_host_arguments) {
-  int requests[2], replies[2], lifeline[2];
-  if (::pipe2(requests, O_CLOEXEC) != 0 || ::pipe2(replies, O_CLOEXEC) != 0 || ::pipe2(lifeline, O_CLOEXEC) != 0) {
-    throw std::runtime_error("plugin isolation: pipe failed");
+Child spawn_child(const std::vector<std::string>& plugin_host_arguments, int batch_fd = -1) {
+  int pipes[3][2] = {{-1, -1}, {-1, -1}, {-1, -1}};  // requests, replies, lifeline
+  auto close_all = [&] {
+    for (auto& pipe : pipes) {
+      for (int& fd : pipe) {
+        if (fd >= 0) ::close(fd);
+        fd = -1;
+      }
+    }
+  };
+  for (auto& pipe : pipes) {
+    if (::pipe2(pipe, O_CLOEXEC) != 0) {
+      const std::string why = std::strerror(errno);
+      close_all();
+      throw std::runtime_error("plugin isolation: cannot make a pipe to a child: " + why);
+    }
   }
+  // The child's descriptors are moved above the numbers they get in the child first: dup2 of a descriptor onto its
+  // own number does nothing, not even clear close-on-exec, and the child would start without it.
+  constexpr int kAboveChildDescriptors = 16;
+  auto above = [&](int& fd) {
+    const int moved = ::fcntl(fd, F_DUPFD_CLOEXEC, kAboveChildDescriptors);
+    if (moved >= 0) {
+      ::close(fd);
+      fd = moved;
+    }
+    return moved >= 0;
+  };
+  int batch = batch_fd >= 0 ? ::fcntl(batch_fd, F_DUPFD_CLOEXEC, kAboveChildDescriptors) : -1;
+  const bool moved = above(pipes[0][0]) && above(pipes[1][1]) && above(pipes[2][0]) && (batch_fd < 0 || batch >= 0);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, requests[0], kRequestFd);
-  posix_spawn_file_actions_adddup2(&actions, replies[1], kReplyFd);
-  posix_spawn_file_actions_adddup2(&actions, lifeline[0], kLifelineFd);
+  int prepared = moved ? 0 : EMFILE;
+  if (prepared == 0) prepared = posix_spawn_file_actions_adddup2(&actions, pipes[0][0], kRequestFd);
+  if (prepared == 0) prepared = posix_spawn_file_actions_adddup2(&actions, pipes[1][1], kReplyFd);
+  if (prepared == 0) prepared = posix_spawn_file_actions_adddup2(&actions, pipes[2][0], kLifelineFd);
+  if (prepared == 0 && batch >= 0) prepared = posix_spawn_file_actions_adddup2(&actions, batch, kBatchFd);
+  // Nothing else of this process goes to the child (descriptors not marked close-on-exec by the libraries).
+  if (prepared == 0) prepared = posix_spawn_file_actions_addclosefrom_np(&actions, kBatchFd + 1);
   std::vector<std::string> arguments{"/proc/self/exe", kPluginHostCommand};
   arguments.insert(arguments.end(), plugin_host_arguments.begin(), plugin_host_arguments.end());
   std::vector<char*> argv;
   for (std::string& argument : arguments) argv.push_back(argument.data());
   argv.push_back(nullptr);
-  // The program's own file, not a name looked up on PATH: the child is this build.
-  char self[4096] = {};
-  const ssize_t length = ::readlink("/proc/self/exe", self, sizeof self - 1);
+  // This program's own file through /proc/self/exe, not a name looked up on PATH nor its path: the child is this
+  // very build, even when the file was rebuilt or removed since this process started.
+  // The child leads a process group of its own, so that killing it kills what it started too (unless that left the
+  // group on purpose).
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  if (prepared == 0) prepared = posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+  if (prepared == 0) prepared = posix_spawnattr_setpgroup(&attributes, 0);
   Child child;
-  int spawned = ENOENT;
-  if (length > 0) spawned = ::posix_spawn(&child.pid, self, &actions, nullptr, argv.data(), environ);
+  const int spawned = prepared != 0 ? prepared : ::posix_spawn(&child.pid, "/proc/self/exe", &actions, &attributes, argv.data(), environ);
+  posix_spawnattr_destroy(&attributes);
   posix_spawn_file_actions_destroy(&actions);
-  ::close(requests[0]);
-  ::close(replies[1]);
-  ::close(lifeline[0]);
-  child.to_child = requests[1];
-  child.from_child = replies[0];
-  child.lifeline = lifeline[1];
+  if (batch >= 0) ::close(batch);
+  child.to_child = pipes[0][1];
+  child.from_child = pipes[1][0];
+  child.lifeline = pipes[2][1];
+  pipes[0][1] = pipes[1][0] = pipes[2][1] = -1;
+  close_all();  // the child's ends
   if (spawned != 0) {
     for (int fd : {child.to_child, child.from_child, child.lifeline}) ::close(fd);
     throw std::runtime_error("plugin isolation: cannot start a child process: " + std::string(std::strerror(spawned)));
@@ -166,7 +110,7 @@ Child spawn_child(const std::vector<std::string>& plugin_host_arguments) {
 
 /// Reaps a child; what happened to it, in words.
 std::string reap(pid_t pid, bool kill_it) {
-  if (kill_it) ::kill(pid, SIGKILL);
+  if (kill_it) ::kill(-pid, SIGKILL);  // its process group: the child and what it started
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
@@ -201,23 +145,6 @@ bool read_until(int fd, char* data, std::size_t size, double deadline, bool& tim
 
 /// A description's reply is at most this long: a table with a thousand keys of long help texts fits many times.
 constexpr std::uint64_t kMaxDescriptionBytes = 16u << 20;
-/// Loading a plugin (its libraries, its constructors) may take this long in a child before it is called hung.
-constexpr double kDescribeSeconds = 120;
-
-int describe_plugin(const char* path) {
-  std::vector<char> reply;
-  try {
-    const Library library(path);
-    const std::vector<char> description = encode(library.description());
-    reply = status_reply(0, "");
-    put(reply, static_cast<std::uint64_t>(description.size()));
-    reply.insert(reply.end(), description.begin(), description.end());
-  } catch (const std::exception& error) {
-    reply = status_reply(1, error.what());
-    put(reply, std::uint64_t{0});
-  }
-  return write_all(kReplyFd, reply.data(), reply.size()) ? 0 : 1;
-}
 
 }  // namespace
 
@@ -229,7 +156,7 @@ PluginDescription describe_in_child(const std::string& given) {
   // A broken pipe is an answer here (the child died), never a reason for this process to die.
   ::signal(SIGPIPE, SIG_IGN);
   Child child = spawn_child({"--describe", path});
-  const double deadline = now_seconds() + kDescribeSeconds;
+  const double deadline = now_seconds() + kLoadSeconds;
   char head[kStatusSize + sizeof(std::uint64_t)];
   bool timed_out = false;
   std::string failure;
@@ -240,20 +167,25 @@ PluginDescription describe_in_child(const std::string& given) {
     const std::string message(at, strnlen(at, CCDBENCH_MESSAGE_SIZE));
     at += CCDBENCH_MESSAGE_SIZE;
     const auto size = take<std::uint64_t>(at);
-    if (status != 0) {
-      failure = message.empty() ? "it was refused" : message;
-    } else if (size > kMaxDescriptionBytes) {
-      failure = "its child process sent a description of " + std::to_string(size) + " bytes";
+    // The payload is the description, or a refusal's whole text (the status message holds only its start).
+    if (size > kMaxDescriptionBytes) {
+      failure = "its child process sent a reply of " + std::to_string(size) + " bytes";
     } else {
       bytes.resize(size);
-      if (!read_until(child.from_child, bytes.data(), size, deadline, timed_out)) failure = "its child process stopped while describing it";
+      if (!read_until(child.from_child, bytes.data(), size, deadline, timed_out)) {
+        failure = "its child process stopped while describing it";
+      } else if (status != 0) {
+        failure = !bytes.empty() ? bytes : message.empty() ? "it was refused" : message;
+      }
     }
   } else {
     failure = "its child process ended while loading it";
   }
   for (int fd : {child.to_child, child.from_child, child.lifeline}) ::close(fd);
   const std::string ended = reap(child.pid, timed_out);
-  if (timed_out) throw std::invalid_argument("plugin " + path + ": loading it did not finish within " + std::to_string(kDescribeSeconds) + " s");
+  if (timed_out) {
+    throw std::invalid_argument("plugin " + path + ": loading it did not finish within " + narrowphase::format_spec_number(kLoadSeconds) + " s");
+  }
   if (!failure.empty()) {
     // A refusal names the plugin already; a child that died says how.
     if (failure.rfind("plugin ", 0) == 0) throw std::invalid_argument(failure);
@@ -262,142 +194,10 @@ PluginDescription describe_in_child(const std::string& given) {
   return decode_description(path, bytes);
 }
 
-int serve_plugin(int argc, char** argv) {
-  if (argc < 3) return 2;
-  watch_the_parent();
-  // Whatever the plugin prints goes to the standard error (never into ccdbench's own output, which a script may be
-  // reading); its answers go to fd 4 alone.
-  ::dup2(STDERR_FILENO, STDOUT_FILENO);
-  if (std::string(argv[2]) == "--describe") return argc == 4 ? describe_plugin(argv[3]) : 2;
-  std::unique_ptr<Library> loaded;
-  try {
-    loaded = std::make_unique<Library>(argv[2]);
-  } catch (const std::exception& error) {
-    std::vector<char> greeting = status_reply(1, error.what());
-    greeting.resize(kGreetingSize, '0');
-    write_all(kReplyFd, greeting.data(), greeting.size());
-    return 1;
-  }
-  const Library& library = *loaded;
-  // The plugin runs in its own process: the environment its load left stays its own (as in-process calls get it).
-  library.environment().install();
-  // argv[3] is the digest of the code the run was planned with ("-": none asked): other code is never called.
-  const std::string& digest = library.description().digest;
-  if (argc < 4) return 2;
-  if (std::string(argv[3]) != "-" && argv[3] != digest) {
-    std::vector<char> greeting = status_reply(kChangedStatus, "its code changed since the run began");
-    greeting.insert(greeting.end(), digest.begin(), digest.end());
-    greeting.resize(kGreetingSize, '0');
-    write_all(kReplyFd, greeting.data(), greeting.size());
-    return 1;
-  }
-  std::vector<std::string> values(argv + 4, argv + argc);
-  std::vector<const char*> pointers;
-  for (const std::string& value : values) pointers.push_back(value.c_str());
-  char error[CCDBENCH_MESSAGE_SIZE] = {};
-  void* context = library.table().create(pointers.data(), error);
-  error[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-  std::vector<char> greeting = status_reply(context != nullptr ? 0 : 1, context != nullptr ? "" : error);
-  greeting.insert(greeting.end(), digest.begin(), digest.end());
-  greeting.resize(kGreetingSize, '0');
-  if (!write_all(kReplyFd, greeting.data(), greeting.size()) || context == nullptr) return 1;
-  // The scene of `begin`, kept for the step calls.
-  std::vector<std::uint32_t> faces, edges, face_object, collidable;
-  std::vector<std::uint8_t> self;
-  ccdbench_scene scene{};
-  for (char kind = 0; read_all(kRequestFd, &kind, 1);) {
-    if (kind == kQuery) {
-      char payload[1 + 25 * sizeof(double)];
-      if (!read_all(kRequestFd, payload, sizeof payload)) return 1;
-      const char* at = payload;
-      const bool vertex_face = take<std::uint8_t>(at) != 0;
-      double rows[24];
-      std::memcpy(rows, at, sizeof rows);
-      at += sizeof rows;
-      const double thickness = take<double>(at);
-      // As in-process (plugin_narrow_phase.cpp): no outcome until the plugin writes one, so a plugin that writes
-      // none is caught here too, not taken for "apart".
-      ccdbench_answer answer{};
-      answer.outcome = -1;
-      answer.toi = std::nan("");
-      (vertex_face ? library.table().vertex_face : library.table().edge_edge)(context, rows, thickness, &answer);
-      answer.message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-      std::vector<char> reply = status_reply(answer.outcome, answer.message);
-      put(reply, answer.toi);
-      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
-    } else if (kind == kBegin) {
-      auto read_array = [&](auto& out) {
-        std::uint64_t count = 0;
-        if (!read_all(kRequestFd, reinterpret_cast<char*>(&count), sizeof count)) return false;
-        out.resize(count);
-        return read_all(kRequestFd, reinterpret_cast<char*>(out.data()), count * sizeof(out[0]));
-      };
-      std::uint64_t vertices = 0;
-      if (!read_all(kRequestFd, reinterpret_cast<char*>(&vertices), sizeof vertices) || !read_array(faces) || !read_array(edges) ||
-          !read_array(face_object) || !read_array(self) || !read_array(collidable)) {
-        return 1;
-      }
-      scene = {vertices,    faces.size() / 3,   faces.data(), edges.size() / 2,      edges.data(),
-               self.size(), face_object.data(), self.data(),  collidable.size() / 2, collidable.data()};
-      char message[CCDBENCH_MESSAGE_SIZE] = {};
-      const int status = library.table().begin ? library.table().begin(context, &scene, message) : 0;
-      message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-      const std::vector<char> reply = status_reply(status, message);
-      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
-    } else if (kind == kStep) {
-      std::uint64_t index = 0, vertices = 0;
-      double thickness = 0;
-      if (!read_all(kRequestFd, reinterpret_cast<char*>(&index), sizeof index) ||
-          !read_all(kRequestFd, reinterpret_cast<char*>(&thickness), sizeof thickness) ||
-          !read_all(kRequestFd, reinterpret_cast<char*>(&vertices), sizeof vertices)) {
-        return 1;
-      }
-      std::vector<double> x0(3 * vertices), x1(3 * vertices);
-      if (!read_all(kRequestFd, reinterpret_cast<char*>(x0.data()), x0.size() * sizeof(double)) ||
-          !read_all(kRequestFd, reinterpret_cast<char*>(x1.data()), x1.size() * sizeof(double))) {
-        return 1;
-      }
-      StepReply collected;
-      ccdbench_contacts contacts{&collected,
-                                 [](void* host, std::uint32_t v, std::uint32_t f, double toi) {
-                                   auto* out = static_cast<StepReply*>(host);
-                                   put(out->vertex_face, v);
-                                   put(out->vertex_face, f);
-                                   put(out->vertex_face, toi);
-                                   ++out->vertex_face_count;
-                                 },
-                                 [](void* host, std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1, double toi) {
-                                   auto* out = static_cast<StepReply*>(host);
-                                   for (std::uint32_t v : {a0, a1, b0, b1}) put(out->edge_edge, v);
-                                   put(out->edge_edge, toi);
-                                   ++out->edge_edge_count;
-                                 }};
-      const ccdbench_step step{index, x0.data(), x1.data(), thickness};
-      char message[CCDBENCH_MESSAGE_SIZE] = {};
-      const int status = library.table().step(context, &step, &contacts, message);
-      message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-      std::vector<char> reply = status_reply(status, message);
-      put(reply, collected.vertex_face_count);
-      reply.insert(reply.end(), collected.vertex_face.begin(), collected.vertex_face.end());
-      put(reply, collected.edge_edge_count);
-      reply.insert(reply.end(), collected.edge_edge.begin(), collected.edge_edge.end());
-      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
-    } else if (kind == kEnd) {
-      if (library.table().end) library.table().end(context);
-      const std::vector<char> reply = status_reply(0, "");
-      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
-    } else {
-      return 1;
-    }
-  }
-  library.table().destroy(context);
-  return 0;
-}
-
 PluginInstance::PluginInstance(const PluginDescription& description_, const narrowphase::SpecReader& keys)
     : description(description_), values(plugin_values(keys, description)), host(read_host_settings(keys, description)) {
   if (host.isolate) {
-    isolated = std::make_unique<IsolatedPlugin>(description, values, host.timeout_seconds);
+    isolated = std::make_unique<IsolatedPlugin>(description, values, host.timeout_seconds, host.batch);
   } else {
     library = load_library(description);
     context = std::make_unique<Context>(library, values, host.timeout_seconds);
@@ -417,10 +217,16 @@ std::vector<std::pair<std::string, std::string>> PluginInstance::provenance() co
   return notes;
 }
 
-IsolatedPlugin::IsolatedPlugin(const PluginDescription& description, std::vector<std::string> values, double timeout_seconds)
-    : path_(description.path), digest_(description.digest), values_(std::move(values)), timeout_seconds_(timeout_seconds) {
+IsolatedPlugin::IsolatedPlugin(const PluginDescription& description, std::vector<std::string> values, double timeout_seconds, std::size_t batch)
+    : path_(description.path),
+      digest_(description.digest),
+      objects_(description.objects),
+      values_(std::move(values)),
+      timeout_seconds_(timeout_seconds),
+      batch_(std::clamp<std::size_t>(batch, 1, kBatchCapacity)) {
   // A broken pipe is an answer here (the child died), never a reason for this process to die.
   ::signal(SIGPIPE, SIG_IGN);
+  if (batch_ > 1) region_ = std::make_unique<BatchRegion>(BatchRegion::create());
 }
 
 IsolatedPlugin::~IsolatedPlugin() {
@@ -428,13 +234,15 @@ IsolatedPlugin::~IsolatedPlugin() {
 }
 
 bool IsolatedPlugin::start(std::string& why) {
+  // PATH DIGEST N (OBJECT OBJECT_DIGEST) x N VALUE...: the child loads nothing that is not the run's code.
 #if CCDBENCH_GUARD_CHILD_IDENTITY
-  std::vector<std::string> arguments{path_, digest_};
+  std::vector<std::string> arguments{path_, digest_, std::to_string(objects_.size())};
+  for (const LoadedObject& object : objects_) arguments.insert(arguments.end(), {object.path, object.digest});
 #else
-  std::vector<std::string> arguments{path_, "-"};
+  std::vector<std::string> arguments{path_, "-", "0"};
 #endif
   arguments.insert(arguments.end(), values_.begin(), values_.end());
-  const Child child = spawn_child(arguments);
+  const Child child = spawn_child(arguments, region_ ? region_->fd() : -1);
   child_ = child.pid;
   to_child_ = child.to_child;
   from_child_ = child.from_child;
@@ -448,11 +256,16 @@ bool IsolatedPlugin::start(std::string& why) {
   const char* at = greeting.data();
   const auto status = take<std::int32_t>(at);
   const std::string message(at, strnlen(at, CCDBENCH_MESSAGE_SIZE));
-  const std::string digest(greeting.data() + kStatusSize, kDigestSize);
   if (status == kChangedStatus) {
     stop(true);
-    changed_ = "its code changed during the run: a child started again loaded code of digest " + digest + ", the run's is " + digest_ +
-               " (the plugin or a library it loads was replaced or rebuilt): no answer of other code stands for the run's";
+    changed_ = "its code changed during the run (" + message + "; the run's digest is " + digest_ +
+               "): the plugin or a library it loads was replaced or rebuilt, and no answer of other code stands for the run's";
+    why = changed_;
+    return false;
+  }
+  if (status == kUnloadableStatus) {
+    stop(true);
+    changed_ = "a child started again could not load it any more (" + message + "): it changed during the run";
     why = changed_;
     return false;
   }
@@ -546,8 +359,107 @@ ccdbench_answer IsolatedPlugin::query(bool vertex_face, const double* rows, doub
   return answer;
 }
 
+std::vector<ccdbench_answer> IsolatedPlugin::queries(const std::vector<Query>& asked) {
+  std::vector<ccdbench_answer> answers(asked.size());
+  if (!region_) {
+    for (std::size_t q = 0; q < asked.size(); ++q) answers[q] = query(asked[q].vertex_face, asked[q].rows, asked[q].thickness);
+    return answers;
+  }
+  std::lock_guard lock(mutex_);
+  auto error = [](ccdbench_answer& answer, const std::string& why) {
+    answer = {};
+    answer.outcome = CCDBENCH_ERROR;
+    answer.toi = std::nan("");
+    std::strncpy(answer.message, ("isolated: " + why).c_str(), CCDBENCH_MESSAGE_SIZE - 1);
+  };
+  for (std::size_t next = 0; next < asked.size();) {
+    std::string why;
+    if (!changed_.empty()) {
+      error(answers[next++], changed_);
+      continue;
+    }
+    // A child that dies while starting is the error of the query it was started for.
+    if (child_ <= 0 && !start(why)) {
+      error(answers[next++], why);
+      continue;
+    }
+    const std::size_t count = std::min(batch_, asked.size() - next);
+    const std::size_t answered = batch(asked, next, count, answers, why);
+    next += answered;
+    // The query the child died or hung on is that query's error; the rest go to a fresh child.
+    if (answered < count) error(answers[next++], why);
+  }
+  return answers;
+}
+
+std::size_t IsolatedPlugin::batch(const std::vector<Query>& asked, std::size_t first, std::size_t count, std::vector<ccdbench_answer>& answers,
+                                  std::string& why) {
+  for (std::size_t k = 0; k < count; ++k) {
+    BatchQuery& query = region_->queries()[k];
+    std::memcpy(query.rows, asked[first + k].rows, sizeof query.rows);
+    query.thickness = asked[first + k].thickness;
+    query.vertex_face = asked[first + k].vertex_face ? 1 : 0;
+  }
+  region_->set_done(0);
+  std::vector<char> request{kBatch};
+  put(request, static_cast<std::uint64_t>(count));
+  bool finished = false;
+  if (!write_all(to_child_, request.data(), request.size())) {
+    why = stop(false);
+  } else {
+    // Each query has its own timeout: the deadline moves on with every answer the child counts done.
+    std::uint64_t seen = 0;
+    double deadline = now_seconds() + timeout_seconds_;
+    while (true) {
+      const double left = deadline - now_seconds();
+      if (left <= 0) {
+        why = "it did not answer within its timeout of " + narrowphase::format_spec_number(timeout_seconds_) + " s (killed)";
+        stop(true);
+        break;
+      }
+      pollfd ready{from_child_, POLLIN, 0};
+      const int polled = ::poll(&ready, 1, static_cast<int>(std::ceil(std::min(left, 0.1) * 1000)));
+      if (polled < 0 && errno != EINTR) {
+        why = stop(true);
+        break;
+      }
+      if (polled > 0) {
+        char done = 0;
+        const ssize_t n = ::read(from_child_, &done, 1);
+        if (n < 0 && errno == EINTR) continue;
+        if (n == 1 && done == kBatchDone) {
+          finished = true;
+        } else {
+          why = n == 1 ? "its reply was not one (killed)" : "";
+          const std::string ended = stop(n == 1);
+          if (why.empty()) why = ended;
+        }
+        break;
+      }
+      if (const std::uint64_t now_done = region_->done(); now_done != seen) {
+        seen = now_done;
+        deadline = now_seconds() + timeout_seconds_;
+      }
+    }
+  }
+  // What the child counted done, never more than was asked; on a clean finish, every query.
+  const std::size_t answered = finished ? count : std::min<std::size_t>(region_->done(), count);
+  for (std::size_t k = 0; k < answered; ++k) {
+    const BatchAnswer& in = region_->answers()[k];
+    ccdbench_answer& out = answers[first + k];
+    out.outcome = in.outcome;
+    out.toi = in.toi;
+    std::memcpy(out.message, in.message, CCDBENCH_MESSAGE_SIZE);
+    out.message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
+  }
+  return answered;
+}
+
 int IsolatedPlugin::begin(const ccdbench_scene& scene, std::string& message) {
   std::lock_guard lock(mutex_);
+  // A reply may claim no more contacts than the mesh has pairs: a larger count is refused before any is read.
+  most_vertex_face_ = static_cast<std::uint64_t>(scene.vertex_count) * scene.face_count;
+  most_edge_edge_ = static_cast<std::uint64_t>(scene.edge_count) * scene.edge_count;
   scene_request_ = {kBegin};
   put(scene_request_, static_cast<std::uint64_t>(scene.vertex_count));
   put_array(scene_request_, scene.faces, 3 * scene.face_count);
@@ -584,6 +496,12 @@ int IsolatedPlugin::step(const ccdbench_step& step, std::size_t vertex_count, co
   constexpr std::size_t kEdgeEdgeBytes = 4 * sizeof(std::uint32_t) + sizeof(double);
   constexpr std::uint64_t kBlock = 4096;
   std::uint64_t vertex_face = take<std::uint64_t>(at);
+  auto flood = [&](std::uint64_t claimed, std::uint64_t most) {
+    message = "its reply claims " + std::to_string(claimed) + " contacts, more than the mesh's " + std::to_string(most) + " pairs (killed)";
+    stop(true);
+    return 1;
+  };
+  if (vertex_face > most_vertex_face_) return flood(vertex_face, most_vertex_face_);
   std::vector<char> block;
   while (vertex_face > 0) {
     const std::uint64_t count = std::min(vertex_face, kBlock);
@@ -601,6 +519,7 @@ int IsolatedPlugin::step(const ccdbench_step& step, std::size_t vertex_count, co
   if (!read_more(block, sizeof(std::uint64_t), message)) return 1;
   const char* p = block.data();
   std::uint64_t edge_edge = take<std::uint64_t>(p);
+  if (edge_edge > most_edge_edge_) return flood(edge_edge, most_edge_edge_);
   while (edge_edge > 0) {
     const std::uint64_t count = std::min(edge_edge, kBlock);
     block.clear();

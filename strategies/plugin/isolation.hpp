@@ -40,14 +40,25 @@ PluginDescription describe_in_child(const std::string& path);
 
 class IsolatedPlugin {
  public:
-  /// The child is started at the first request (and again after a crash or a hang).
-  IsolatedPlugin(const PluginDescription& description, std::vector<std::string> values, double timeout_seconds);
+  /// The child is started at the first request (and again after a crash or a hang). Queries go to it `batch` at a
+  /// time (query_batch.hpp); 1 sends each on its own over the pipe.
+  IsolatedPlugin(const PluginDescription& description, std::vector<std::string> values, double timeout_seconds, std::size_t batch);
   ~IsolatedPlugin();
   IsolatedPlugin(const IsolatedPlugin&) = delete;
   IsolatedPlugin& operator=(const IsolatedPlugin&) = delete;
 
   /// A query's answer; a crash or a hang comes back as CCDBENCH_ERROR saying which. One request at a time.
   ccdbench_answer query(bool vertex_face, const double* rows, double thickness);
+
+  /// One query of a batch: 24 doubles in the ABI's order.
+  struct Query {
+    const double* rows;
+    double thickness;
+    bool vertex_face;
+  };
+  /// The answers of many queries, in order, in batches through shared memory: a crash or a hang is the error of the
+  /// query it happened on alone, and a fresh child answers the ones after it.
+  std::vector<ccdbench_answer> queries(const std::vector<Query>& asked);
 
   /// A whole-step plugin's calls. `begin` keeps the scene, so that a child started again after a crash is given it
   /// before its next step (its state across steps starts over). A nonzero status comes with `message`.
@@ -68,17 +79,25 @@ class IsolatedPlugin {
   /// Reads more of a reply (after exchange), within the same deadline.
   bool read_more(std::vector<char>& reply, std::size_t size, std::string& why);
   bool send_scene(std::string& message);
+  /// Queries [first, first + count) of `asked` in one batch; returns how many got an answer before the child died or
+  /// hung (then `why` says which), or `count`.
+  std::size_t batch(const std::vector<Query>& asked, std::size_t first, std::size_t count, std::vector<ccdbench_answer>& answers, std::string& why);
 
   std::string path_;
   std::string digest_;
+  std::vector<LoadedObject> objects_;
   std::vector<std::string> values_;
   double timeout_seconds_;
+  std::size_t batch_;
+  /// The memory shared with every child for batches (none when batch_ is 1).
+  std::unique_ptr<class BatchRegion> region_;
   std::mutex mutex_;
   pid_t child_ = -1;
   int to_child_ = -1, from_child_ = -1, lifeline_ = -1;
   double deadline_ = 0;
-  /// The scene of `begin`, as sent (empty: none yet).
+  /// The scene of `begin`, as sent (empty: none yet), and the most contacts of each kind its mesh can have.
   std::vector<char> scene_request_;
+  std::uint64_t most_vertex_face_ = 0, most_edge_edge_ = 0;
   /// Why no child may answer any more ("its code changed during the run: ..."): every request is then an error.
   std::string changed_;
 };

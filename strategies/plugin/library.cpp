@@ -8,6 +8,7 @@
 #include <xxhash.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -43,6 +44,11 @@ void hash_file(XXH3_state_t* state, const std::filesystem::path& path) {
 
 // A plugin's timeout: from a millisecond (a test of one) to a day (a whole step of a huge mesh).
 constexpr narrowphase::SpecRange kTimeoutRange{0.001, 86400};
+// Queries per batch to an isolated child: one (a pipe round trip each) to the shared region's capacity.
+constexpr narrowphase::SpecRange kBatchRange{1, 4096, true};
+
+/// isolate='s value when a spec does not give one (set_default_isolation).
+std::atomic<bool> default_isolation{true};
 
 /// The table's fields as plain data. Only what its size says it holds is read: a table of another ABI version, or
 /// a shorter one, keeps its size and version alone, and `describe` refuses it.
@@ -120,6 +126,11 @@ PluginDescription describe(const std::string& path, const PluginTable& table, st
   for (std::size_t k = 0; k < table.keys.size(); ++k) {
     const TableKey& key = table.keys[k];
     if (!plain_name(key.name)) throw refuse("key " + std::to_string(k) + ": its name must be letters, digits and '_'");
+    // A value goes into the resolved name as key=value between ':' (a spec's words): one with ':' would read back as
+    // other keys (a default "a:errors=hit" would show errors=hit in the name where errors=miss was used).
+    if (key.default_value.find(':') != std::string::npos || key.choices.find(':') != std::string::npos) {
+      throw refuse("key '" + key.name + "': its default and choices may not hold ':' (it separates a spec's keys)");
+    }
     for (const narrowphase::KeySpec& own : host) {
       if (own.name == key.name) throw refuse("key '" + own.name + "' is one of ccdbench's own keys for every plugin");
     }
@@ -297,9 +308,8 @@ PluginDescription decode_description(const std::string& path, std::string_view b
   }
   std::string environment = in.text();
   in.end();
-  PluginDescription described = describe(path, t, objects, environment);
-  // The digest is recomputed from the objects, not taken from the child.
-  return described;
+  // Checked as a table loaded here would be; its digest is made here from the objects' digests the child sent.
+  return describe(path, t, objects, environment);
 }
 
 Library::Library(const std::filesystem::path& given) {
@@ -312,15 +322,14 @@ Library::Library(const std::filesystem::path& given) {
   PluginLoad load("plugin " + path);
   handle_ = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (handle_ == nullptr) {
-    std::string refused;
-    load.finish(refused);
+    load.finish();
     throw refuse(std::string("cannot be loaded: ") + text_or(::dlerror(), "dlopen failed"));
   }
   const auto entry = reinterpret_cast<ccdbench_plugin_entry>(::dlsym(handle_, CCDBENCH_PLUGIN_ENTRY_NAME));
   table_ = entry != nullptr ? entry(CCDBENCH_PLUGIN_ABI_VERSION) : nullptr;
-  std::string refused;
-  environment_ = load.finish(refused);
-  if (!refused.empty()) throw refuse("while it was loaded, " + refused);
+  const PluginLoad::Finished loaded = load.finish();
+  environment_ = loaded.environment;
+  if (!loaded.refused.empty()) throw refuse("while it was loaded, " + loaded.refused);
   if (entry == nullptr) throw refuse("exports no " CCDBENCH_PLUGIN_ENTRY_NAME " (see ccdbench_plugin.h)");
   if (table_ == nullptr) throw refuse("its entry point returned no table for ABI version " + std::to_string(CCDBENCH_PLUGIN_ABI_VERSION));
   std::vector<LoadedObject> objects;
@@ -371,6 +380,12 @@ const PluginDescription& plugin_description(const std::string& given) {
   }
 #if CCDBENCH_GUARD_DESCRIBE_IN_CHILD
   PluginDescription made = describe_in_child(given);
+#if CCDBENCH_GUARD_IDENTITY
+  // Its identity is this process's to find, from its files, never the child's to say: the code the child ran could
+  // have written any description.
+  made.objects = plugin_objects_on_disk(made.path);
+  made.digest = combined_digest(made.objects);
+#endif
   std::lock_guard lock(registry_mutex());
 #else
   // Without the guard: loaded into this process to be described (a crash at load ends the run).
@@ -387,12 +402,15 @@ const PluginDescription& plugin_description(const std::string& given) {
 std::shared_ptr<const Library> load_library(const PluginDescription& description) {
   std::lock_guard lock(registry_mutex());
   std::shared_ptr<const Library> loaded = library_at(description.path);
-  const Library& library = *loaded;
 #if CCDBENCH_GUARD_IDENTITY
-  const std::string differs = differs_from_loaded(description.objects, library.description().objects);
-  if (!differs.empty()) {
-    throw std::invalid_argument("plugin " + description.path + ": the code loaded here is not the code described when the run began (" + differs +
-                                "): it changed during the run");
+  // Once, when it is first loaded here: the code in this process does not change after that.
+  static std::map<std::string, std::string> differences;
+  auto it = differences.find(description.path);
+  if (it == differences.end())
+    it = differences.emplace(description.path, differs_from_loaded(description.objects, loaded->description().objects)).first;
+  if (!it->second.empty()) {
+    throw std::invalid_argument("plugin " + description.path + ": the code loaded into this process is not the code a child process described (" +
+                                it->second + "): its file or a library it links changed in between");
   }
 #endif
   return loaded;
@@ -404,9 +422,11 @@ std::vector<narrowphase::KeySpec> host_keys() {
   return {KeySpec::text("digest", "the digest of the plugin's code as loaded (filled in; a cell kept for another build is never reused)"),
           KeySpec::choice("errors", {"miss", "hit"}, "miss",
                           "how an error or undecided answer counts for verdicts and the gate (it is also counted apart)"),
-          KeySpec::on_off("isolate", defaults.isolate, "run the plugin in a child process: a crash or a hang is an error, not the end of the run"),
+          KeySpec::on_off("isolate", default_isolation.load(),
+                          "run the plugin in a child process (the default): a crash, an exit or a hang is that call's error, not the end of the run"),
           KeySpec::number("timeout", defaults.timeout_seconds, kTimeoutRange,
-                          "seconds a query or a step may take (isolated: that call's error; in-process: the run ends)")};
+                          "seconds a query or a step may take (isolated: that call's error; in-process: the run ends)"),
+          KeySpec::integer("batch", defaults.batch, kBatchRange, "isolated: queries sent to the child at a time (1: a pipe round trip each)")};
 }
 
 std::vector<narrowphase::KeySpec> entry_keys(const PluginDescription& description) {
@@ -426,8 +446,11 @@ HostSettings read_host_settings(const narrowphase::SpecReader& keys, const Plugi
   settings.errors_count_as_hits = keys.choice("errors") == "hit";
   settings.isolate = keys.choice("isolate") == "on";
   settings.timeout_seconds = keys.number("timeout");
+  settings.batch = keys.integer("batch");
   return settings;
 }
+
+void set_default_isolation(bool isolate) { default_isolation = isolate; }
 
 std::vector<std::string> plugin_values(const narrowphase::SpecReader& keys, const PluginDescription& description) {
   std::vector<std::string> values;
@@ -446,8 +469,10 @@ std::string resolved_name(const PluginDescription& description, const std::vecto
   std::string name = std::string(narrowphase::kPluginHead) + ":" + description.path;
   for (std::size_t k = 0; k < values.size(); ++k) name += ":" + description.keys[k].name + "=" + values[k];
   name += ":digest=" + host.digest + ":errors=" + (host.errors_count_as_hits ? "hit" : "miss");
-  // Isolation changes no answer, only what a crash does: off, the default, is not printed.
-  if (host.isolate) name += ":isolate=on:timeout=" + narrowphase::format_spec_number(host.timeout_seconds);
+  // Where it runs and its timeout decide what a crash or a hang does (an error, or the run's end): both are named.
+  // Isolated, its batch size changes only the time, but times are results too (and a table compares batch sizes).
+  name += std::string(":isolate=") + (host.isolate ? "on" : "off") + ":timeout=" + narrowphase::format_spec_number(host.timeout_seconds);
+  if (host.isolate) name += ":batch=" + std::to_string(host.batch);
   return name;
 }
 
@@ -456,21 +481,24 @@ Context::Context(std::shared_ptr<const Library> library, const std::vector<std::
   std::vector<const char*> pointers;
   for (const std::string& value : values) pointers.push_back(value.c_str());
   char error[CCDBENCH_MESSAGE_SIZE] = {};
-  PluginCall call(site_, "create");
-  handle_ = library_->table().create(pointers.data(), error);
-  const std::string fault = call.finish();
-  if (handle_ == nullptr || !fault.empty()) {
+  std::string fault = guarded_call(site_, "create", [&] { handle_ = library_->table().create(pointers.data(), error); });
+  if (handle_ != nullptr && !fault.empty()) {
+    guarded_call(site_, "destroy", [&] { library_->table().destroy(handle_); });
+    handle_ = nullptr;
+  }
+  if (handle_ == nullptr) {
     error[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-    throw std::invalid_argument("plugin " + library_->description().table.name + ": " +
-                                (handle_ == nullptr ? "its configuration was refused: " + std::string(error[0] ? error : "no reason given")
-                                                    : "its create call failed: " + fault));
+    throw std::invalid_argument(
+        "plugin " + library_->description().table.name + ": " +
+        (fault.empty() ? "its configuration was refused: " + std::string(error[0] ? error : "no reason given") : "its create call failed: " + fault));
   }
 }
 
 Context::~Context() {
   if (handle_ == nullptr) return;
-  PluginCall call(site_, "destroy");
-  library_->table().destroy(handle_);
+  // Nothing is answered any more: what destroy does beside its job can only be said.
+  const std::string fault = guarded_call(site_, "destroy", [&] { library_->table().destroy(handle_); });
+  if (!fault.empty()) std::fprintf(stderr, "ccdbench: warning: %s: destroy: %s\n", site_.plugin.c_str(), fault.c_str());
 }
 
 }  // namespace ccd::plugin

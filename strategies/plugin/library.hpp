@@ -51,7 +51,8 @@ struct PluginDescription {
   std::string path;
   PluginTable table;
   std::vector<narrowphase::KeySpec> keys;
-  /// Its file and each library it brought in, as loaded; `digest` is theirs together (its version in cell keys).
+  /// Its file and each library it brings in (loaded_code.hpp: found and digested by this process from the files,
+  /// never taken from the plugin's own process); `digest` is theirs together (its version in cell keys).
   std::vector<LoadedObject> objects;
   std::string digest;
   /// How its load changed the floating-point environment ("" when it did not): its calls run so in-process.
@@ -108,7 +109,8 @@ class Library {
 std::string bytes_digest(std::string_view bytes);
 
 /// XXH3-128 of a file's bytes, or of every file under a folder (their relative paths and bytes, in path order), as
-/// 32 hex digits: what a result records of answers made outside ccdbench, so a changed one is never reused.
+/// 32 hex digits, read apart from any use of them: what builds with the identity and read-once guards left out
+/// record (CCDBENCH_PLUGIN_GUARDS_OFF), where it stands for the earlier, weaker digests.
 std::string content_digest(const std::filesystem::path& path);
 
 /// The library described by `description`, loaded into this process once and kept (a loaded library is never
@@ -121,7 +123,9 @@ std::shared_ptr<const Library> load_library(const PluginDescription& description
 ///   kept for one build of a plugin is never reused for another;
 /// - errors=miss|hit: how an error or undecided answer counts for the verdicts and the gate (it is counted apart too);
 /// - isolate=on|off: run the plugin in a child process (a crash or a hang becomes an error, not the end of the run);
-/// - timeout: the seconds a query or a step may take (isolated: that call's error; in-process: the end of the run).
+///   on unless the spec says off (or --in-process makes off the default: set_default_isolation);
+/// - timeout: the seconds a query or a step may take (isolated: that call's error; in-process: the end of the run);
+/// - batch: isolated, how many queries go to the child at a time (1: one pipe round trip each).
 std::vector<narrowphase::KeySpec> host_keys();
 
 /// What a plugin's registry entry declares: its own keys, then ccdbench's (host_keys).
@@ -131,9 +135,13 @@ std::vector<narrowphase::KeySpec> entry_keys(const PluginDescription& descriptio
 struct HostSettings {
   std::string digest;
   bool errors_count_as_hits = false;
-  bool isolate = false;
+  bool isolate = true;
   double timeout_seconds = 10;
+  long batch = 4096;
 };
+
+/// Whether a plugin spec that does not say isolate= runs isolated (on, unless a command's --in-process said off).
+void set_default_isolation(bool isolate);
 /// @throws std::invalid_argument when `keys` gives a digest other than the description's.
 HostSettings read_host_settings(const narrowphase::SpecReader& keys, const PluginDescription& description);
 

@@ -32,6 +32,13 @@ struct LoadedObject {
   std::string digest;  // 32 hex digits
 };
 
+/// The code a plugin file brings into this program, found and digested without running any of it: the file itself,
+/// then every library the dynamic loader resolves for it (its `--list` mode, which maps and relocates nothing and
+/// runs no constructor), less those this program had when it started. Each digest is of the file's bytes as read
+/// now. This is the plugin's identity as the parent process knows it: no code of the plugin decides it.
+/// @throws std::invalid_argument "plugin PATH: REASON" when the loader cannot resolve its libraries.
+std::vector<LoadedObject> plugin_objects_on_disk(const std::string& path);
+
 /// The objects of the link map that are not in `before`, each with its digest as loaded, in load order.
 /// @throws std::runtime_error "FILE: REASON" when an object's file no longer holds what was loaded from it.
 std::vector<LoadedObject> objects_loaded_since(const std::vector<LinkMapEntry>& before);
@@ -40,10 +47,14 @@ std::vector<LoadedObject> objects_loaded_since(const std::vector<LinkMapEntry>& 
 /// @throws std::runtime_error "PATH: REASON" when none is, or its file no longer holds what was loaded from it.
 LoadedObject loaded_object(const std::string& path);
 
-/// Why the code loaded in this process is not `expected` (objects described by another process): an object of it
-/// that is not loaded here as it was there, or an object `loaded` (what the plugin's load brought in here) that it
-/// does not name. "" when it is the same code.
+/// Why the code loaded in this process is not `expected` (plugin_objects_on_disk): an object of it that is not loaded
+/// here as it was digested, or an object `loaded` (what the plugin's load brought in here) that it does not name.
+/// "" when it is the same code.
 std::string differs_from_loaded(const std::vector<LoadedObject>& expected, const std::vector<LoadedObject>& loaded);
+
+/// Why the files of `expected` no longer hold the bytes digested, read now, before anything of them is loaded: ""
+/// when they all do. A child process checks this before it loads a plugin, so that no code but the run's runs there.
+std::string differs_on_disk(const std::vector<LoadedObject>& expected);
 
 /// One digest of the objects (their digests in order): the plugin's identity in its resolved name and cell keys.
 std::string combined_digest(const std::vector<LoadedObject>& objects);

@@ -23,8 +23,9 @@ class PluginNarrowPhase final : public narrowphase::NarrowPhase {
 
   std::string name() const override { return plugin_.name(); }
   bool conservative() const override { return plugin_.description.conservative(); }
-  /// Isolated, one child answers one query at a time: the strategy runs on one thread then too.
-  bool thread_safe() const override { return plugin_.description.thread_safe() && !plugin_.host.isolate; }
+  /// Isolated, its child answers one request at a time, in the order the parent sends them (strategies send batches
+  /// from one thread, in pair order): the parent may call it from any thread.
+  bool thread_safe() const override { return plugin_.description.thread_safe() || plugin_.host.isolate; }
   std::vector<std::pair<std::string, std::string>> provenance() const override { return plugin_.provenance(); }
 
   narrowphase::NarrowPhaseResult vertex_face(const narrowphase::PairRows& rows, double thickness) const override {
@@ -32,6 +33,28 @@ class PluginNarrowPhase final : public narrowphase::NarrowPhase {
   }
   narrowphase::NarrowPhaseResult edge_edge(const narrowphase::PairRows& rows, double thickness) const override {
     return answer(false, rows, thickness);
+  }
+
+  /// Isolated, a batch is one round trip to the child (query_batch.hpp) instead of one per pair.
+  bool prefers_batches() const override { return plugin_.isolated != nullptr; }
+  void answer_batch(std::span<const BatchPair> pairs, std::span<narrowphase::NarrowPhaseResult> results) const override {
+    if (!plugin_.isolated) {
+      NarrowPhase::answer_batch(pairs, results);
+      return;
+    }
+    std::vector<double> flat(24 * pairs.size());
+    std::vector<IsolatedPlugin::Query> asked(pairs.size());
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      double* rows = flat.data() + 24 * i;
+      for (int p = 0; p < 8; ++p) {
+        for (int c = 0; c < 3; ++c) rows[3 * p + c] = (*pairs[i].rows)[static_cast<std::size_t>(p)][c];
+      }
+      asked[i] = {rows, pairs[i].thickness, pairs[i].vertex_face};
+    }
+    const std::vector<ccdbench_answer> answers = plugin_.isolated->queries(asked);
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      results[i] = checked_answer(answers[i], plugin_.description.reports_toi(), plugin_.host.errors_count_as_hits);
+    }
   }
 
  private:
@@ -52,9 +75,9 @@ class PluginNarrowPhase final : public narrowphase::NarrowPhase {
       const ccdbench_plugin& table = plugin_.library->table();
       std::unique_lock lock(plugin_.context->mutex(), std::defer_lock);
       if (!plugin_.description.thread_safe()) lock.lock();
-      PluginCall call(plugin_.context->call_site(), vertex_face ? "a vertex-face query" : "an edge-edge query");
-      (vertex_face ? table.vertex_face : table.edge_edge)(plugin_.context->handle(), flat, thickness, &answer);
-      const std::string fault = call.finish();
+      const std::string fault = guarded_call(plugin_.context->call_site(), vertex_face ? "a vertex-face query" : "an edge-edge query", [&] {
+        (vertex_face ? table.vertex_face : table.edge_edge)(plugin_.context->handle(), flat, thickness, &answer);
+      });
       if (!fault.empty()) {
         // Whatever it answered, the call did something else too: it is the call's error, never an answer.
         answer.outcome = CCDBENCH_ERROR;
@@ -70,14 +93,6 @@ class PluginNarrowPhase final : public narrowphase::NarrowPhase {
 }  // namespace
 
 bool names_plugin(const std::string& name) { return name.rfind(std::string(narrowphase::kPluginHead) + ":", 0) == 0; }
-
-std::string isolated_spec(const std::string& spec) {
-  const std::string head = narrowphase::split_spec(spec).first;
-  const std::size_t plus = head.substr(0, head.find(':')).find('+');
-  const bool plugin = names_plugin(plus == std::string::npos ? head : head.substr(plus + 1));
-  if (!plugin || spec.find(":isolate=") != std::string::npos) return spec;
-  return spec + ":isolate=on";
-}
 
 narrowphase::NarrowPhaseResult checked_answer(const ccdbench_answer& answer, bool reports_toi, bool errors_count_as_hits) {
   narrowphase::NarrowPhaseResult result;

@@ -23,8 +23,4 @@ narrowphase::NarrowPhaseResult checked_answer(const ccdbench_answer& answer, boo
 /// Whether `name` is `plugin:...` (the head of a plugin spec).
 bool names_plugin(const std::string& name);
 
-/// `spec` with isolate=on where it names a plugin (as its strategy or its narrow phase) that does not say isolate=
-/// itself (`--isolate`); any other spec as it is.
-std::string isolated_spec(const std::string& spec);
-
 }  // namespace ccd::plugin

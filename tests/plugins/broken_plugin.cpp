@@ -15,20 +15,30 @@
 //   BROKEN_ROUNDING     every call leaves the rounding mode upward;
 //   BROKEN_WRITES_INPUTS its whole step writes its end positions over its start positions (no motion) through the
 //                       const pointers it is given, and its queries write over their rows;
-//   BROKEN_EXIT_ON=N    its Nth call (query or step, counted in its process) calls exit(0);
+//   BROKEN_EXIT_ON=N    its Nth call (query or step, counted in its process) calls exit(0); with BROKEN_ABORT,
+//                       abort() instead, with BROKEN_ASSERT a failed assert, with BROKEN_ERRX errx(0, ...) (the C
+//                       library's own exit, no symbol a program can interpose);
 //   BROKEN_CHDIR        every call moves to the folder CCDBENCH_TEST_CHDIR names (or /);
 //   BROKEN_FIRST_CALLS=N answers "contact" to every query, at t = 0 for its first N queries (counted in its process)
 //                       and at the smallest double after them: its answers depend on what it was asked before, and
 //                       it misses nothing (not thread-safe, so the order is the run's);
 //   BROKEN_REPLACE_SELF_ON=N on its Nth query (counted in its process) replaces its own file with the one
 //                       CCDBENCH_TEST_REPLACEMENT names, and then crashes: the next child loads other code;
-//   BROKEN_CRASH_AT_LOAD its constructor dereferences a null pointer when the library is loaded.
+//   BROKEN_CRASH_AT_LOAD its constructor raises SIGSEGV when the library is loaded;
+//   BROKEN_HANG_AT_LOAD  its constructor never returns;
+//   BROKEN_ERRORS_LATER=N answers "apart" to its first N queries and "error" after them: with errors=miss the same
+//                       pairs are reported either way, and only the count of errors tells two passes apart.
+#ifdef BROKEN_ASSERT
+#undef NDEBUG  // the assert must be there in a release build
+#endif
 #include <ccdbench/ccdbench_plugin.h>
 
 #include <dlfcn.h>
+#include <err.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cassert>
 #include <cfenv>
 #include <chrono>
 #include <cmath>
@@ -48,6 +58,13 @@ struct CrashAtLoad {
   CrashAtLoad() { std::raise(SIGSEGV); }
 } crash_at_load;
 #endif
+#ifdef BROKEN_HANG_AT_LOAD
+struct HangAtLoad {
+  HangAtLoad() {
+    while (true) std::this_thread::sleep_for(std::chrono::seconds(1));
+  }
+} hang_at_load;
+#endif
 
 int queries_answered = 0;
 int calls = 0;
@@ -61,7 +78,17 @@ void misbehave() {
   std::fesetround(FE_UPWARD);
 #endif
 #ifdef BROKEN_EXIT_ON
-  if (calls == BROKEN_EXIT_ON) std::exit(0);
+  if (calls == BROKEN_EXIT_ON) {
+#if defined(BROKEN_ABORT)
+    std::abort();
+#elif defined(BROKEN_ASSERT)
+    assert(calls != BROKEN_EXIT_ON && "the broken plugin's assertion");
+#elif defined(BROKEN_ERRX)
+    errx(0, "the broken plugin ends its process with errx(0)");
+#else
+    std::exit(0);
+#endif
+  }
 #endif
 #ifdef BROKEN_CHDIR
   const char* folder = std::getenv("CCDBENCH_TEST_CHDIR");
@@ -105,6 +132,10 @@ void answer(void*, const double* rows, double, ccdbench_answer* out) {
     replace_self();
     std::abort();
   }
+#endif
+#ifdef BROKEN_ERRORS_LATER
+  out->outcome = queries_answered <= BROKEN_ERRORS_LATER ? CCDBENCH_APART : CCDBENCH_ERROR;
+  return;
 #endif
 #ifdef BROKEN_FIRST_CALLS
   out->outcome = CCDBENCH_CONTACT;
@@ -171,7 +202,7 @@ constexpr std::uint32_t kAbi = BROKEN_ABI;
 constexpr std::uint32_t kAbi = CCDBENCH_PLUGIN_ABI_VERSION;
 #endif
 
-#if defined(ONE_THREAD) || defined(BROKEN_FIRST_CALLS)
+#if defined(ONE_THREAD) || defined(BROKEN_FIRST_CALLS) || defined(BROKEN_ERRORS_LATER)
 constexpr std::uint32_t kCapabilities = CCDBENCH_REPORTS_TOI;
 #else
 constexpr std::uint32_t kCapabilities = CCDBENCH_REPORTS_TOI | CCDBENCH_THREAD_SAFE;

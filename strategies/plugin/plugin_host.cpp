@@ -1,0 +1,283 @@
+// The child's side of an isolated plugin (isolation.hpp): `ccdbench plugin-host ...`, started by the parent, loads the
+// plugin and answers the parent's requests (child_protocol.hpp), or describes the plugin and exits.
+#include "ccd/config.hpp"
+#include "strategies/plugin/child_protocol.hpp"
+#include "strategies/plugin/isolation.hpp"
+#include "strategies/plugin/query_batch.hpp"
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <thread>
+
+namespace ccd::plugin {
+
+using namespace child_protocol;
+
+namespace {
+
+/// The child's collected contacts of a step, as sent back.
+struct StepReply {
+  std::vector<char> vertex_face, edge_edge;
+  std::uint64_t vertex_face_count = 0, edge_edge_count = 0;
+};
+
+/// Ends the child when its parent is gone, even while the plugin hangs in a call on the main thread.
+void watch_the_parent() {
+#if CCDBENCH_GUARD_LIFELINE
+  std::thread([] {
+    pollfd lifeline{kLifelineFd, POLLIN, 0};
+    while (::poll(&lifeline, 1, -1) < 0 && errno == EINTR) {
+    }
+    // The system call itself: the program's _exit is interposed, and a lookup there could wait for ever on the
+    // loader's lock, which a plugin whose constructor hangs inside dlopen holds.
+    ::syscall(SYS_exit_group, 3);
+  }).detach();
+#endif
+}
+
+/// Describes the plugin: its description as the payload, or a refusal with its whole text as the payload.
+int describe_plugin(const char* path) {
+  std::vector<char> reply;
+  try {
+    const Library library(path);
+    const std::vector<char> description = encode(library.description());
+    reply = status_reply(0, "");
+    put(reply, static_cast<std::uint64_t>(description.size()));
+    reply.insert(reply.end(), description.begin(), description.end());
+  } catch (const std::exception& error) {
+    const std::string why = error.what();
+    reply = status_reply(1, why.c_str());
+    put(reply, static_cast<std::uint64_t>(why.size()));
+    reply.insert(reply.end(), why.begin(), why.end());
+  }
+  return write_all(kReplyFd, reply.data(), reply.size()) ? 0 : 1;
+}
+
+/// A call into the plugin as the child makes it, held to what an in-process call is held to: a C++ exception
+/// thrown through its C functions, or a floating-point environment left otherwise than its load left it, is the
+/// call's error (the environment is put back), so that a plugin gets the same verdicts isolated as in-process.
+template <class Call>
+std::string child_call(const Library& library, Call&& call) {
+  std::string fault;
+  try {
+    call();
+  } catch (const std::exception& error) {
+    fault = std::string("it threw a C++ exception through the C ABI: ") + error.what();
+  } catch (...) {
+    fault = "it threw an exception through the C ABI";
+  }
+#if CCDBENCH_GUARD_FENV
+  const FpEnvironment after = FpEnvironment::current();
+  if (after != library.environment()) {
+    library.environment().install();
+    const std::string change = "it left the floating-point environment changed: " + describe_change(library.environment(), after);
+    fault = fault.empty() ? change : fault + "; " + change;
+  }
+#else
+  (void)library;
+#endif
+  return fault;
+}
+
+/// One query, answered in the child: no outcome until the plugin writes one, so a plugin that writes none is caught
+/// here too, not taken for "apart"; a fault of the call is its answer.
+ccdbench_answer answer_query(const Library& library, void* context, bool vertex_face, const double* rows, double thickness) {
+  ccdbench_answer answer{};
+  answer.outcome = -1;
+  answer.toi = std::nan("");
+  const std::string fault =
+      child_call(library, [&] { (vertex_face ? library.table().vertex_face : library.table().edge_edge)(context, rows, thickness, &answer); });
+  if (!fault.empty()) {
+    answer.outcome = CCDBENCH_ERROR;
+    std::snprintf(answer.message, CCDBENCH_MESSAGE_SIZE, "%s", fault.c_str());
+  }
+  answer.message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
+  return answer;
+}
+
+}  // namespace
+
+int serve_plugin(int argc, char** argv) {
+  if (argc < 3) return 2;
+  // This process runs the plugin, and nothing here is ccdbench's own work to guard: its exits are its own.
+  set_plugin_host_process();
+#if CCDBENCH_GUARD_LIFELINE
+  // Killed with the parent thread that started it, as well as watching the lifeline (a plugin can stop a thread).
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+#endif
+  watch_the_parent();
+  // Whatever the plugin prints goes to the standard error (never into ccdbench's own output, which a script may be
+  // reading); its answers go to fd 4 alone.
+  ::dup2(STDERR_FILENO, STDOUT_FILENO);
+  if (std::string(argv[2]) == "--describe") return argc == 4 ? describe_plugin(argv[3]) : 2;
+  // PATH DIGEST N (OBJECT OBJECT_DIGEST) x N VALUE...
+  if (argc < 5) return 2;
+  const std::string expected_digest = argv[3];
+  const std::size_t object_count = std::strtoull(argv[4], nullptr, 10);
+  if (object_count > static_cast<std::size_t>(argc - 5) / 2) return 2;
+  std::vector<LoadedObject> expected;
+  for (std::size_t k = 0; k < object_count; ++k) expected.push_back({argv[5 + 2 * k], argv[6 + 2 * k]});
+  auto greet = [&](std::int32_t status, const std::string& message, const std::string& digest) {
+    std::vector<char> greeting = status_reply(status, message.c_str());
+    greeting.insert(greeting.end(), digest.begin(), digest.end());
+    greeting.resize(kGreetingSize, '0');
+    return write_all(kReplyFd, greeting.data(), greeting.size());
+  };
+  // Before anything of it is loaded (a constructor runs at load): its files must hold the run's bytes.
+  if (const std::string differs = differs_on_disk(expected); !differs.empty()) {
+    greet(kChangedStatus, differs, std::string(kDigestSize, '0'));
+    return 1;
+  }
+  std::unique_ptr<Library> loaded;
+  try {
+    loaded = std::make_unique<Library>(argv[2]);
+  } catch (const std::exception& error) {
+    std::vector<char> greeting = status_reply(kUnloadableStatus, error.what());
+    greeting.resize(kGreetingSize, '0');
+    write_all(kReplyFd, greeting.data(), greeting.size());
+    return 1;
+  }
+  const Library& library = *loaded;
+  // The plugin runs in its own process: the environment its load left stays its own (as in-process calls get it).
+  library.environment().install();
+  // And as loaded: the objects that came in are those the run digested, as they were (the files may have changed
+  // between the check above and the load). "-": none asked.
+  const std::string& digest = library.description().digest;
+  if (expected_digest != "-") {
+    const std::string differs = differs_from_loaded(expected, library.description().objects);
+    if (!differs.empty()) {
+      greet(kChangedStatus, differs, digest);
+      return 1;
+    }
+  }
+  std::vector<std::string> values(argv + 5 + 2 * object_count, argv + argc);
+  std::vector<const char*> pointers;
+  for (const std::string& value : values) pointers.push_back(value.c_str());
+  char error[CCDBENCH_MESSAGE_SIZE] = {};
+  void* context = library.table().create(pointers.data(), error);
+  error[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
+  if (!greet(context != nullptr ? 0 : 1, context != nullptr ? "" : error, digest) || context == nullptr) return 1;
+  // The scene of `begin`, kept for the step calls.
+  std::vector<std::uint32_t> faces, edges, face_object, collidable;
+  std::vector<std::uint8_t> self;
+  ccdbench_scene scene{};
+  std::optional<BatchRegion> region;
+  for (char kind = 0; read_all(kRequestFd, &kind, 1);) {
+    if (kind == kBatch) {
+      std::uint64_t count = 0;
+      if (!read_all(kRequestFd, reinterpret_cast<char*>(&count), sizeof count) || count > kBatchCapacity) return 1;
+      if (!region) region.emplace(BatchRegion::open(kBatchFd));
+      for (std::uint64_t k = 0; k < count; ++k) {
+        const BatchQuery query = region->queries()[k];
+        const ccdbench_answer answer = answer_query(library, context, query.vertex_face != 0, query.rows, query.thickness);
+        BatchAnswer& out = region->answers()[k];
+        out.outcome = answer.outcome;
+        out.toi = answer.toi;
+        std::memcpy(out.message, answer.message, CCDBENCH_MESSAGE_SIZE);
+        region->set_done(k + 1);
+      }
+      if (!write_all(kReplyFd, &kBatchDone, 1)) return 1;
+    } else if (kind == kQuery) {
+      char payload[1 + 25 * sizeof(double)];
+      if (!read_all(kRequestFd, payload, sizeof payload)) return 1;
+      const char* at = payload;
+      const bool vertex_face = take<std::uint8_t>(at) != 0;
+      double rows[24];
+      std::memcpy(rows, at, sizeof rows);
+      at += sizeof rows;
+      const double thickness = take<double>(at);
+      const ccdbench_answer answer = answer_query(library, context, vertex_face, rows, thickness);
+      std::vector<char> reply = status_reply(answer.outcome, answer.message);
+      put(reply, answer.toi);
+      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
+    } else if (kind == kBegin) {
+      auto read_array = [&](auto& out) {
+        std::uint64_t count = 0;
+        if (!read_all(kRequestFd, reinterpret_cast<char*>(&count), sizeof count)) return false;
+        out.resize(count);
+        return read_all(kRequestFd, reinterpret_cast<char*>(out.data()), count * sizeof(out[0]));
+      };
+      std::uint64_t vertices = 0;
+      if (!read_all(kRequestFd, reinterpret_cast<char*>(&vertices), sizeof vertices) || !read_array(faces) || !read_array(edges) ||
+          !read_array(face_object) || !read_array(self) || !read_array(collidable)) {
+        return 1;
+      }
+      scene = {vertices,    faces.size() / 3,   faces.data(), edges.size() / 2,      edges.data(),
+               self.size(), face_object.data(), self.data(),  collidable.size() / 2, collidable.data()};
+      char message[CCDBENCH_MESSAGE_SIZE] = {};
+      int status = 0;
+      if (library.table().begin) {
+        const std::string fault = child_call(library, [&] { status = library.table().begin(context, &scene, message); });
+        if (!fault.empty()) {
+          status = 1;
+          std::snprintf(message, CCDBENCH_MESSAGE_SIZE, "%s", fault.c_str());
+        }
+      }
+      message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
+      const std::vector<char> reply = status_reply(status, message);
+      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
+    } else if (kind == kStep) {
+      std::uint64_t index = 0, vertices = 0;
+      double thickness = 0;
+      if (!read_all(kRequestFd, reinterpret_cast<char*>(&index), sizeof index) ||
+          !read_all(kRequestFd, reinterpret_cast<char*>(&thickness), sizeof thickness) ||
+          !read_all(kRequestFd, reinterpret_cast<char*>(&vertices), sizeof vertices)) {
+        return 1;
+      }
+      std::vector<double> x0(3 * vertices), x1(3 * vertices);
+      if (!read_all(kRequestFd, reinterpret_cast<char*>(x0.data()), x0.size() * sizeof(double)) ||
+          !read_all(kRequestFd, reinterpret_cast<char*>(x1.data()), x1.size() * sizeof(double))) {
+        return 1;
+      }
+      StepReply collected;
+      ccdbench_contacts contacts{&collected,
+                                 [](void* host, std::uint32_t v, std::uint32_t f, double toi) {
+                                   auto* out = static_cast<StepReply*>(host);
+                                   put(out->vertex_face, v);
+                                   put(out->vertex_face, f);
+                                   put(out->vertex_face, toi);
+                                   ++out->vertex_face_count;
+                                 },
+                                 [](void* host, std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1, double toi) {
+                                   auto* out = static_cast<StepReply*>(host);
+                                   for (std::uint32_t v : {a0, a1, b0, b1}) put(out->edge_edge, v);
+                                   put(out->edge_edge, toi);
+                                   ++out->edge_edge_count;
+                                 }};
+      const ccdbench_step step{index, x0.data(), x1.data(), thickness};
+      char message[CCDBENCH_MESSAGE_SIZE] = {};
+      int status = 0;
+      const std::string fault = child_call(library, [&] { status = library.table().step(context, &step, &contacts, message); });
+      if (!fault.empty()) {
+        status = 1;
+        std::snprintf(message, CCDBENCH_MESSAGE_SIZE, "%s", fault.c_str());
+      }
+      message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
+      std::vector<char> reply = status_reply(status, message);
+      put(reply, collected.vertex_face_count);
+      reply.insert(reply.end(), collected.vertex_face.begin(), collected.vertex_face.end());
+      put(reply, collected.edge_edge_count);
+      reply.insert(reply.end(), collected.edge_edge.begin(), collected.edge_edge.end());
+      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
+    } else if (kind == kEnd) {
+      if (library.table().end) child_call(library, [&] { library.table().end(context); });
+      const std::vector<char> reply = status_reply(0, "");
+      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
+    } else {
+      return 1;
+    }
+  }
+  child_call(library, [&] { library.table().destroy(context); });
+  return 0;
+}
+
+}  // namespace ccd::plugin
