@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "datasets/atomic_file.hpp"
+#include "datasets/content_hash.hpp"
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/sample_step.hpp"
 #include "datasets/scene_file.hpp"
@@ -9,6 +10,7 @@
 #include "harness/inspect.hpp"
 #include "harness/progress.hpp"
 #include "harness/query_scoring.hpp"
+#include "harness/run/provenance.hpp"
 #include "harness/sample_comparison.hpp"
 #include "harness/stress.hpp"
 #include "harness/table.hpp"
@@ -42,8 +44,9 @@ int run_inspect(const InspectOptions& options, std::ostream& out) {
 
 namespace {
 
-/// The queries each method gave no answer to, written as query files under options.faults/METHOD/KIND/FILE.csv (the
-/// file's label kept), with FAULTS.txt beside them saying which query and why; said on `out`.
+/// The queries each method gave no answer to, written as query files under options.faults/METHOD/KIND/FILE-HASH.csv
+/// (the file's label kept; HASH from the file's whole path, so that two inputs of one name in two folders never
+/// share a file), with FAULTS.txt beside them saying which query and why; said on `out`.
 void write_query_faults(const std::vector<QueryScore>& scores, const std::vector<datasets::QueryFile>& files, const QueriesOptions& options,
                         std::ostream& out) {
   std::map<std::filesystem::path, std::string> notes_of_folder;
@@ -58,12 +61,19 @@ void write_query_faults(const std::vector<QueryScore>& scores, const std::vector
     for (const QueryScore::Fault& fault : score.fault_queries) {
       kept[0].queries.push_back(file->queries.at(fault.index));
       notes += score.file + " query " + std::to_string(fault.index + 1) + " (index " + std::to_string(fault.index) + ", line " +
-               std::to_string(fault.line) + "): " + fault.message + "\n";
+               std::to_string(fault.line) + "; query " + std::to_string(kept[0].queries.size()) + " of WRITTEN): " + fault.message + "\n";
     }
     // Under MPI the files were scaled by the ranks that scored them: scale the copies alike.
     if (options.scale_exponent != 0 && rank_info().size > 1) scale_query_files(kept, options.scale_exponent);
-    const std::filesystem::path written = folder / std::string(datasets::to_string(file->kind)) / file->path.filename();
+    datasets::ContentHash path_hash;
+    path_hash.text(file->path.string());
+    const std::filesystem::path written =
+        folder / std::string(datasets::to_string(file->kind)) / (file->path.stem().string() + "-" + path_hash.hex().substr(0, 8) + ".csv");
     datasets::write_query_file(written, kept[0].queries);
+    for (std::size_t at = notes.find("WRITTEN"); at != std::string::npos; at = notes.find("WRITTEN", at)) {
+      notes.replace(at, 7, written.string());
+      at += written.string().size();
+    }
     notes_of_folder[folder] += notes;
     out << score.method << ": " << score.faults << " of " << score.queries << " queries of " << score.file << " got no answer; first: query "
         << score.fault_queries.front().index + 1 << " (line " << score.fault_queries.front().line << "): " << score.fault_queries.front().message
@@ -187,7 +197,12 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
   }
   if (options.json) {
     nlohmann::json rows = nlohmann::json::array();
-    for (const QueryScore& score : scores) rows.push_back(to_json(score));
+    // Every record says where and how it was made, as run's do.
+    const nlohmann::json made = environment();
+    for (const QueryScore& score : scores) {
+      rows.push_back(to_json(score));
+      rows.back().update(made);
+    }
     datasets::write_json_file(*options.json, rows);
   }
   if (options.report) {
@@ -409,7 +424,11 @@ int run_stress_command(const StressOptions& options, std::ostream& out) {
   }
   if (options.json) {
     nlohmann::json document = nlohmann::json::array();
-    for (const StressRow& row : rows) document.push_back(to_json(row));
+    const nlohmann::json made = environment();
+    for (const StressRow& row : rows) {
+      document.push_back(to_json(row));
+      document.back().update(made);
+    }
     datasets::write_json_file(*options.json, document);
   }
   if (options.write_queries) {

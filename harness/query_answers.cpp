@@ -1,7 +1,7 @@
 #include "harness/query_answers.hpp"
 
 #include "core/error.hpp"
-#include "strategies/plugin/library.hpp"
+#include "datasets/content_hash.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -11,6 +11,10 @@
 
 namespace ccd::harness {
 namespace {
+
+/// A line longer than this is no answer (file,index,hit,toi,method with a long path and method name is a few hundred
+/// bytes): a file whose line 1 passes it is refused there, not read whole first.
+constexpr std::size_t kLongestAnswerLine = 1 << 16;
 
 /// One CSV line's fields. Answer files hold no quoted fields: paths and method names with ',' are refused.
 std::vector<std::string> fields_of(const std::string& line) {
@@ -42,24 +46,36 @@ std::string answer_number(double value) {
 }
 
 AnswerTable read_answer_table(const std::filesystem::path& path, const std::string& method) {
+  // A folder, a FIFO or a device is no answer file: refused before anything is read from it.
+  std::error_code status_error;
+  const std::filesystem::file_status status = std::filesystem::status(path, status_error);
+  if (status_error || !std::filesystem::exists(status)) throw InputError(path, {}, "no such file");
+  if (!std::filesystem::is_regular_file(status)) {
+    throw InputError(path, {}, std::filesystem::is_directory(status) ? "is a folder: an answer file (CSV) is expected" : "is not a regular file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, {}, "cannot be read");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   AnswerTable table;
   table.path = path;
-  // The digest is of the bytes scored, from this one read (a file rewritten while it is read cannot put one file's
-  // digest on another's verdict).
-  table.digest = plugin::bytes_digest(text);
+  // Read line by line, each line digested as it is read: the digest is of the bytes scored, from this one read (a
+  // file rewritten while it is read cannot put one file's digest on another's verdict), and a file that is not an
+  // answer file is refused at its first bad line, without holding the rest.
+  datasets::ContentHash digest;
   std::map<std::string, std::size_t> column;
   std::set<std::string> methods;
   std::size_t line_number = 0;
-  for (std::size_t begin = 0; begin < text.size();) {
+  for (std::string line; in.peek() != std::char_traits<char>::eof();) {
     ++line_number;
     const std::string where = "line " + std::to_string(line_number);
-    const std::size_t end = text.find('\n', begin);
-    if (end == std::string::npos) throw InputError(path, where, "the file ends inside this line (cut short?): every line ends with a newline");
-    std::string line = text.substr(begin, end - begin);
-    begin = end + 1;
+    line.clear();
+    for (int c; (c = in.get()) != std::char_traits<char>::eof() && c != '\n';) {
+      line.push_back(static_cast<char>(c));
+      if (line.size() > kLongestAnswerLine) throw InputError(path, where, "longer than " + std::to_string(kLongestAnswerLine) + " bytes: not an answer file");
+    }
+    const bool ended = !in.eof();
+    digest.bytes(line.data(), line.size());
+    if (ended) digest.bytes("\n", 1);
+    if (!ended) throw InputError(path, where, "the file ends inside this line (cut short?): every line ends with a newline");
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty() || line.front() == '#') continue;
     const std::vector<std::string> fields = fields_of(line);
@@ -108,6 +124,8 @@ AnswerTable read_answer_table(const std::filesystem::path& path, const std::stri
     methods.insert(answer.method);
     table.lines.push_back(std::move(answer));
   }
+  if (in.bad()) throw InputError(path, {}, "cannot be read");
+  table.digest = digest.hex();
   if (column.empty()) throw InputError(path, {}, "empty: an answer file starts with a header (file,index,hit,toi)");
   // The method: the one asked for (by its whole name or its head, "cubic64" for "cubic64:eta=1e-06"), or the only one.
   auto head = [](const std::string& name) { return name.substr(0, name.find(':')); };

@@ -127,9 +127,11 @@ class AnswerFileMethod final : public QueryMethod {
  public:
   explicit AnswerFileMethod(const AnswerTable& table) : table_(table) {}
   std::string name() const override {
-    std::string name = std::string(narrowphase::kAnswersHead) + ":" + std::filesystem::absolute(table_.path).lexically_normal().string();
+    // method= last: it takes the rest of a spec, ':' included (split_spec), so the name reads back as itself.
+    std::string name =
+        std::string(narrowphase::kAnswersHead) + ":" + std::filesystem::absolute(table_.path).lexically_normal().string() + ":digest=" + table_.digest;
     if (!table_.method.empty()) name += ":method=" + table_.method;
-    return name + ":digest=" + table_.digest;
+    return name;
   }
   QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double) const override {
     const auto it = table_.by_file.find(file.path.string());
@@ -218,12 +220,14 @@ nlohmann::json to_json(const QueryScore& s) {
     for (const QueryScore::Fault& f : s.fault_queries) row["error_queries"].push_back({{"index", f.index}, {"line", f.line}, {"message", f.message}});
   }
   if (s.with_toi) {
+    // With no TOI checked the error is unknown: null, never a 0 nobody measured.
+    auto checked = [&](double value) { return s.toi_checked ? nlohmann::json(value) : nlohmann::json(nullptr); };
     row["toi_checked"] = s.toi_checked;
     row["toi_late"] = s.toi_late;
-    row["toi_error_max"] = s.toi_error_max;
-    row["toi_error_mean"] = s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0;
-    row["toi_error_median"] = percentile(s.toi_errors, 50);
-    row["toi_error_p99"] = percentile(s.toi_errors, 99);
+    row["toi_error_max"] = checked(s.toi_error_max);
+    row["toi_error_mean"] = checked(s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0);
+    row["toi_error_median"] = checked(percentile(s.toi_errors, 50));
+    row["toi_error_p99"] = checked(percentile(s.toi_errors, 99));
   }
   return row;
 }
@@ -485,9 +489,12 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
                                     fixed(s.ns_per_query, 0)};
     if (with_errors) row.push_back(std::to_string(s.faults));
     if (with_changes) row.push_back(std::to_string(s.changed_between_passes));
-    if (with_toi) {
+    if (with_toi && s.toi_checked == 0) {
+      // Nothing checked (no TOI reported on a colliding query): '-', never a 0 nobody measured.
+      for (int k = 0; k < 5; ++k) row.push_back("-");
+    } else if (with_toi) {
       row.push_back(std::to_string(s.toi_late));
-      row.push_back(significant(s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0, 3));
+      row.push_back(significant(s.toi_error_sum / static_cast<double>(s.toi_checked), 3));
       row.push_back(significant(percentile(s.toi_errors, 50), 3));
       row.push_back(significant(percentile(s.toi_errors, 99), 3));
       row.push_back(significant(s.toi_error_max, 3));

@@ -58,7 +58,8 @@ def main(scores_path, image_path):
             axis.plot(x, y, marker="o", label=line)
             for xi, yi, text in zip(x, y, labels):
                 axis.annotate(text, (xi, yi), fontsize=6, xytext=(2, 2), textcoords="offset points")
-        if all("toi_error_p99" in r for r in points):
+        # null: nothing was checked (no TOI on a colliding query), so nothing to draw
+        if all(r.get("toi_error_p99") is not None for r in points):
             floor = 1e-18  # an error of 0 drawn at the axis' floor
             p99 = [max(r["toi_error_p99"], floor) for r in points]
             drawn = toi.plot(x, p99, marker="o", label=line)[0]

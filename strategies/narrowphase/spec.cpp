@@ -159,7 +159,16 @@ std::pair<std::string, SpecParameters> split_spec(const std::string& spec) {
   for (std::size_t i = first_key; i < parts.size(); ++i) {
     const std::size_t equals = parts[i].find('=');
     if (equals == std::string::npos || equals == 0) throw std::invalid_argument("'" + parts[i] + "' in '" + spec + "' is not key=value");
-    parameters[parts[i].substr(0, equals)] = parts[i].substr(equals + 1);
+    const std::string key = parts[i].substr(0, equals);
+    // answers:FILE:method=NAME: a method's name is a resolved spec itself ("cubic64:eta=1e-06", "plugin:PATH:..."),
+    // as the file holds it: method= takes the rest of the spec, ':' included, and is its last key.
+    if (kind == kAnswersHead && key == "method") {
+      std::string rest = parts[i].substr(equals + 1);
+      for (std::size_t j = i + 1; j < parts.size(); ++j) rest += ":" + parts[j];
+      parameters[key] = rest;
+      break;
+    }
+    parameters[key] = parts[i].substr(equals + 1);
   }
   return {parts[0], parameters};
 }
