@@ -70,7 +70,8 @@ AnswerTable read_answer_table(const std::filesystem::path& path, const std::stri
     line.clear();
     for (int c; (c = in.get()) != std::char_traits<char>::eof() && c != '\n';) {
       line.push_back(static_cast<char>(c));
-      if (line.size() > kLongestAnswerLine) throw InputError(path, where, "longer than " + std::to_string(kLongestAnswerLine) + " bytes: not an answer file");
+      if (line.size() > kLongestAnswerLine)
+        throw InputError(path, where, "longer than " + std::to_string(kLongestAnswerLine) + " bytes: not an answer file");
     }
     const bool ended = !in.eof();
     digest.bytes(line.data(), line.size());

@@ -128,8 +128,8 @@ class AnswerFileMethod final : public QueryMethod {
   explicit AnswerFileMethod(const AnswerTable& table) : table_(table) {}
   std::string name() const override {
     // method= last: it takes the rest of a spec, ':' included (split_spec), so the name reads back as itself.
-    std::string name =
-        std::string(narrowphase::kAnswersHead) + ":" + std::filesystem::absolute(table_.path).lexically_normal().string() + ":digest=" + table_.digest;
+    std::string name = std::string(narrowphase::kAnswersHead) + ":" + std::filesystem::absolute(table_.path).lexically_normal().string() +
+                       ":digest=" + table_.digest;
     if (!table_.method.empty()) name += ":method=" + table_.method;
     return name;
   }
