@@ -186,11 +186,13 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
     json stages = json::object();
     for (const auto& [stage, value] : r.stages.entries()) stages[stage] = value;
     json record = {{"record", "step"},
+                   {"schema", kRecordSchema},
                    {"scene", data.label},
                    {"thickness", scene.thickness()},
                    {"strategy", resolved},
                    {"step", k},
                    {"ms", ms},
+                   {"ms_repeats", step_ms[k]},
                    {"stages", stages},
                    {"candidate_pairs", r.counters.candidate_triangle_pairs},
                    {"elementary_tests", r.counters.elementary_tests},
@@ -221,6 +223,9 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
         record["missed_face_shape"] = verdicts[k].missed_face_shape;
       }
       record["missed"] = verdicts[k].missed;
+      if (verdicts[k].missed > 0 && judging == strategies::Judging::elementary_pairs) {
+        record["missed_pairs"] = missed_pair_records(scene, data.frames[k], data.frames[k + 1], data.truth[k], r.collisions, kKeptMissedPairs);
+      }
       record["missed_culled"] = verdicts[k].culled;
       record["missed_tested"] = verdicts[k].tested;
       record["false_alarms"] = verdicts[k].false_alarms;
@@ -264,15 +269,25 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
   }
   double ms_sum = 0;
   for (const double ms : medians) ms_sum += ms;
+  // Each timed pass's time over every step: what compare tests two runs' times with (a rank test over repeats).
+  std::vector<double> pass_ms(static_cast<std::size_t>(std::max(1, options.repeats)), 0.0);
+  for (const std::vector<double>& repeats : step_ms) {
+    for (std::size_t r = 0; r < repeats.size() && r < pass_ms.size(); ++r) pass_ms[r] += repeats[r];
+  }
   json summary = {{"record", "summary"},
+                  {"schema", kRecordSchema},
                   {"scene", data.label},
                   {"strategy", resolved},
+                  // The strategy as --strategy gave it, when the cell ran (run --json sets it to this run's): what
+                  // check and compare match a plugin's cell by, its resolved name holding absolute paths and digests.
+                  {"spec", spec},
                   {"triangles", scene.topology().num_faces()},
                   {"vertices", scene.topology().num_vertices()},
                   {"steps", steps},
                   {"thickness", scene.thickness()},
                   {"ms_per_step", median(medians)},
                   {"ms_per_step_mean", ms_sum / static_cast<double>(std::max<std::size_t>(steps, 1))},
+                  {"ms_per_repeat", pass_ms},
                   {"stage_ms", stage_summary},
                   {"stage_ms_mean", stage_mean},
                   {"unattributed_ms_mean", unattributed_count ? unattributed_sum / static_cast<double>(unattributed_count) : 0.0},
@@ -308,7 +323,9 @@ json run_cell(const SceneData& data, const std::string& spec, const RunOptions& 
                           {"toi_late", toi_total.late},
                           {"toi_missing", toi_total.missing},
                           {"toi_error_max", toi_total.error_max},
-                          {"toi_error_mean", toi_total.checked ? toi_total.error_sum / static_cast<double>(toi_total.checked) : 0.0}});
+                          {"toi_error_mean", toi_total.checked ? toi_total.error_sum / static_cast<double>(toi_total.checked) : 0.0},
+                          {"toi_error_median", toi_total.errors.empty() ? json() : json(percentile(toi_total.errors, 50))},
+                          {"toi_error_p99", toi_total.errors.empty() ? json() : json(percentile(toi_total.errors, 99))}});
     }
   }
   if (faults.contains("errors_written")) summary["errors_written"] = faults.at("errors_written");

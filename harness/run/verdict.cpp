@@ -21,6 +21,7 @@ void ToiVerdict::add(const ToiVerdict& other) {
   missing += other.missing;
   error_max = std::max(error_max, other.error_max);
   error_sum += other.error_sum;
+  errors.insert(errors.end(), other.errors.begin(), other.errors.end());
 }
 
 namespace {
@@ -44,6 +45,7 @@ void compare_tois(const std::vector<Contact>& truth, const std::vector<Contact>&
     const double error = std::abs(at->toi - exact.toi);
     verdict.error_max = std::max(verdict.error_max, error);
     verdict.error_sum += error;
+    verdict.errors.push_back(error);
   }
 }
 
@@ -115,6 +117,47 @@ Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::S
     for (const auto& c : missed.face_shape()) (in_sorted(tested->face_shape, c.pair) ? verdict.tested : verdict.culled) += 1;
   }
   return verdict;
+}
+
+namespace {
+
+template <class Pair>
+json pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const Pair& pair) {
+  const auto rows = pair_rows(scene.topology(), x0, x1, pair);
+  json coordinates = json::array();
+  for (const Vec3& row : rows) {
+    for (int k = 0; k < 3; ++k) coordinates.push_back(row[k]);
+  }
+  if constexpr (std::is_same_v<Pair, VertexFacePair>) {
+    return {{"kind", "vf"}, {"ids", {pair.v, pair.f}}, {"rows", coordinates}};
+  } else {
+    return {{"kind", "ee"}, {"ids", {pair.a.v0, pair.a.v1, pair.b.v0, pair.b.v1}}, {"rows", coordinates}};
+  }
+}
+
+}  // namespace
+
+json missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const VertexFacePair& pair) {
+  return pair_record(scene, x0, x1, pair);
+}
+
+json missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const EdgeEdgePair& pair) {
+  return pair_record(scene, x0, x1, pair);
+}
+
+json missed_pair_records(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const CollisionSet& truth,
+                         const CollisionSet& reported, std::size_t limit) {
+  json records = json::array();
+  const CollisionSet missed = set_difference(truth, reported);
+  for (const auto& c : missed.vertex_face()) {
+    if (records.size() >= limit) return records;
+    records.push_back(missed_pair_record(scene, x0, x1, c.pair));
+  }
+  for (const auto& c : missed.edge_edge()) {
+    if (records.size() >= limit) return records;
+    records.push_back(missed_pair_record(scene, x0, x1, c.pair));
+  }
+  return records;
 }
 
 std::size_t reported_count(const strategies::StepResult& result, strategies::Judging judging) {

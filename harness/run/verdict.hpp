@@ -19,6 +19,8 @@ namespace ccd::harness {
 struct ToiVerdict {
   std::size_t checked = 0, late = 0, missing = 0;
   double error_max = 0, error_sum = 0;
+  /// Every checked pair's error, for the percentiles a comparison of two runs reads.
+  std::vector<double> errors;
 
   void add(const ToiVerdict& other);
 };
@@ -36,6 +38,15 @@ struct Verdict {
 /// are split into culled and tested; with `toi`, reported TOIs are compared with the truth's exact ones.
 Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::StepResult& result, strategies::Judging judging,
               const strategies::TestedPairs* tested, bool toi);
+
+/// A missed pair as results keep it (a step record's `missed_pairs`): its kind, its ids and its 24 coordinates, so
+/// that `compare` can write the pairs a change newly misses as query files without the scene.
+nlohmann::json missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const VertexFacePair& pair);
+nlohmann::json missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const EdgeEdgePair& pair);
+
+/// The first `limit` missed pairs of a step (vertex-face, then edge-edge, each in pair order) as records.
+nlohmann::json missed_pair_records(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const CollisionSet& truth,
+                                   const CollisionSet& reported, std::size_t limit);
 
 /// What a step reported, in the unit it is judged by.
 std::size_t reported_count(const strategies::StepResult& result, strategies::Judging judging);

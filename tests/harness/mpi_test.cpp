@@ -43,10 +43,11 @@ testing::CommandResult mpirun(int ranks, const std::string& arguments, const std
 /// timings, host, rank, threads and when it finished).
 nlohmann::json verdict(const nlohmann::json& summary) {
   nlohmann::json kept;
-  for (const char* field : {"scene",           "strategy",         "triangles",     "steps",         "thickness",    "thickness_from", "verified",
-                            "colliding",       "missed",           "missed_culled", "missed_tested", "false_alarms", "miss_causes",    "reported",
-                            "candidate_pairs", "elementary_tests", "kept_bytes",    "history_bytes", "device_bytes", "judged_by",      "toi_checked",
-                            "toi_late",        "toi_missing",      "toi_error_max", "toi_error_mean"}) {
+  for (const char* field :
+       {"scene",           "strategy",         "triangles",     "steps",          "thickness",        "thickness_from", "verified",
+        "colliding",       "missed",           "missed_culled", "missed_tested",  "false_alarms",     "miss_causes",    "reported",
+        "candidate_pairs", "elementary_tests", "kept_bytes",    "history_bytes",  "device_bytes",     "judged_by",      "toi_checked",
+        "toi_late",        "toi_missing",      "toi_error_max", "toi_error_mean", "toi_error_median", "toi_error_p99"}) {
     if (summary.contains(field)) kept[field] = summary[field];
   }
   return kept;
