@@ -9,6 +9,7 @@
 #include "harness/query_scoring.hpp"
 #include "harness/registry_listing.hpp"
 #include "harness/run.hpp"
+#include "harness/run/compare.hpp"
 #include "harness/run/provenance.hpp"
 #include "harness/work_queue.hpp"
 #include "strategies/narrowphase/registry.hpp"
@@ -263,7 +264,7 @@ int run_command_line(int argc, char** argv) {
                   "where what a step could not answer (a plugin's errors, crashes, hangs) is written to replay\n"
                   "(default: OUT/faults)");
 
-  std::string baseline_file;
+  std::string baseline_file, write_baseline_file, baseline_margin = "0";
   std::vector<std::string> results_files;
   CLI::App* check =
       app.add_subcommand("check",
@@ -271,13 +272,53 @@ int run_command_line(int argc, char** argv) {
                          "has no baseline entry or an entry no result, a result was not verified or has no colliding pair (it could\n"
                          "not miss anything, so it gates nothing), or a result misses more than its entry allows, has errors\n"
                          "(answers a plugin could not give) beyond its max_errors (default 0), or answers that changed between\n"
-                         "passes unless its entry says allow_nondeterministic: true.");
+                         "passes unless its entry says allow_nondeterministic: true. With --write-baseline it writes the baseline\n"
+                         "of the results instead (README: CI regression).");
+  CLI::Option* baseline_option =
+      check->add_option("--baseline", baseline_file,
+                        "JSON array of {scene, strategy, thickness: \"scene\" or a number, max_missed: integer >= 0}, each with optional\n"
+                        "steps, colliding, max_toi_late, max_errors (integers) and allow_nondeterministic (true or false)");
+  CLI::Option* write_baseline_option =
+      check->add_option("--write-baseline", write_baseline_file,
+                        "write FILE: one entry per result, the strategy as --strategy gave it, max_missed, max_errors and\n"
+                        "max_toi_late (with --toi) as the results have them plus --margin, steps and colliding pinned; results\n"
+                        "not verified or without a colliding pair are refused");
+  baseline_option->excludes(write_baseline_option);
   check
-      ->add_option("--baseline", baseline_file,
-                   "JSON array of {scene, strategy, thickness: \"scene\" or a number, max_missed: integer >= 0}, each with optional\n"
-                   "steps, colliding, max_toi_late, max_errors (integers) and allow_nondeterministic (true or false)")
-      ->required();
+      ->add_option("--margin", baseline_margin,
+                   "with --write-baseline: allow this many more missed pairs, errors and late TOIs than the results show,\n"
+                   "a count N or a percentage P% of each (rounded up); default 0")
+      ->needs(write_baseline_option);
+  std::string check_strategies;
+  check->add_option("--strategy", check_strategies,
+                    "gate (or write the baseline of) only the results of these strategies, comma-separated, as run's\n"
+                    "--strategy gave them: a run of a plugin's base and head builds gates the head alone");
   check->add_option("RESULTS", results_files, "`ccdbench run --json` summary files, taken together")->required();
+
+  ccd::harness::CompareOptions compare_options;
+  CLI::App* compare =
+      app.add_subcommand("compare",
+                         "Compare two result sets of `run`, cell by cell (README: CI regression): missed, errors, false alarms, late TOIs,\n"
+                         "the TOI error's median and 99th percentile, memory, and ms per step with the ratio and whether it is beyond the\n"
+                         "noise (a two-sided Mann-Whitney U test over the passes' times, exact for small samples; p printed: with --repeat\n"
+                         "R on both sides, p can go below 0.05 only from R = 4). With step records (an --out folder, or its results.jsonl)\n"
+                         "also the steps whose answers changed and the pairs the head newly misses, written as query files to replay.\n"
+                         "Cells are matched by scene, δ and the strategy as given; times are compared only between records of one\n"
+                         "machine, build type, compiler and flags. Exit 1 when a verdict got worse (more missed, errors or late TOIs,\n"
+                         "or answers that now change between passes), 2 for a malformed file, else 0.");
+  compare->add_option("BASE", compare_options.base, "the base: a `run --json` file, a run's --out folder or its results.jsonl")->required();
+  compare->add_option("HEAD", compare_options.head, "the head, as BASE (may be the same file as BASE with --pair)")->required();
+  compare->add_option("--pair", compare_options.pairs,
+                      "BASE_SPEC HEAD_SPEC: compare the cells of BASE_SPEC in BASE with those of HEAD_SPEC in HEAD (two builds\n"
+                      "of a plugin run in one invocation: BASE and HEAD may then be one file); repeatable");
+  compare->add_option("--alpha", compare_options.alpha, "a time change counts when its p-value is below this (default 0.05)")
+      ->check(CLI::Range(1e-9, 0.5));
+  compare->add_flag("--fail-on-slower", compare_options.fail_on_slower, "also exit 1 when a cell got slower beyond the noise");
+  compare->add_option("--markdown", compare_options.markdown, "also write the comparison as Markdown (a pull request's comment)");
+  compare->add_option("--json", compare_options.json, "also write the comparison as JSON, for scripts");
+  compare->add_option("--replay", compare_options.replay,
+                      "where the newly missed pairs are written as query files, FOLDER/CELL/{vertex-face,edge-edge}/\n"
+                      "newly-missed.csv (default: compare-replay)");
 
   CLI::App* scenes = app.add_subcommand("scenes", "List the built-in procedural scenes, their parameters and defaults.");
 
@@ -433,12 +474,35 @@ int run_command_line(int argc, char** argv) {
       return 0;
     }
     if (*check) {
-      const nlohmann::json baseline = ccd::datasets::read_json_file(baseline_file, "baseline file");
       std::vector<std::pair<std::filesystem::path, nlohmann::json>> results;
-      for (const std::string& file : results_files) results.emplace_back(file, ccd::datasets::read_json_file(file, "results file"));
+      auto read_results = [&] {
+        for (const std::string& file : results_files) results.emplace_back(file, ccd::datasets::read_json_file(file, "results file"));
+        if (!check_strategies.empty()) results = ccd::harness::select_results(results, CLI::detail::split(check_strategies, ','), std::cout);
+      };
+      if (!write_baseline_file.empty()) {
+        const ccd::harness::BaselineMargin margin = ccd::harness::BaselineMargin::parse(baseline_margin);
+        ccd::datasets::require_writable_file(write_baseline_file);
+        read_results();
+        const nlohmann::json baseline = ccd::harness::write_baseline(results, margin, std::cerr);
+        ccd::datasets::write_json_file(write_baseline_file, baseline);
+        for (const nlohmann::json& entry : baseline) {
+          std::cout << "entry " << entry["scene"].get<std::string>() << " / " << entry["strategy"].get<std::string>() << " / δ "
+                    << entry["thickness"].dump() << ": max_missed " << entry["max_missed"] << ", max_errors " << entry.value("max_errors", 0)
+                    << (entry.contains("max_toi_late") ? ", max_toi_late " + entry["max_toi_late"].dump() : std::string()) << ", steps "
+                    << entry["steps"] << ", colliding " << entry["colliding"] << "\n";
+        }
+        std::cout << "check: wrote " << baseline.size() << " entr" << (baseline.size() == 1 ? "y" : "ies") << " to " << write_baseline_file << "\n";
+        return 0;
+      }
+      if (baseline_file.empty()) return refuse({}, "check needs --baseline FILE (or --write-baseline FILE to write one)");
+      const nlohmann::json baseline = ccd::datasets::read_json_file(baseline_file, "baseline file");
+      read_results();
       const bool ok = ccd::harness::check_against_baseline(baseline, baseline_file, results, std::cout);
       std::cout << (ok ? "check: every result within its baseline\n" : "check: FAILED\n");
       return ok ? 0 : 1;
+    }
+    if (*compare) {
+      return ccd::harness::run_compare(compare_options, std::cout);
     }
     if (*stress) {
       stress_options.methods = CLI::detail::split(stress_methods, ',');

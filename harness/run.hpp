@@ -79,4 +79,30 @@ std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostrea
 bool check_against_baseline(const nlohmann::json& baseline, const std::filesystem::path& baseline_file,
                             const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, std::ostream& out);
 
+/// Keeps of the results (run --json arrays) those of the given strategies, each as --strategy gave it (a summary's
+/// spec) or its resolved name; says on `out` how many others were left out. @throws InputError when a strategy has
+/// no result at all (a misspelt name would otherwise gate nothing).
+std::vector<std::pair<std::filesystem::path, nlohmann::json>> select_results(
+    const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, const std::vector<std::string>& strategies, std::ostream& out);
+
+/// How much a written baseline allows beyond what the results show, for missed pairs, errors and late TOIs: a count
+/// added to each, or a percentage of each (rounded up).
+struct BaselineMargin {
+  std::uint64_t count = 0;
+  double percent = 0;
+
+  /// Parses "N" or "P%" (N an integer >= 0, P a number in [0, 1000]). @throws std::invalid_argument.
+  static BaselineMargin parse(const std::string& text);
+  std::uint64_t allow(std::uint64_t value) const;
+};
+
+/// `ccdbench check --write-baseline`: one entry per result (run --json summaries, several files taken as one), with
+/// the strategy as the run was given it, δ as "scene" or the number, max_missed, max_errors and max_toi_late (with
+/// --toi) from the result plus the margin, and the steps and colliding pairs pinned. Results that could not be gated are
+/// refused, as check refuses them: not verified, no colliding pair, or two results for one cell. A result whose
+/// answers changed between passes gets no allow_nondeterministic: it is named on `warnings`, and check fails it until
+/// a person says it may. @throws InputError (the file, the entry).
+nlohmann::json write_baseline(const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, const BaselineMargin& margin,
+                              std::ostream& warnings);
+
 }  // namespace ccd::harness

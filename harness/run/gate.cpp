@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <ostream>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
 
 namespace ccd::harness {
@@ -149,7 +151,9 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
         ++entries_matched;
       }
     }
-    const std::string name = key.scene + " / " + key.strategy + " / δ " + (scene_thickness ? "scene's " : "") + [&] {
+    // Named by the strategy as the run was given it (a plugin's resolved name is long and holds its path).
+    const std::string shown = result.contains("spec") && result["spec"].is_string() ? result["spec"].get<std::string>() : key.strategy;
+    const std::string name = key.scene + " / " + shown + " / δ " + (scene_thickness ? "scene's " : "") + [&] {
       std::ostringstream t;
       t << std::setprecision(17) << *key.thickness;
       return t.str();
@@ -220,6 +224,111 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
     }
   }
   return ok;
+}
+
+std::vector<std::pair<std::filesystem::path, json>> select_results(const std::vector<std::pair<std::filesystem::path, json>>& results,
+                                                                   const std::vector<std::string>& strategies, std::ostream& out) {
+  std::vector<std::pair<std::filesystem::path, json>> kept;
+  std::vector<bool> found(strategies.size(), false);
+  std::size_t left = 0;
+  for (const auto& [file, document] : results) {
+    if (!document.is_array()) throw InputError(file, {}, "must be a JSON array (a `ccdbench run --json` file)");
+    json selected = json::array();
+    for (const json& result : document) {
+      bool wanted = false;
+      for (std::size_t k = 0; k < strategies.size(); ++k) {
+        const bool same =
+            (result.contains("spec") && result["spec"] == strategies[k]) || (result.contains("strategy") && result["strategy"] == strategies[k]);
+        if (same) found[k] = wanted = true;
+      }
+      if (wanted) {
+        selected.push_back(result);
+      } else {
+        ++left;
+      }
+    }
+    kept.emplace_back(file, std::move(selected));
+  }
+  for (std::size_t k = 0; k < strategies.size(); ++k) {
+    if (!found[k])
+      throw InputError(results.empty() ? std::filesystem::path() : results.front().first, {}, "no result of --strategy " + strategies[k]);
+  }
+  if (left > 0) out << "left out: " << left << " result" << (left == 1 ? "" : "s") << " of other strategies than --strategy names\n";
+  return kept;
+}
+
+BaselineMargin BaselineMargin::parse(const std::string& text) {
+  BaselineMargin margin;
+  const bool percent = !text.empty() && text.back() == '%';
+  const std::string number = percent ? text.substr(0, text.size() - 1) : text;
+  std::size_t used = 0;
+  try {
+    if (percent) {
+      margin.percent = std::stod(number, &used);
+    } else if (!number.empty() && number[0] != '-' && number[0] != '+') {
+      margin.count = std::stoull(number, &used);
+    }
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != number.size() || !(margin.percent >= 0 && margin.percent <= 1000)) {
+    throw std::invalid_argument("--margin " + text + ": must be a count (an integer >= 0) or a percentage (P%, 0 <= P <= 1000)");
+  }
+  return margin;
+}
+
+std::uint64_t BaselineMargin::allow(std::uint64_t value) const {
+  return value + count + static_cast<std::uint64_t>(std::ceil(static_cast<double>(value) * percent / 100.0));
+}
+
+json write_baseline(const std::vector<std::pair<std::filesystem::path, json>>& results_files, const BaselineMargin& margin, std::ostream& warnings) {
+  json baseline = json::array();
+  std::vector<std::string> seen;
+  for (const auto& [file, document] : results_files) {
+    if (!document.is_array()) throw InputError(file, {}, "must be a JSON array (a `ccdbench run --json` file)");
+    for (std::size_t i = 0; i < document.size(); ++i) {
+      const json& result = document[i];
+      const std::string where = "entry " + std::to_string(i);
+      if (!result.is_object() || !result.contains("scene") || !result["scene"].is_string() || !result.contains("strategy") ||
+          !result["strategy"].is_string() || !result.contains("thickness") || !result["thickness"].is_number() ||
+          !result.contains("thickness_from") || !result["thickness_from"].is_string()) {
+        throw InputError(file, where, "not a summary of `ccdbench run --json` (scene, strategy, thickness, thickness_from)");
+      }
+      // The strategy as the user gave it: a plugin's resolved name holds its absolute path and its file's digest,
+      // which would tie the baseline to one checkout and one build.
+      const std::string strategy =
+          result.contains("spec") && result["spec"].is_string() ? result["spec"].get<std::string>() : result["strategy"].get<std::string>();
+      const bool scene_thickness = result["thickness_from"] == "scene";
+      const json thickness = scene_thickness ? json("scene") : result["thickness"];
+      const std::string name = result["scene"].get<std::string>() + " / " + strategy + " / δ " + thickness.dump();
+      if (!result.value("verified", false) || !result.contains("missed"))
+        throw InputError(file, where, name + ": not verified (run with --verify exact)");
+      const std::uint64_t colliding = result_count(result, "colliding", file, where);
+      if (colliding == 0) {
+        throw InputError(file, where,
+                         name + ": no colliding pair in any step, so it cannot miss: an entry for it would gate nothing (check refuses it too)");
+      }
+      const std::string key = result["scene"].get<std::string>() + "|" + strategy + "|" + thickness.dump();
+      if (std::find(seen.begin(), seen.end(), key) != seen.end()) throw InputError(file, where, name + ": a second result for one cell");
+      seen.push_back(key);
+      json entry = {{"scene", result["scene"]},
+                    {"strategy", strategy},
+                    {"thickness", thickness},
+                    {"max_missed", margin.allow(result_count(result, "missed", file, where))},
+                    {"steps", result_count(result, "steps", file, where)},
+                    {"colliding", colliding}};
+      if (result.contains("errors")) entry["max_errors"] = margin.allow(result_count(result, "errors", file, where));
+      if (result.contains("toi_late")) entry["max_toi_late"] = margin.allow(result_count(result, "toi_late", file, where));
+      if (result.contains("nondeterministic_at_step")) {
+        warnings << "ccdbench: warning: " << name << ": its answers differed between two passes of step " << result["nondeterministic_at_step"].dump()
+                 << "; check fails it until its entry says allow_nondeterministic: true (find out why first)\n";
+      }
+      baseline.push_back(std::move(entry));
+    }
+  }
+  if (baseline.empty())
+    throw InputError(results_files.empty() ? std::filesystem::path() : results_files.front().first, {}, "no results: nothing to write a baseline of");
+  return baseline;
 }
 
 }  // namespace ccd::harness

@@ -1,0 +1,396 @@
+#include "harness/run/compare.hpp"
+
+#include "core/error.hpp"
+#include "datasets/atomic_file.hpp"
+#include "datasets/query_file.hpp"
+#include "harness/cell_store.hpp"
+#include "harness/rank_test.hpp"
+#include "harness/run/cells.hpp"
+#include "harness/table.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <ostream>
+#include <set>
+#include <sstream>
+
+namespace ccd::harness {
+
+using nlohmann::json;
+
+namespace {
+
+/// One side's records: the cells' summaries, and each cell's step records when the side has them.
+struct ResultSet {
+  std::filesystem::path path;
+  std::vector<json> summaries;
+  /// By steps_key: the step records of a cell, by step index.
+  std::map<std::string, std::map<std::size_t, json>> steps;
+  bool has_steps = false;
+};
+
+/// A cell's steps are found by what both records name: scene, δ and resolved strategy.
+std::string steps_key(const json& record) {
+  return record.at("scene").dump() + "|" + record.at("thickness").dump() + "|" + record.at("strategy").dump();
+}
+
+ResultSet load(const std::filesystem::path& given) {
+  ResultSet set;
+  set.path = given;
+  std::filesystem::path file = given;
+  if (std::filesystem::is_directory(given)) file = given / "results.jsonl";
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file, {}, std::filesystem::is_directory(given) ? "no results.jsonl: not a run's --out folder" : "cannot be read");
+  auto check_summary = [&](const json& s, const std::string& where) {
+    for (const char* field : {"scene", "strategy", "thickness", "thickness_from", "steps", "ms_per_step"}) {
+      if (!s.is_object() || !s.contains(field))
+        throw InputError(file, where, std::string("a summary without '") + field + "': not a result of `run`");
+    }
+  };
+  if (file.extension() == ".jsonl") {
+    std::size_t line_number = 0;
+    for (std::string line; std::getline(in, line);) {
+      ++line_number;
+      if (line.empty()) continue;
+      const std::string where = "line " + std::to_string(line_number);
+      json record;
+      try {
+        record = json::parse(line);
+      } catch (const json::parse_error& error) {
+        throw InputError(file, where, std::string("not JSON: ") + error.what());
+      }
+      const std::string kind = record.is_object() ? record.value("record", "") : "";
+      if (kind == "summary") {
+        check_summary(record, where);
+        set.summaries.push_back(std::move(record));
+      } else if (kind == "step") {
+        if (!record.contains("step") || !record["step"].is_number_unsigned()) throw InputError(file, where, "a step record without its step");
+        const std::string key = steps_key(record);
+        const std::size_t step = record["step"].get<std::size_t>();
+        set.steps[key][step] = std::move(record);
+        set.has_steps = true;
+      }
+    }
+  } else {
+    const json document = datasets::read_json_file(file, "results file");
+    if (!document.is_array()) throw InputError(file, {}, "must be a JSON array of summaries (`run --json`) or a results.jsonl");
+    for (std::size_t i = 0; i < document.size(); ++i) {
+      check_summary(document[i], "entry " + std::to_string(i));
+      set.summaries.push_back(document[i]);
+    }
+  }
+  return set;
+}
+
+/// The strategy as the run was given it (what the gate and compare match), else its resolved name.
+std::string spec_of(const json& s) { return s.value("spec", s["strategy"].get<std::string>()); }
+
+/// "fold / full / δ scene's 0.008" or "... / δ 0".
+std::string cell_name(const json& s, const std::string& spec) {
+  return s["scene"].get<std::string>() + " / " + spec + " / δ " + (s["thickness_from"] == "scene" ? "scene's " : "") +
+         significant(s["thickness"].get<double>(), 6);
+}
+
+/// What matches a cell: scene, δ (the scene's own, or the number) and the spec.
+std::string match_key(const json& s, const std::string& spec) {
+  const bool scene_thickness = s["thickness_from"] == "scene";
+  return s["scene"].get<std::string>() + "|" + (scene_thickness ? std::string("scene") : s["thickness"].dump()) + "|" + spec;
+}
+
+std::optional<double> number(const json& s, const char* field) {
+  if (!s.contains(field) || !s[field].is_number()) return std::nullopt;
+  return s[field].get<double>();
+}
+
+/// "3 → 4" (or "3" when equal, "-" when unknown on a side).
+std::string change(std::optional<double> before, std::optional<double> after, int digits = -1) {
+  auto text = [&](std::optional<double> v) { return !v ? std::string("-") : digits < 0 ? significant(*v, 15) : significant(*v, digits); };
+  if (before && after && *before == *after) return text(before);
+  return text(before) + " → " + text(after);
+}
+
+/// Whether two records were made where their times may be compared: one machine, build type, compiler and flags.
+std::string times_not_comparable(const json& base, const json& head) {
+  auto field = [](const json& s, const char* name) {
+    if (s.contains(name)) return s[name].dump();
+    if (s.contains("provenance") && s["provenance"].contains(name)) return s["provenance"][name].dump();
+    return std::string("?");
+  };
+  for (const char* name : {"machine", "build_type", "compiler", "cxx_flags"}) {
+    if (field(base, name) != field(head, name)) return std::string("different ") + name + " (" + field(base, name) + ", " + field(head, name) + ")";
+  }
+  return {};
+}
+
+/// The digest in a resolved plugin spec ("...:digest=HEX:..."), or "".
+std::string digest_in(const std::string& name) {
+  const std::size_t at = name.find(":digest=");
+  return at == std::string::npos ? std::string() : name.substr(at + 8, 32);
+}
+
+/// A missed pair's identity: its kind and ids.
+std::string pair_identity(const json& pair) { return pair.at("kind").get<std::string>() + pair.at("ids").dump(); }
+
+/// The smallest two-sided p-value the exact test can give for samples of n and m: 2 / C(n + m, n).
+double smallest_p(std::size_t n, std::size_t m) {
+  double rankings = 1;
+  for (std::size_t k = 1; k <= n; ++k) rankings = rankings * static_cast<double>(m + k) / static_cast<double>(k);
+  return std::min(1.0, 2.0 / rankings);
+}
+
+struct CellComparison {
+  std::string name;
+  json base, head;
+  bool worse = false, slower = false;
+  std::vector<std::string> notes;
+  std::vector<std::size_t> changed_steps;
+  /// The pairs the head misses and the base did not, by step: the records as the head kept them.
+  std::vector<std::pair<std::size_t, json>> newly_missed;
+  std::optional<RankTest> time_test;
+  double ratio = 0;
+};
+
+void compare_steps(const ResultSet& base, const ResultSet& head, CellComparison& cell) {
+  const auto base_steps = base.steps.find(steps_key(cell.base));
+  const auto head_steps = head.steps.find(steps_key(cell.head));
+  if (base_steps == base.steps.end() || head_steps == head.steps.end()) return;
+  for (const auto& [k, head_step] : head_steps->second) {
+    const auto other = base_steps->second.find(k);
+    if (other == base_steps->second.end()) continue;
+    const json& base_step = other->second;
+    if (base_step.value("answers", "") != head_step.value("answers", "")) cell.changed_steps.push_back(k);
+    if (!head_step.contains("missed_pairs")) continue;
+    // Each side keeps only its first missed pairs (kKeptMissedPairs): beyond them a pair's status is not known.
+    const json& kept_base = base_step.contains("missed_pairs") ? base_step["missed_pairs"] : json::array();
+    const json& kept_head = head_step["missed_pairs"];
+    if (base_step.value("missed", std::size_t{0}) > kept_base.size() || head_step.value("missed", std::size_t{0}) > kept_head.size()) {
+      cell.notes.push_back("step " + std::to_string(k) + ": more missed pairs than a record keeps (" + std::to_string(kKeptMissedPairs) +
+                           "): its newly missed pairs are not listed");
+      continue;
+    }
+    std::set<std::string> before;
+    for (const json& pair : kept_base) before.insert(pair_identity(pair));
+    for (const json& pair : kept_head) {
+      if (before.count(pair_identity(pair)) == 0) cell.newly_missed.emplace_back(k, pair);
+    }
+  }
+}
+
+CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set, const json& base, const json& head, const std::string& name,
+                            const CompareOptions& options) {
+  CellComparison cell{name, base, head};
+  for (const char* field : {"missed", "errors", "toi_late"}) {
+    const auto b = number(base, field), h = number(head, field);
+    if (b && h && *h > *b) {
+      cell.worse = true;
+      cell.notes.push_back(std::string(field) + " " + change(b, h));
+    }
+  }
+  if (head.contains("nondeterministic_at_step") && !base.contains("nondeterministic_at_step")) {
+    cell.worse = true;
+    cell.notes.push_back("answers now change between passes (step " + head["nondeterministic_at_step"].dump() + ")");
+  }
+  if (base.contains("key") && head.contains("key") && base["key"].value("scene_content", "") != head["key"].value("scene_content", "")) {
+    cell.notes.push_back("the scene's content differs: verdicts are of different inputs");
+  }
+  if (base["strategy"] != head["strategy"]) {
+    const std::string b = digest_in(base["strategy"]), h = digest_in(head["strategy"]);
+    cell.notes.push_back(!b.empty() && !h.empty() && b != h ? "plugin code changed: digest " + b + " → " + h : "resolved strategy changed");
+  }
+  compare_steps(base_set, head_set, cell);
+  const std::string not_comparable = times_not_comparable(base, head);
+  if (!not_comparable.empty()) {
+    cell.notes.push_back("times not compared: " + not_comparable);
+  } else if (base.contains("ms_per_repeat") && head.contains("ms_per_repeat")) {
+    const auto base_times = base["ms_per_repeat"].get<std::vector<double>>(), head_times = head["ms_per_repeat"].get<std::vector<double>>();
+    cell.time_test = mann_whitney(base_times, head_times);
+    if (smallest_p(base_times.size(), head_times.size()) >= options.alpha) {
+      cell.notes.push_back("times cannot be told apart at p < " + significant(options.alpha, 3) + " from " + std::to_string(base_times.size()) +
+                           " and " + std::to_string(head_times.size()) + " passes (run both with --repeat 5 or more)");
+    }
+    cell.ratio = base["ms_per_step"].get<double>() > 0 ? head["ms_per_step"].get<double>() / base["ms_per_step"].get<double>() : 0;
+    cell.slower = cell.time_test->p < options.alpha && cell.ratio > 1;
+  } else {
+    cell.notes.push_back("times not tested: a side has no per-repeat times (records of schema 1)");
+  }
+  return cell;
+}
+
+Table comparison_table(const std::vector<CellComparison>& cells) {
+  using Align = Table::Align;
+  Table table({{"cell"},
+               {"missed", Align::right},
+               {"errors", Align::right},
+               {"false alarms", Align::right},
+               {"TOI late", Align::right},
+               {"TOI error p50", Align::right},
+               {"p99", Align::right},
+               {"MiB host peak", Align::right},
+               {"ms/step", Align::right},
+               {"head/base", Align::right},
+               {"p", Align::right},
+               {"verdict"}});
+  for (const CellComparison& c : cells) {
+    auto mib = [](std::optional<double> bytes) { return bytes ? std::optional<double>(*bytes / (1024.0 * 1024.0)) : std::nullopt; };
+    std::string verdict = c.worse ? "WORSE" : "same or better";
+    if (c.time_test)
+      verdict += c.slower ? ", slower beyond noise" : c.time_test->p < 0.05 && c.ratio < 1 ? ", faster beyond noise" : ", time within noise";
+    table.add_row({c.name, change(number(c.base, "missed"), number(c.head, "missed")), change(number(c.base, "errors"), number(c.head, "errors")),
+                   change(number(c.base, "false_alarms"), number(c.head, "false_alarms")),
+                   change(number(c.base, "toi_late"), number(c.head, "toi_late")),
+                   change(number(c.base, "toi_error_median"), number(c.head, "toi_error_median"), 3),
+                   change(number(c.base, "toi_error_p99"), number(c.head, "toi_error_p99"), 3),
+                   change(mib(number(c.base, "host_peak_bytes")), mib(number(c.head, "host_peak_bytes")), 4),
+                   change(number(c.base, "ms_per_step"), number(c.head, "ms_per_step"), 4), c.time_test ? fixed(c.ratio, 2) + "x" : "-",
+                   c.time_test ? significant(c.time_test->p, 2) : "-", verdict});
+  }
+  return table;
+}
+
+/// Details under the table: notes, changed steps, newly missed pairs (and where they were written).
+std::string details(const std::vector<CellComparison>& cells, const std::map<std::string, std::filesystem::path>& written) {
+  std::ostringstream text;
+  for (const CellComparison& c : cells) {
+    if (c.notes.empty() && c.changed_steps.empty() && c.newly_missed.empty()) continue;
+    text << c.name << ":\n";
+    for (const std::string& note : c.notes) text << "  " << note << "\n";
+    if (!c.changed_steps.empty()) {
+      text << "  answers changed on " << c.changed_steps.size() << " step" << (c.changed_steps.size() == 1 ? "" : "s") << ":";
+      for (std::size_t i = 0; i < std::min<std::size_t>(c.changed_steps.size(), 20); ++i) text << " " << c.changed_steps[i];
+      text << (c.changed_steps.size() > 20 ? " ..." : "") << "\n";
+    }
+    for (const auto& [step, pair] : c.newly_missed)
+      text << "  newly missed at step " << step << ": " << pair["kind"].get<std::string>() << " " << pair["ids"].dump() << "\n";
+    if (const auto it = written.find(c.name); it != written.end()) {
+      // The pairs collide at the cell's δ: they are replayed at it.
+      text << "  written to replay: ccdbench queries " << it->second.string() << " --thickness " << significant(c.head["thickness"].get<double>(), 17)
+           << "\n";
+    }
+  }
+  return text.str();
+}
+
+/// The newly missed pairs of the `number`th cell compared as query files (truth 1: they collide at the cell's δ),
+/// DIR/cell-NUMBER-SCENE/{vertex-face,edge-edge}/newly-missed.csv.
+std::filesystem::path write_replay(const CellComparison& c, std::size_t number, const std::filesystem::path& root) {
+  const std::filesystem::path folder =
+      root / ("cell-" + std::to_string(number) + "-" + safe_path_component(c.head["scene"].get<std::string>().substr(0, 100)));
+  std::vector<datasets::Query> vertex_face, edge_edge;
+  for (const auto& [step, pair] : c.newly_missed) {
+    datasets::Query query;
+    const json& rows = pair.at("rows");
+    if (!rows.is_array() || rows.size() != 24) continue;
+    for (int i = 0; i < 8; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        const double value = rows[static_cast<std::size_t>(3 * i + k)].get<double>();
+        query.rounded[i][k] = value;
+        query.exact[i][k] = mpq_class(value);
+      }
+    }
+    query.truth = true;
+    (pair["kind"] == "vf" ? vertex_face : edge_edge).push_back(std::move(query));
+  }
+  // A folder of an earlier compare keeps none of its pairs: each file is this comparison's, or gone.
+  for (const char* kind : {"vertex-face", "edge-edge"}) std::filesystem::remove(folder / kind / "newly-missed.csv");
+  if (!vertex_face.empty()) datasets::write_query_file(folder / "vertex-face" / "newly-missed.csv", vertex_face);
+  if (!edge_edge.empty()) datasets::write_query_file(folder / "edge-edge" / "newly-missed.csv", edge_edge);
+  return folder;
+}
+
+}  // namespace
+
+int run_compare(const CompareOptions& options, std::ostream& out) {
+  if (options.markdown) datasets::require_writable_file(*options.markdown);
+  if (options.json) datasets::require_writable_file(*options.json);
+  const ResultSet base = load(options.base), head = load(options.head);
+  // Which spec of a side a cell is matched by: as given, or paired.
+  auto matched_spec = [&](const std::string& spec, bool base_side) {
+    for (const auto& [b, h] : options.pairs) {
+      if (spec == (base_side ? b : h)) return b + " → " + h;
+    }
+    return spec;
+  };
+  // With pairs, a side's cells of the other side's spec are not compared (in one run's results, the head's build
+  // on the base side and the base's build on the head side).
+  auto left_out = [&](const std::string& spec, bool base_side) {
+    bool other = false, own = false;
+    for (const auto& [b, h] : options.pairs) {
+      other = other || spec == (base_side ? h : b);
+      own = own || spec == (base_side ? b : h);
+    }
+    return other && !own;
+  };
+  std::map<std::string, const json*> base_cells, head_cells;
+  std::vector<std::string> order;
+  for (const json& s : base.summaries) {
+    if (left_out(spec_of(s), true)) continue;
+    const std::string key = match_key(s, matched_spec(spec_of(s), true));
+    if (!base_cells.emplace(key, &s).second) throw InputError(base.path, {}, "two results for the cell " + cell_name(s, spec_of(s)));
+    order.push_back(key);
+  }
+  for (const json& s : head.summaries) {
+    if (left_out(spec_of(s), false)) continue;
+    const std::string key = match_key(s, matched_spec(spec_of(s), false));
+    if (!head_cells.emplace(key, &s).second) throw InputError(head.path, {}, "two results for the cell " + cell_name(s, spec_of(s)));
+    if (base_cells.count(key) == 0) order.push_back(key);
+  }
+  std::vector<CellComparison> cells;
+  std::vector<std::string> only_base, only_head;
+  for (const std::string& key : order) {
+    const auto b = base_cells.find(key), h = head_cells.find(key);
+    if (b == base_cells.end()) {
+      only_head.push_back(cell_name(*h->second, spec_of(*h->second)));
+    } else if (h == head_cells.end()) {
+      only_base.push_back(cell_name(*b->second, spec_of(*b->second)));
+    } else {
+      const std::string spec = matched_spec(spec_of(*b->second), true);
+      cells.push_back(compare_cell(base, head, *b->second, *h->second, cell_name(*h->second, spec), options));
+    }
+  }
+  std::map<std::string, std::filesystem::path> written;
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    if (!cells[k].newly_missed.empty()) written[cells[k].name] = write_replay(cells[k], k + 1, options.replay);
+  }
+  const Table table = comparison_table(cells);
+  table.print(out);
+  out << details(cells, written);
+  for (const std::string& name : only_base) out << "only in the base: " << name << "\n";
+  for (const std::string& name : only_head) out << "only in the head: " << name << "\n";
+  if (!base.has_steps || !head.has_steps) out << "steps not compared: a side has no step records (give run's --out folder or its results.jsonl)\n";
+  const bool worse = std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.worse; });
+  const bool slower = std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.slower; });
+  if (options.markdown) {
+    datasets::AtomicFile file(*options.markdown, std::ios::out);
+    file.stream() << "### ccdbench compare\n\n" << (worse ? "**A verdict got worse.**" : "No verdict got worse.") << "\n\n";
+    table.print_markdown(file.stream());
+    const std::string more = details(cells, written);
+    if (!more.empty()) file.stream() << "\n```\n" << more << "```\n";
+    for (const std::string& name : only_base) file.stream() << "\n- only in the base: " << name;
+    for (const std::string& name : only_head) file.stream() << "\n- only in the head: " << name;
+    file.stream() << "\n";
+    file.commit();
+  }
+  if (options.json) {
+    json document = json::array();
+    for (const CellComparison& c : cells) {
+      json row = {{"cell", c.name}, {"worse", c.worse}, {"slower_beyond_noise", c.slower}, {"notes", c.notes}, {"changed_steps", c.changed_steps}};
+      for (const char* field : {"missed", "errors", "false_alarms", "toi_late", "toi_error_median", "toi_error_p99", "toi_error_max",
+                                "host_peak_bytes", "device_bytes", "ms_per_step"}) {
+        row[field] = {{"base", c.base.value(field, json())}, {"head", c.head.value(field, json())}};
+      }
+      if (c.time_test) row["time"] = {{"ratio", c.ratio}, {"p", c.time_test->p}, {"u", c.time_test->u}};
+      json missed = json::array();
+      for (const auto& [step, pair] : c.newly_missed) missed.push_back({{"step", step}, {"kind", pair["kind"]}, {"ids", pair["ids"]}});
+      row["newly_missed"] = missed;
+      document.push_back(row);
+    }
+    datasets::write_json_file(*options.json, json{{"cells", document}, {"only_in_base", only_base}, {"only_in_head", only_head}});
+  }
+  out << "compare: " << (worse ? "a verdict got WORSE" : "no verdict got worse") << (slower ? "; a cell got slower beyond the noise" : "") << "\n";
+  return worse || (options.fail_on_slower && slower) ? 1 : 0;
+}
+
+}  // namespace ccd::harness

@@ -1,0 +1,359 @@
+// CI regression as its users run it (README "CI regression"): the rank test compare uses, `compare` on fixed
+// synthetic result files, and a real round trip: a baseline written from a run, the gate passing it, and a rebuilt
+// plugin that misses one more pair failing it, with compare naming the pair.
+
+#include "ccd/config.hpp"
+#include "datasets/procedural_scenes.hpp"
+#include "harness/rank_test.hpp"
+#include "tests/support/cli.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <iterator>
+
+namespace ccd {
+namespace {
+
+using testing::quoted;
+using testing::read_json;
+using testing::run_ccdbench;
+
+// Published values: the two-sample example of R's wilcox.test (Hollander and Wolfe), exact; exact tables for small
+// samples (the two most extreme of C(n + m, n) rankings); and, with ties, the normal approximation with the tie
+// correction and a continuity correction as textbooks state it (computed by hand for these samples).
+TEST(RankTest, ExactPValuesMatchPublishedValues) {
+  const harness::RankTest r = harness::mann_whitney({0.80, 0.83, 1.89, 1.04, 1.45, 1.38, 1.91, 1.64, 0.73, 1.46}, {1.15, 0.88, 0.90, 0.74, 1.21});
+  EXPECT_EQ(r.u, 35);
+  EXPECT_NEAR(r.p, 0.2544122544, 1e-9);  // R: W = 35, p-value = 0.1272 one-sided
+  EXPECT_NEAR(harness::mann_whitney({1, 2, 3, 4, 5}, {6, 7, 8, 9, 10}).p, 2.0 / 252, 1e-12);
+  EXPECT_NEAR(harness::mann_whitney({1, 2, 3}, {4, 5, 6}).p, 2.0 / 20, 1e-12);
+  EXPECT_NEAR(harness::mann_whitney({1, 2, 3, 5}, {4, 6, 7, 8}).p, 4.0 / 70, 1e-12);
+  EXPECT_EQ(harness::mann_whitney({1, 2, 3, 5}, {4, 6, 7, 8}).u, 1);
+  EXPECT_EQ(harness::mann_whitney({}, {1, 2}).p, 1);
+}
+
+TEST(RankTest, TiesUseTheCorrectedNormalApproximation) {
+  std::vector<double> x, y;
+  for (int k = 0; k < 30; ++k) {
+    x.push_back(k);
+    y.push_back(k + 10);
+  }
+  EXPECT_NEAR(harness::mann_whitney(x, y).p, 0.00022448380595775665, 1e-12);
+  EXPECT_NEAR(harness::mann_whitney({1, 2, 2, 3, 3, 3, 4, 5}, {3, 4, 4, 5, 6, 6, 7}).p, 0.01598468512519625, 1e-12);
+  EXPECT_EQ(harness::mann_whitney({2, 2, 2}, {2, 2}).p, 1);
+}
+
+std::string whole_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// A cell's records as `run --out` writes them into results.jsonl: three steps, a plugin built at some digest.
+struct SyntheticCell {
+  std::string spec = "plugin:my.so";
+  std::string digest = "0123456789abcdef0123456789abcdef";
+  std::size_t missed = 0;
+  /// Each step's missed pairs: (kind, ids).
+  std::vector<std::vector<std::pair<std::string, std::vector<int>>>> missed_pairs = {{}, {}, {}};
+  std::vector<std::string> answers = {"a0", "a1", "a2"};
+  std::vector<double> ms_per_repeat = {30, 31, 29, 30.5, 29.5};
+  std::string machine = "m1";
+
+  std::string resolved() const {
+    return spec.rfind("plugin:", 0) == 0 ? "plugin:/abs/" + spec.substr(7) + ":digest=" + digest + ":isolate=on" : spec;
+  }
+
+  std::string lines() const {
+    std::string text;
+    std::size_t total = 0;
+    for (std::size_t k = 0; k < 3; ++k) {
+      nlohmann::json pairs = nlohmann::json::array();
+      for (const auto& [kind, ids] : missed_pairs[k]) {
+        std::vector<double> rows(24);
+        for (std::size_t i = 0; i < 24; ++i) rows[i] = 0.125 * static_cast<double>(i) + ids[0];
+        pairs.push_back({{"kind", kind}, {"ids", ids}, {"rows", rows}});
+      }
+      total += pairs.size();
+      nlohmann::json step = {{"record", "step"}, {"schema", 2},           {"scene", "s"},           {"thickness", 0.01}, {"strategy", resolved()},
+                             {"step", k},        {"answers", answers[k]}, {"missed", pairs.size()}, {"colliding", 10}};
+      if (!pairs.empty()) step["missed_pairs"] = pairs;
+      text += step.dump() + "\n";
+    }
+    std::vector<double> sorted = ms_per_repeat;
+    std::sort(sorted.begin(), sorted.end());
+    const nlohmann::json summary = {{"record", "summary"},
+                                    {"schema", 2},
+                                    {"scene", "s"},
+                                    {"strategy", resolved()},
+                                    {"spec", spec},
+                                    {"thickness", 0.01},
+                                    {"thickness_from", "scene"},
+                                    {"steps", 3},
+                                    {"ms_per_step", sorted[sorted.size() / 2] / 3},
+                                    {"ms_per_repeat", ms_per_repeat},
+                                    {"verified", true},
+                                    {"colliding", 30},
+                                    {"missed", std::max(missed, total)},
+                                    {"false_alarms", 2},
+                                    {"errors", 0},
+                                    {"host_peak_bytes", 1 << 20},
+                                    {"machine", machine},
+                                    {"build_type", "Release"},
+                                    {"provenance", {{"compiler", "GNU 12.2.0"}, {"cxx_flags", "-O2"}}}};
+    return text + summary.dump() + "\n";
+  }
+};
+
+class Compare : public ::testing::Test {
+ protected:
+  std::filesystem::path write(const std::string& name, const std::vector<SyntheticCell>& cells) {
+    std::string text;
+    for (const SyntheticCell& cell : cells) text += cell.lines();
+    testing::write_text(dir_ / name, text);
+    return dir_ / name;
+  }
+  testing::CommandResult compare(const std::filesystem::path& base, const std::filesystem::path& head, const std::string& extra = {}) {
+    return run_ccdbench("compare " + quoted(base) + " " + quoted(head) + " --replay " + quoted(dir_ / "replay") + " " + extra);
+  }
+  testing::TempDir dir_;
+};
+
+TEST_F(Compare, ARunComparedWithItselfShowsNoChange) {
+  const auto base = write("base.jsonl", {SyntheticCell{}});
+  const auto result = compare(base, base, "--json " + quoted(dir_ / "c.json") + " --markdown " + quoted(dir_ / "c.md"));
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("no verdict got worse"), std::string::npos) << result.output;
+  EXPECT_EQ(result.output.find("WORSE"), std::string::npos) << result.output;
+  EXPECT_EQ(result.output.find("answers changed"), std::string::npos) << result.output;
+  EXPECT_EQ(result.output.find("only in"), std::string::npos) << result.output;
+  const nlohmann::json document = read_json(dir_ / "c.json");
+  ASSERT_EQ(document["cells"].size(), 1u);
+  EXPECT_FALSE(document["cells"][0]["worse"]);
+  EXPECT_EQ(document["cells"][0]["time"]["ratio"], 1.0);
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "c.md"));
+}
+
+TEST_F(Compare, OneMoreMissedPairExits1NamingTheCellAndThePair) {
+  SyntheticCell before;
+  before.missed_pairs = {{{"vf", {4, 9}}}, {}, {}};
+  SyntheticCell after = before;
+  after.digest = "fedcba9876543210fedcba9876543210";
+  after.missed_pairs[2] = {{"ee", {1, 2, 7, 8}}};
+  after.answers[2] = "b2";
+  const auto result = compare(write("base.jsonl", {before}), write("head.jsonl", {after}), "--json " + quoted(dir_ / "c.json"));
+  EXPECT_EQ(result.exit_code, 1) << result.output;
+  EXPECT_NE(result.output.find("s / plugin:my.so / δ scene's 0.01:"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("missed 1 → 2"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("newly missed at step 2: ee [1,2,7,8]"), std::string::npos) << result.output;
+  EXPECT_EQ(result.output.find("newly missed at step 0"), std::string::npos) << result.output;  // an old miss
+  EXPECT_NE(result.output.find("answers changed on 1 step: 2"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("plugin code changed: digest 0123456789abcdef0123456789abcdef → fedcba9876543210fedcba9876543210"), std::string::npos)
+      << result.output;
+  EXPECT_NE(result.output.find("a verdict got WORSE"), std::string::npos) << result.output;
+  const nlohmann::json document = read_json(dir_ / "c.json");
+  EXPECT_TRUE(document["cells"][0]["worse"]);
+  ASSERT_EQ(document["cells"][0]["newly_missed"].size(), 1u);
+  EXPECT_EQ(document["cells"][0]["newly_missed"][0]["ids"], nlohmann::json({1, 2, 7, 8}));
+  // The pair written to replay, as a query file `queries` reads.
+  const std::filesystem::path replay = dir_ / "replay";
+  ASSERT_TRUE(std::filesystem::exists(replay)) << result.output;
+  std::filesystem::path written;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(replay)) {
+    if (entry.is_regular_file()) written = entry.path();
+  }
+  EXPECT_EQ(written.filename(), "newly-missed.csv");
+  EXPECT_EQ(written.parent_path().filename(), "edge-edge");
+  const auto replayed = run_ccdbench("queries " + quoted(written.parent_path().parent_path()) + " --method exact --thickness 0.01");
+  EXPECT_EQ(replayed.exit_code, 0) << replayed.output;
+  // Fewer misses is no regression.
+  EXPECT_EQ(compare(dir_ / "head.jsonl", dir_ / "base.jsonl").exit_code, 0);
+}
+
+TEST_F(Compare, TimesWithinTheNoiseAreNotFlaggedATwofoldSlowdownIs) {
+  SyntheticCell base;
+  SyntheticCell noisy = base;
+  noisy.ms_per_repeat = {30.4, 29.8, 31.2, 29.2, 30.1};
+  const auto same = compare(write("base.jsonl", {base}), write("noisy.jsonl", {noisy}), "--fail-on-slower");
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_NE(same.output.find("time within noise"), std::string::npos) << same.output;
+  SyntheticCell slow = base;
+  for (double& ms : slow.ms_per_repeat) ms *= 2;
+  const auto slower = compare(dir_ / "base.jsonl", write("slow.jsonl", {slow}));
+  EXPECT_EQ(slower.exit_code, 0) << slower.output;  // a verdict did not get worse
+  EXPECT_NE(slower.output.find("2.00x"), std::string::npos) << slower.output;
+  EXPECT_NE(slower.output.find("0.0079"), std::string::npos) << slower.output;  // 2 / C(10, 5)
+  EXPECT_NE(slower.output.find("slower beyond noise"), std::string::npos) << slower.output;
+  EXPECT_EQ(compare(dir_ / "base.jsonl", dir_ / "slow.jsonl", "--fail-on-slower").exit_code, 1);
+  // Three passes a side cannot reach p < 0.05 (2 / C(6, 3) = 0.1): it says so rather than flag nothing silently.
+  SyntheticCell few = base, few_slow = slow;
+  few.ms_per_repeat.resize(3);
+  few_slow.ms_per_repeat.resize(3);
+  const auto too_few = compare(write("few.jsonl", {few}), write("few_slow.jsonl", {few_slow}), "--fail-on-slower");
+  EXPECT_EQ(too_few.exit_code, 0) << too_few.output;
+  EXPECT_NE(too_few.output.find("times cannot be told apart at p < 0.05 from 3 and 3 passes"), std::string::npos) << too_few.output;
+  // Another machine: verdicts only.
+  SyntheticCell elsewhere = slow;
+  elsewhere.machine = "m2";
+  const auto other = compare(dir_ / "base.jsonl", write("elsewhere.jsonl", {elsewhere}), "--fail-on-slower");
+  EXPECT_EQ(other.exit_code, 0) << other.output;
+  EXPECT_NE(other.output.find("times not compared: different machine"), std::string::npos) << other.output;
+}
+
+TEST_F(Compare, PairsMatchTwoBuildsOfOneRunAndCellsOnOneSideAreListed) {
+  SyntheticCell base_build, head_build, full;
+  base_build.spec = "plugin:base/my.so";
+  head_build.spec = "plugin:head/my.so";
+  head_build.missed_pairs = {{}, {{"vf", {3, 5}}}, {}};
+  full.spec = "full";
+  const auto one_run = write("one.jsonl", {base_build, head_build, full});
+  const auto paired = compare(one_run, one_run, "--pair plugin:base/my.so plugin:head/my.so");
+  EXPECT_EQ(paired.exit_code, 1) << paired.output;
+  EXPECT_NE(paired.output.find("s / plugin:base/my.so → plugin:head/my.so / δ scene's 0.01:"), std::string::npos) << paired.output;
+  EXPECT_NE(paired.output.find("newly missed at step 1: vf [3,5]"), std::string::npos) << paired.output;
+  EXPECT_EQ(paired.output.find("only in"), std::string::npos) << paired.output;
+  const auto unpaired = compare(write("base.jsonl", {base_build, full}), write("head.jsonl", {head_build, full}));
+  EXPECT_EQ(unpaired.exit_code, 0) << unpaired.output;
+  EXPECT_NE(unpaired.output.find("only in the base: s / plugin:base/my.so"), std::string::npos) << unpaired.output;
+  EXPECT_NE(unpaired.output.find("only in the head: s / plugin:head/my.so"), std::string::npos) << unpaired.output;
+}
+
+TEST_F(Compare, RefusesWhatIsNotAResultSet) {
+  testing::write_text(dir_ / "junk.jsonl", "{\"record\": \"summary\", \"scene\": \"s\"}\n");
+  const auto junk = compare(dir_ / "junk.jsonl", dir_ / "junk.jsonl");
+  EXPECT_EQ(junk.exit_code, 2) << junk.output;
+  EXPECT_NE(junk.output.find("junk.jsonl:line 1: a summary without 'strategy'"), std::string::npos) << junk.output;
+  const auto folder = compare(dir_.path(), dir_.path());
+  EXPECT_EQ(folder.exit_code, 2) << folder.output;
+  EXPECT_NE(folder.output.find("no results.jsonl"), std::string::npos) << folder.output;
+}
+
+/// The gate's round trip as a user's CI runs it: a plugin built at one path, its baseline written from a run, then a
+/// rebuild at that path that misses one more pair.
+class GateRoundTrip : public ::testing::Test {
+ protected:
+  void SetUp() override { ::setenv("CCDBENCH_CACHE_DIR", (dir_ / "cache").c_str(), 1); }
+  void TearDown() override {
+    ::unsetenv("CCDBENCH_CACHE_DIR");
+    ::unsetenv("CCDBENCH_TEST_DROP_SALT");
+  }
+  /// The candidate plugin is `build` copied to one path (a user's build folder), run on fold 8x8 at δ 0.001.
+  testing::CommandResult run(const std::string& build, const std::string& name) {
+    std::filesystem::copy_file(std::filesystem::path(CCDBENCH_PLUGIN_DIR) / ("lib" + build + ".so"), dir_ / "libcandidate.so",
+                               std::filesystem::copy_options::overwrite_existing);
+    return run_ccdbench("run --scene " + quoted(dir_ / "fold8") + " --thickness 0.001 --strategy " + spec() + ",full --verify exact --toi --json " +
+                        quoted(dir_ / (name + ".json")) + " --out " + quoted(dir_ / name));
+  }
+  std::string spec() const { return "plugin:" + (dir_ / "libcandidate.so").string(); }
+  nlohmann::json cell(const std::string& name) {
+    for (const nlohmann::json& s : read_json(dir_ / (name + ".json"))) {
+      if (s["spec"] == spec()) return s;
+    }
+    return {};
+  }
+  testing::TempDir dir_;
+};
+
+TEST_F(GateRoundTrip, WrittenBaselinePassesAndARebuildMissingOneMorePairFailsIt) {
+  datasets::SceneParameters parameters;
+  parameters["resolution"] = 8;
+  parameters["frames"] = 8;
+  datasets::generate_procedural_scene({"fold", parameters, dir_ / "fold8", {}, {}});
+  const auto base = run("my_ccd", "base");
+  ASSERT_EQ(base.exit_code, 0) << base.output;
+  const std::uint64_t base_missed = cell("base")["missed"];
+  ASSERT_GT(cell("base")["colliding"].get<std::uint64_t>(), base_missed + 100);  // pairs found to lose
+
+  const auto written = run_ccdbench("check --write-baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "base.json"));
+  ASSERT_EQ(written.exit_code, 0) << written.output;
+  const nlohmann::json baseline = read_json(dir_ / "baseline.json");
+  ASSERT_EQ(baseline.size(), 2u);
+  EXPECT_EQ(baseline[0]["strategy"], spec());  // as given: no digest, no key of the resolved name
+  EXPECT_EQ(baseline[0]["max_missed"], base_missed);
+  EXPECT_TRUE(baseline[0].contains("max_toi_late") && baseline[0].contains("max_errors") && baseline[0].contains("colliding"));
+  const auto passes = run_ccdbench("check --baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "base.json"));
+  EXPECT_EQ(passes.exit_code, 0) << passes.output;
+
+  // The rebuild drops the queries whose coordinates hash to 0 (one in 1000); a salt that drops exactly one pair
+  // the template found is searched for (each salt is deterministic, so this finds the same one every time).
+  std::uint64_t head_missed = 0;
+  int salt = 0;
+  for (; salt < 40; ++salt) {
+    ::setenv("CCDBENCH_TEST_DROP_SALT", std::to_string(salt).c_str(), 1);
+    const auto head = run("regressed_ccd", "head");
+    ASSERT_EQ(head.exit_code, 0) << head.output;
+    head_missed = cell("head")["missed"];
+    if (head_missed == base_missed + 1) break;
+    std::filesystem::remove_all(dir_ / "head");
+  }
+  ASSERT_EQ(head_missed, base_missed + 1) << "no salt below 40 dropped exactly one found pair";
+  std::cout << "salt " << salt << ": " << base_missed << " missed -> " << head_missed << "\n";
+  const auto fails = run_ccdbench("check --baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "head.json"));
+  EXPECT_EQ(fails.exit_code, 1) << fails.output;
+  EXPECT_NE(fails.output.find("FAIL fold8 / " + spec()), std::string::npos) << fails.output;
+  EXPECT_NE(fails.output.find("missed " + std::to_string(head_missed) + " of"), std::string::npos) << fails.output;
+  EXPECT_NE(fails.output.find("baseline allows " + std::to_string(base_missed)), std::string::npos) << fails.output;
+
+  // compare, from the run's --out folders (step records): the cell, the pair, the plugin's new digest.
+  const auto compared = run_ccdbench("compare " + quoted(dir_ / "base") + " " + quoted(dir_ / "head") + " --replay " + quoted(dir_ / "replay"));
+  EXPECT_EQ(compared.exit_code, 1) << compared.output;
+  EXPECT_NE(compared.output.find("fold8 / " + spec() + " / δ 0.001:"), std::string::npos) << compared.output;
+  EXPECT_NE(compared.output.find("newly missed at step"), std::string::npos) << compared.output;
+  EXPECT_NE(compared.output.find("plugin code changed: digest"), std::string::npos) << compared.output;
+  EXPECT_NE(compared.output.find("written to replay: ccdbench queries "), std::string::npos) << compared.output;
+  EXPECT_NE(compared.output.find(" --thickness 0.001"), std::string::npos) << compared.output;
+  // The written pair is a true contact the rebuild misses when asked alone.
+  std::filesystem::path replay;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir_ / "replay")) {
+    if (entry.is_regular_file()) replay = entry.path().parent_path().parent_path();
+  }
+  ASSERT_FALSE(replay.empty());
+  const auto replayed = run_ccdbench("queries " + quoted(replay) + " --method plugin:" + (dir_ / "libcandidate.so").string() +
+                                     ",exact --thickness 0.001 --json " + quoted(dir_ / "replayed.json"));
+  EXPECT_EQ(replayed.exit_code, 0) << replayed.output;
+  bool regressed_missed = false, exact_found = false;
+  for (const nlohmann::json& row : read_json(dir_ / "replayed.json")) {
+    if (row.value("method", "").rfind("plugin:", 0) == 0) regressed_missed = row.value("false_negatives", 0) == 1;
+    if (row.value("method", "") == "exact") exact_found = row.value("false_negatives", 1) == 0;
+  }
+  EXPECT_TRUE(regressed_missed) << read_json(dir_ / "replayed.json").dump();
+  EXPECT_TRUE(exact_found) << read_json(dir_ / "replayed.json").dump();
+}
+
+// examples/ci/regression.sh as a user's CI runs it, its builds given (the template, and the rebuild that drops one
+// query in 50 as the head): the baseline written, then the gate failing the head and the comparison naming it.
+TEST_F(GateRoundTrip, TheCiExampleScriptGatesTheHeadAndComparesItWithTheBase) {
+  datasets::SceneParameters parameters;
+  parameters["resolution"] = 8;
+  parameters["frames"] = 8;
+  datasets::generate_procedural_scene({"fold", parameters, dir_ / "fold8", {}, {}});
+  const std::filesystem::path plugins(CCDBENCH_PLUGIN_DIR);
+  std::filesystem::create_directories(dir_ / "head-build");
+  std::filesystem::copy_file(plugins / "libregressed_ccd.so", dir_ / "head-build" / "libmy_ccd.so");
+  const std::string script = quoted(std::filesystem::path(CCDBENCH_SOURCE_DIR) / "examples" / "ci" / "regression.sh");
+  const std::string settings = "CCDBENCH=" + quoted(std::filesystem::path(CCDBENCH_EXECUTABLE)) +
+                               " PLUGIN=libmy_ccd.so BASELINE=" + quoted(dir_ / "baseline.json") +
+                               " RUN_ARGS=" + quoted(std::filesystem::path("--scene " + (dir_ / "fold8").string() + " --thickness 0.001 --toi")) +
+                               " CCDBENCH_TEST_DROP_ONE_IN=50 BASE_BUILD=" + quoted(plugins) + " ";
+  const std::string arguments = " " + quoted(std::filesystem::path(CCDBENCH_SOURCE_DIR)) + " . . " + quoted(dir_ / "work");
+  const auto written = testing::run_command("WRITE_BASELINE=1 HEAD_BUILD=" + quoted(plugins) + " " + settings + script + arguments);
+  ASSERT_EQ(written.exit_code, 0) << written.output;
+  EXPECT_EQ(read_json(dir_ / "baseline.json")[0]["strategy"], "plugin:head/libmy_ccd.so");
+  std::filesystem::remove_all(dir_ / "work");
+  const auto same = testing::run_command("HEAD_BUILD=" + quoted(plugins) + " " + settings + script + arguments);
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+  std::filesystem::remove_all(dir_ / "work");
+  const auto regressed = testing::run_command("HEAD_BUILD=" + quoted(dir_ / "head-build") + " " + settings + script + arguments);
+  EXPECT_EQ(regressed.exit_code, 1) << regressed.output;
+  EXPECT_NE(regressed.output.find("FAIL fold8 / plugin:head/libmy_ccd.so / δ 0.001: missed"), std::string::npos) << regressed.output;
+  const std::string markdown = whole_file(dir_ / "work" / "compare.md");
+  EXPECT_NE(markdown.find("**A verdict got worse.**"), std::string::npos) << markdown;
+  EXPECT_NE(markdown.find("fold8 / plugin:base/libmy_ccd.so → plugin:head/libmy_ccd.so / δ 0.001"), std::string::npos) << markdown;
+  EXPECT_NE(markdown.find("newly missed at step"), std::string::npos) << markdown;
+  EXPECT_NE(markdown.find("check: FAILED"), std::string::npos) << markdown;
+}
+
+}  // namespace
+}  // namespace ccd
