@@ -305,7 +305,8 @@ int run_command_line(int argc, char** argv) {
                          "also the steps whose answers changed and the pairs the head newly misses, written as query files to replay.\n"
                          "Cells are matched by scene, δ and the strategy as given; times are compared only between records of one\n"
                          "machine, build type, compiler and flags. Exit 1 when a verdict got worse (more missed, errors or late TOIs,\n"
-                         "or answers that now change between passes), 2 for a malformed file, else 0.");
+                         "answers that now change between passes, a verdict the head lacks, or a cell only the base has), 2 for\n"
+                         "a malformed file or a --pair that names no cell, else 0.");
   compare->add_option("BASE", compare_options.base, "the base: a `run --json` file, a run's --out folder or its results.jsonl")->required();
   compare->add_option("HEAD", compare_options.head, "the head, as BASE (may be the same file as BASE with --pair)")->required();
   compare->add_option("--pair", compare_options.pairs,
@@ -313,7 +314,9 @@ int run_command_line(int argc, char** argv) {
                       "of a plugin run in one invocation: BASE and HEAD may then be one file); repeatable");
   compare->add_option("--alpha", compare_options.alpha, "a time change counts when its p-value is below this (default 0.05)")
       ->check(CLI::Range(1e-9, 0.5));
-  compare->add_flag("--fail-on-slower", compare_options.fail_on_slower, "also exit 1 when a cell got slower beyond the noise");
+  compare->add_flag("--fail-on-slower", compare_options.fail_on_slower,
+                    "also exit 1 when a cell got slower beyond the noise (a cell's passes run one after another, base's\n"
+                    "before head's: a machine that slows down between them looks like a slower head; for quiet machines)");
   compare->add_option("--markdown", compare_options.markdown, "also write the comparison as Markdown (a pull request's comment)");
   compare->add_option("--json", compare_options.json, "also write the comparison as JSON, for scripts");
   compare->add_option("--replay", compare_options.replay,

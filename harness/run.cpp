@@ -226,6 +226,13 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
         }
       }
       if (kept) {
+        // The cell is kept under its resolved name; the strategy as given is this run's: results.jsonl names it so
+        // (compare and check match cells by it), rank 0 alone writing.
+        if (rank_info().rank == 0 && (*kept)["summary"].value("spec", json()) != json(spec)) {
+          (*kept)["summary"]["spec"] = spec;
+          write_cell(file, *kept);
+          rebuild_results_log(options.out, std::cerr);
+        }
         (*kept)["summary"]["resumed"] = true;
         say("run: " + source.label + " / " + key.strategy +
             ": kept from an earlier run with the same inputs, strategy, steps, δ, "

@@ -11,11 +11,13 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <ostream>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 namespace ccd::harness {
 
@@ -30,12 +32,119 @@ struct ResultSet {
   /// By steps_key: the step records of a cell, by step index.
   std::map<std::string, std::map<std::size_t, json>> steps;
   bool has_steps = false;
+  /// Summaries that a later one of the same cell replaced (an --out folder keeps every run's).
+  std::size_t replaced = 0;
 };
 
 /// A cell's steps are found by what both records name: scene, δ and resolved strategy.
-std::string steps_key(const json& record) {
-  return record.at("scene").dump() + "|" + record.at("thickness").dump() + "|" + record.at("strategy").dump();
+std::string steps_key(const json& record) { return record["scene"].dump() + "|" + record["thickness"].dump() + "|" + record["strategy"].dump(); }
+
+/// What a field of a record must be for compare to read it.
+enum class Kind { string, number, count, numbers, object, boolean, number_or_null };
+
+bool has_kind(const json& value, Kind kind) {
+  switch (kind) {
+    case Kind::string: return value.is_string();
+    case Kind::number: return value.is_number() && std::isfinite(value.get<double>()) && value.get<double>() >= 0;
+    case Kind::count: return value.is_number_unsigned();
+    case Kind::numbers: return value.is_array() && std::all_of(value.begin(), value.end(), [](const json& v) { return has_kind(v, Kind::number); });
+    case Kind::object: return value.is_object();
+    case Kind::boolean: return value.is_boolean();
+    case Kind::number_or_null: return value.is_null() || has_kind(value, Kind::number);
+  }
+  return false;
 }
+
+const char* kind_name(Kind kind) {
+  switch (kind) {
+    case Kind::string: return "a string";
+    case Kind::number: return "a finite number >= 0";
+    case Kind::count: return "an integer >= 0";
+    case Kind::numbers: return "an array of finite numbers >= 0";
+    case Kind::object: return "an object";
+    case Kind::boolean: return "true or false";
+    case Kind::number_or_null: return "a finite number >= 0 or null";
+  }
+  return "";
+}
+
+struct Field {
+  const char* name;
+  Kind kind;
+  bool required;
+};
+
+/// Every field compare reads, checked before anything is compared or written: a malformed record is bad input
+/// (FILE:WHERE: REASON, exit 2), never a verdict.
+void check_fields(const json& record, const std::vector<Field>& fields, const std::filesystem::path& file, const std::string& where,
+                  const char* what) {
+  if (!record.is_object()) throw InputError(file, where, std::string("a ") + what + " must be an object");
+  for (const Field& field : fields) {
+    if (!record.contains(field.name)) {
+      if (field.required) throw InputError(file, where, std::string("a ") + what + " without '" + field.name + "': not a result of `run`");
+      continue;
+    }
+    if (!has_kind(record[field.name], field.kind)) {
+      throw InputError(file, where + "." + field.name, std::string("must be ") + kind_name(field.kind) + ", got " + record[field.name].dump());
+    }
+  }
+}
+
+const std::vector<Field> kSummaryFields = {{"scene", Kind::string, true},
+                                           {"strategy", Kind::string, true},
+                                           {"thickness", Kind::number, true},
+                                           {"thickness_from", Kind::string, true},
+                                           {"steps", Kind::count, true},
+                                           {"ms_per_step", Kind::number, true},
+                                           {"spec", Kind::string, false},
+                                           {"ms_per_repeat", Kind::numbers, false},
+                                           {"missed", Kind::count, false},
+                                           {"errors", Kind::count, false},
+                                           {"toi_late", Kind::count, false},
+                                           {"false_alarms", Kind::count, false},
+                                           {"colliding", Kind::count, false},
+                                           {"verified", Kind::boolean, false},
+                                           {"host_peak_bytes", Kind::number, false},
+                                           {"device_bytes", Kind::number, false},
+                                           {"toi_error_max", Kind::number_or_null, false},
+                                           {"toi_error_median", Kind::number_or_null, false},
+                                           {"toi_error_p99", Kind::number_or_null, false},
+                                           {"nondeterministic_at_step", Kind::count, false},
+                                           {"key", Kind::object, false},
+                                           {"finished_at", Kind::string, false},
+                                           {"machine", Kind::string, false},
+                                           {"build_type", Kind::string, false},
+                                           {"provenance", Kind::object, false}};
+
+const std::vector<Field> kStepFields = {
+    {"scene", Kind::string, true},    {"thickness", Kind::number, true}, {"strategy", Kind::string, true},         {"step", Kind::count, true},
+    {"answers", Kind::string, false}, {"missed", Kind::count, false},    {"missed_face_shape", Kind::count, false}};
+
+/// A kept missed pair: {kind: "vf" (ids v, f) or "ee" (ids a0, a1, b0, b1), rows: its 24 coordinates}.
+void check_missed_pairs(const json& record, const std::filesystem::path& file, const std::string& where) {
+  if (!record.contains("missed_pairs")) return;
+  const json& pairs = record["missed_pairs"];
+  if (!pairs.is_array()) throw InputError(file, where + ".missed_pairs", "must be an array");
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const json& pair = pairs[i];
+    const std::string at = where + ".missed_pairs[" + std::to_string(i) + "]";
+    const bool vf = pair.is_object() && pair.value("kind", "") == "vf", ee = pair.is_object() && pair.value("kind", "") == "ee";
+    if (!vf && !ee) throw InputError(file, at, "must be an object of kind \"vf\" or \"ee\"");
+    const json& ids = pair.contains("ids") ? pair["ids"] : json();
+    if (!ids.is_array() || ids.size() != (vf ? 2u : 4u) ||
+        !std::all_of(ids.begin(), ids.end(), [](const json& id) { return id.is_number_unsigned(); })) {
+      throw InputError(file, at + ".ids", std::string("must be ") + (vf ? "2" : "4") + " integers >= 0");
+    }
+    const json& rows = pair.contains("rows") ? pair["rows"] : json();
+    if (!rows.is_array() || rows.size() != 24 ||
+        !std::all_of(rows.begin(), rows.end(), [](const json& v) { return v.is_number() && std::isfinite(v.get<double>()); })) {
+      throw InputError(file, at + ".rows", "must be 24 finite numbers");
+    }
+  }
+}
+
+/// Of two summaries of one cell (an --out folder keeps each run's), the later: by finished_at, else the one read last.
+bool later(const json& candidate, const json& kept) { return candidate.value("finished_at", "") >= kept.value("finished_at", ""); }
 
 ResultSet load(const std::filesystem::path& given) {
   ResultSet set;
@@ -44,12 +153,7 @@ ResultSet load(const std::filesystem::path& given) {
   if (std::filesystem::is_directory(given)) file = given / "results.jsonl";
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file, {}, std::filesystem::is_directory(given) ? "no results.jsonl: not a run's --out folder" : "cannot be read");
-  auto check_summary = [&](const json& s, const std::string& where) {
-    for (const char* field : {"scene", "strategy", "thickness", "thickness_from", "steps", "ms_per_step"}) {
-      if (!s.is_object() || !s.contains(field))
-        throw InputError(file, where, std::string("a summary without '") + field + "': not a result of `run`");
-    }
-  };
+  std::vector<json> summaries;
   if (file.extension() == ".jsonl") {
     std::size_t line_number = 0;
     for (std::string line; std::getline(in, line);) {
@@ -62,31 +166,49 @@ ResultSet load(const std::filesystem::path& given) {
       } catch (const json::parse_error& error) {
         throw InputError(file, where, std::string("not JSON: ") + error.what());
       }
-      const std::string kind = record.is_object() ? record.value("record", "") : "";
+      const std::string kind =
+          record.is_object() && record.contains("record") && record["record"].is_string() ? record["record"].get<std::string>() : "";
       if (kind == "summary") {
-        check_summary(record, where);
-        set.summaries.push_back(std::move(record));
+        check_fields(record, kSummaryFields, file, where, "summary");
+        summaries.push_back(std::move(record));
       } else if (kind == "step") {
-        if (!record.contains("step") || !record["step"].is_number_unsigned()) throw InputError(file, where, "a step record without its step");
+        check_fields(record, kStepFields, file, where, "step record");
+        check_missed_pairs(record, file, where);
         const std::string key = steps_key(record);
         const std::size_t step = record["step"].get<std::size_t>();
         set.steps[key][step] = std::move(record);
         set.has_steps = true;
+      } else {
+        throw InputError(file, where, "neither a step record nor a summary of `run`");
       }
     }
   } else {
     const json document = datasets::read_json_file(file, "results file");
     if (!document.is_array()) throw InputError(file, {}, "must be a JSON array of summaries (`run --json`) or a results.jsonl");
     for (std::size_t i = 0; i < document.size(); ++i) {
-      check_summary(document[i], "entry " + std::to_string(i));
-      set.summaries.push_back(document[i]);
+      check_fields(document[i], kSummaryFields, file, "entry " + std::to_string(i), "summary");
+      summaries.push_back(document[i]);
+    }
+  }
+  if (summaries.empty()) throw InputError(file, {}, "no summary of any cell: nothing to compare (a run that finished no cell?)");
+  // One summary per cell (scene, δ, resolved strategy): the latest.
+  std::map<std::string, std::size_t> kept;
+  for (json& summary : summaries) {
+    const std::string key = steps_key(summary);
+    const auto it = kept.find(key);
+    if (it == kept.end()) {
+      kept.emplace(key, set.summaries.size());
+      set.summaries.push_back(std::move(summary));
+    } else {
+      ++set.replaced;
+      if (later(summary, set.summaries[it->second])) set.summaries[it->second] = std::move(summary);
     }
   }
   return set;
 }
 
 /// The strategy as the run was given it (what the gate and compare match), else its resolved name.
-std::string spec_of(const json& s) { return s.value("spec", s["strategy"].get<std::string>()); }
+std::string spec_of(const json& s) { return s.contains("spec") ? s["spec"].get<std::string>() : s["strategy"].get<std::string>(); }
 
 /// "fold / full / δ scene's 0.008" or "... / δ 0".
 std::string cell_name(const json& s, const std::string& spec) {
@@ -157,6 +279,7 @@ void compare_steps(const ResultSet& base, const ResultSet& head, CellComparison&
   const auto base_steps = base.steps.find(steps_key(cell.base));
   const auto head_steps = head.steps.find(steps_key(cell.head));
   if (base_steps == base.steps.end() || head_steps == head.steps.end()) return;
+  std::vector<std::size_t> unlisted;  // steps with more missed pairs than their records keep
   for (const auto& [k, head_step] : head_steps->second) {
     const auto other = base_steps->second.find(k);
     if (other == base_steps->second.end()) continue;
@@ -166,9 +289,12 @@ void compare_steps(const ResultSet& base, const ResultSet& head, CellComparison&
     // Each side keeps only its first missed pairs (kKeptMissedPairs): beyond them a pair's status is not known.
     const json& kept_base = base_step.contains("missed_pairs") ? base_step["missed_pairs"] : json::array();
     const json& kept_head = head_step["missed_pairs"];
-    if (base_step.value("missed", std::size_t{0}) > kept_base.size() || head_step.value("missed", std::size_t{0}) > kept_head.size()) {
-      cell.notes.push_back("step " + std::to_string(k) + ": more missed pairs than a record keeps (" + std::to_string(kKeptMissedPairs) +
-                           "): its newly missed pairs are not listed");
+    // A step's missed count includes face-shape contacts, which are kept as no pair.
+    auto pairs_missed = [](const json& step) {
+      return step.value("missed", std::size_t{0}) - std::min(step.value("missed", std::size_t{0}), step.value("missed_face_shape", std::size_t{0}));
+    };
+    if (pairs_missed(base_step) > kept_base.size() || pairs_missed(head_step) > kept_head.size()) {
+      unlisted.push_back(k);
       continue;
     }
     std::set<std::string> before;
@@ -177,23 +303,39 @@ void compare_steps(const ResultSet& base, const ResultSet& head, CellComparison&
       if (before.count(pair_identity(pair)) == 0) cell.newly_missed.emplace_back(k, pair);
     }
   }
+  if (!unlisted.empty()) {
+    std::string steps;
+    for (std::size_t i = 0; i < std::min<std::size_t>(unlisted.size(), 20); ++i) steps += (i ? " " : "") + std::to_string(unlisted[i]);
+    cell.notes.push_back(std::to_string(unlisted.size()) + " step" + (unlisted.size() == 1 ? "" : "s") +
+                         " with more missed pairs than a record keeps (" + std::to_string(kKeptMissedPairs) +
+                         "), whose newly missed pairs are not listed: " + steps + (unlisted.size() > 20 ? " ..." : ""));
+  }
 }
 
 CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set, const json& base, const json& head, const std::string& name,
                             const CompareOptions& options) {
-  CellComparison cell{name, base, head};
+  CellComparison cell;
+  cell.name = name;
+  cell.base = base;
+  cell.head = head;
   for (const char* field : {"missed", "errors", "toi_late"}) {
     const auto b = number(base, field), h = number(head, field);
     if (b && h && *h > *b) {
       cell.worse = true;
       cell.notes.push_back(std::string(field) + " " + change(b, h));
+    } else if (b && !h) {
+      // A verdict the base has and the head does not (a head run without --verify exact or --toi) cannot be said
+      // not to have got worse.
+      cell.worse = true;
+      cell.notes.push_back(std::string("the head has no ") + field + " (the base has " + change(b, b) + "): run it with --verify exact" +
+                           (std::string(field) == "toi_late" ? " --toi" : ""));
     }
   }
   if (head.contains("nondeterministic_at_step") && !base.contains("nondeterministic_at_step")) {
     cell.worse = true;
     cell.notes.push_back("answers now change between passes (step " + head["nondeterministic_at_step"].dump() + ")");
   }
-  if (base.contains("key") && head.contains("key") && base["key"].value("scene_content", "") != head["key"].value("scene_content", "")) {
+  if (base.contains("key") && head.contains("key") && base["key"].value("scene_content", json()) != head["key"].value("scene_content", json())) {
     cell.notes.push_back("the scene's content differs: verdicts are of different inputs");
   }
   if (base["strategy"] != head["strategy"]) {
@@ -273,16 +415,34 @@ std::string details(const std::vector<CellComparison>& cells, const std::map<std
   return text.str();
 }
 
-/// The newly missed pairs of the `number`th cell compared as query files (truth 1: they collide at the cell's δ),
-/// DIR/cell-NUMBER-SCENE/{vertex-face,edge-edge}/newly-missed.csv.
+/// The replay folders compare writes: ROOT/cell-NUMBER-SCENE-at-δ/{vertex-face,edge-edge}/newly-missed.csv.
+constexpr const char* kReplayFile = "newly-missed.csv";
+
+/// Removes the files an earlier compare wrote under `root` (its cell folders' newly-missed.csv, then the folders
+/// left empty): the folder then holds this comparison's pairs alone. Nothing else is touched.
+void clear_replay(const std::filesystem::path& root) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(root, error)) return;
+  for (const auto& entry : std::filesystem::directory_iterator(root, error)) {
+    if (!entry.is_directory() || entry.path().filename().string().rfind("cell-", 0) != 0) continue;
+    for (const char* kind : {"vertex-face", "edge-edge"}) {
+      std::filesystem::remove(entry.path() / kind / kReplayFile, error);
+      std::filesystem::remove(entry.path() / kind, error);  // only when empty
+    }
+    std::filesystem::remove(entry.path(), error);  // only when empty
+  }
+}
+
+/// The newly missed pairs of the `number`th cell compared as query files. Their truth is 1 at the cell's δ (they
+/// collide there, as run's --misses files do), which the folder's name says and the replay command passes.
 std::filesystem::path write_replay(const CellComparison& c, std::size_t number, const std::filesystem::path& root) {
   const std::filesystem::path folder =
-      root / ("cell-" + std::to_string(number) + "-" + safe_path_component(c.head["scene"].get<std::string>().substr(0, 100)));
+      root / ("cell-" + std::to_string(number) + "-" + safe_path_component(c.head["scene"].get<std::string>().substr(0, 100)) + "-at-" +
+              significant(c.head["thickness"].get<double>(), 17));
   std::vector<datasets::Query> vertex_face, edge_edge;
   for (const auto& [step, pair] : c.newly_missed) {
     datasets::Query query;
-    const json& rows = pair.at("rows");
-    if (!rows.is_array() || rows.size() != 24) continue;
+    const json& rows = pair["rows"];  // 24 finite numbers (checked when read)
     for (int i = 0; i < 8; ++i) {
       for (int k = 0; k < 3; ++k) {
         const double value = rows[static_cast<std::size_t>(3 * i + k)].get<double>();
@@ -293,10 +453,8 @@ std::filesystem::path write_replay(const CellComparison& c, std::size_t number, 
     query.truth = true;
     (pair["kind"] == "vf" ? vertex_face : edge_edge).push_back(std::move(query));
   }
-  // A folder of an earlier compare keeps none of its pairs: each file is this comparison's, or gone.
-  for (const char* kind : {"vertex-face", "edge-edge"}) std::filesystem::remove(folder / kind / "newly-missed.csv");
-  if (!vertex_face.empty()) datasets::write_query_file(folder / "vertex-face" / "newly-missed.csv", vertex_face);
-  if (!edge_edge.empty()) datasets::write_query_file(folder / "edge-edge" / "newly-missed.csv", edge_edge);
+  if (!vertex_face.empty()) datasets::write_query_file(folder / "vertex-face" / kReplayFile, vertex_face);
+  if (!edge_edge.empty()) datasets::write_query_file(folder / "edge-edge" / kReplayFile, edge_edge);
   return folder;
 }
 
@@ -306,6 +464,20 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
   if (options.markdown) datasets::require_writable_file(*options.markdown);
   if (options.json) datasets::require_writable_file(*options.json);
   const ResultSet base = load(options.base), head = load(options.head);
+  // Records of schema 1 carry no spec: then every cell is matched by its resolved name (built-in strategies still
+  // match; a plugin's resolved name holds its path and digest, so its two builds do not).
+  const auto without_spec = [](const ResultSet& set) {
+    return std::any_of(set.summaries.begin(), set.summaries.end(), [](const json& s) { return !s.contains("spec"); });
+  };
+  const bool by_resolved = without_spec(base) || without_spec(head);
+  auto given = [&](const json& s) { return by_resolved ? s["strategy"].get<std::string>() : spec_of(s); };
+  for (const auto& [b, h] : options.pairs) {
+    for (const auto& [set, spec] : {std::pair{&base, b}, {&head, h}}) {
+      if (std::none_of(set->summaries.begin(), set->summaries.end(), [&](const json& s) { return given(s) == spec; })) {
+        throw InputError(set->path, {}, "--pair " + b + " " + h + ": no cell of " + spec + " here (the strategy as run's --strategy gave it)");
+      }
+    }
+  }
   // Which spec of a side a cell is matched by: as given, or paired.
   auto matched_spec = [&](const std::string& spec, bool base_side) {
     for (const auto& [b, h] : options.pairs) {
@@ -325,31 +497,30 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
   };
   std::map<std::string, const json*> base_cells, head_cells;
   std::vector<std::string> order;
-  for (const json& s : base.summaries) {
-    if (left_out(spec_of(s), true)) continue;
-    const std::string key = match_key(s, matched_spec(spec_of(s), true));
-    if (!base_cells.emplace(key, &s).second) throw InputError(base.path, {}, "two results for the cell " + cell_name(s, spec_of(s)));
-    order.push_back(key);
-  }
-  for (const json& s : head.summaries) {
-    if (left_out(spec_of(s), false)) continue;
-    const std::string key = match_key(s, matched_spec(spec_of(s), false));
-    if (!head_cells.emplace(key, &s).second) throw InputError(head.path, {}, "two results for the cell " + cell_name(s, spec_of(s)));
-    if (base_cells.count(key) == 0) order.push_back(key);
+  for (const auto& [set, cells, base_side] : {std::tuple{&base, &base_cells, true}, {&head, &head_cells, false}}) {
+    for (const json& s : set->summaries) {
+      if (left_out(given(s), base_side)) continue;
+      const std::string key = match_key(s, matched_spec(given(s), base_side));
+      if (!cells->emplace(key, &s).second) {
+        throw InputError(set->path, {}, "two cells match as " + cell_name(s, given(s)) + " (one strategy given twice?)");
+      }
+      if (base_side || base_cells.count(key) == 0) order.push_back(key);
+    }
   }
   std::vector<CellComparison> cells;
   std::vector<std::string> only_base, only_head;
   for (const std::string& key : order) {
     const auto b = base_cells.find(key), h = head_cells.find(key);
     if (b == base_cells.end()) {
-      only_head.push_back(cell_name(*h->second, spec_of(*h->second)));
+      only_head.push_back(cell_name(*h->second, given(*h->second)));
     } else if (h == head_cells.end()) {
-      only_base.push_back(cell_name(*b->second, spec_of(*b->second)));
+      only_base.push_back(cell_name(*b->second, given(*b->second)));
     } else {
-      const std::string spec = matched_spec(spec_of(*b->second), true);
+      const std::string spec = matched_spec(given(*b->second), true);
       cells.push_back(compare_cell(base, head, *b->second, *h->second, cell_name(*h->second, spec), options));
     }
   }
+  if (!options.replay.empty()) clear_replay(options.replay);
   std::map<std::string, std::filesystem::path> written;
   for (std::size_t k = 0; k < cells.size(); ++k) {
     if (!cells[k].newly_missed.empty()) written[cells[k].name] = write_replay(cells[k], k + 1, options.replay);
@@ -357,10 +528,16 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
   const Table table = comparison_table(cells);
   table.print(out);
   out << details(cells, written);
-  for (const std::string& name : only_base) out << "only in the base: " << name << "\n";
+  for (const std::string& name : only_base) out << "only in the base: " << name << " (the head lost it: a verdict it cannot show)\n";
   for (const std::string& name : only_head) out << "only in the head: " << name << "\n";
   if (!base.has_steps || !head.has_steps) out << "steps not compared: a side has no step records (give run's --out folder or its results.jsonl)\n";
-  const bool worse = std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.worse; });
+  if (by_resolved) out << "cells matched by resolved name: a side's records are of schema 1 (no spec)\n";
+  for (const ResultSet* set : {&base, &head}) {
+    if (set->replaced > 0)
+      out << set->path.string() << ": " << set->replaced << " earlier result(s) of a cell left out (the latest of each is compared)\n";
+  }
+  // A cell the base had and the head lacks is a verdict the head cannot show.
+  const bool worse = !only_base.empty() || std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.worse; });
   const bool slower = std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.slower; });
   if (options.markdown) {
     datasets::AtomicFile file(*options.markdown, std::ios::out);
@@ -368,7 +545,7 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
     table.print_markdown(file.stream());
     const std::string more = details(cells, written);
     if (!more.empty()) file.stream() << "\n```\n" << more << "```\n";
-    for (const std::string& name : only_base) file.stream() << "\n- only in the base: " << name;
+    for (const std::string& name : only_base) file.stream() << "\n- only in the base (the head lost it): " << name;
     for (const std::string& name : only_head) file.stream() << "\n- only in the head: " << name;
     file.stream() << "\n";
     file.commit();

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 
 namespace ccd {
 namespace {
@@ -214,10 +215,82 @@ TEST_F(Compare, PairsMatchTwoBuildsOfOneRunAndCellsOnOneSideAreListed) {
   EXPECT_NE(paired.output.find("s / plugin:base/my.so → plugin:head/my.so / δ scene's 0.01:"), std::string::npos) << paired.output;
   EXPECT_NE(paired.output.find("newly missed at step 1: vf [3,5]"), std::string::npos) << paired.output;
   EXPECT_EQ(paired.output.find("only in"), std::string::npos) << paired.output;
+  // Unpaired, the base's build is a cell the head lost: a verdict it cannot show.
   const auto unpaired = compare(write("base.jsonl", {base_build, full}), write("head.jsonl", {head_build, full}));
-  EXPECT_EQ(unpaired.exit_code, 0) << unpaired.output;
+  EXPECT_EQ(unpaired.exit_code, 1) << unpaired.output;
   EXPECT_NE(unpaired.output.find("only in the base: s / plugin:base/my.so"), std::string::npos) << unpaired.output;
   EXPECT_NE(unpaired.output.find("only in the head: s / plugin:head/my.so"), std::string::npos) << unpaired.output;
+  // A cell only the head has is no regression.
+  EXPECT_EQ(compare(write("full.jsonl", {full}), dir_ / "head.jsonl").exit_code, 0);
+  // A pair that names no cell is refused, never a comparison of nothing.
+  const auto misspelt = compare(one_run, one_run, "--pair plugin:base/my.so plugin:hed/my.so");
+  EXPECT_EQ(misspelt.exit_code, 2) << misspelt.output;
+  EXPECT_NE(misspelt.output.find("no cell of plugin:hed/my.so"), std::string::npos) << misspelt.output;
+}
+
+TEST_F(Compare, AVerdictTheHeadLacksIsWorseAndRecordsOfSchema1MatchByResolvedName) {
+  SyntheticCell base;
+  const auto base_file = write("base.jsonl", {base});
+  // A head run without --verify exact: its cells have no missed count.
+  std::string text;
+  std::istringstream in(base.lines());
+  for (std::string line; std::getline(in, line);) {
+    nlohmann::json record = nlohmann::json::parse(line);
+    record.erase("missed");
+    text += record.dump() + "\n";
+  }
+  testing::write_text(dir_ / "unverified.jsonl", text);
+  const auto lacking = compare(base_file, dir_ / "unverified.jsonl");
+  EXPECT_EQ(lacking.exit_code, 1) << lacking.output;
+  EXPECT_NE(lacking.output.find("the head has no missed"), std::string::npos) << lacking.output;
+  // Schema 1 (no spec): matched by the resolved name, and still compared.
+  SyntheticCell worse = base;
+  worse.missed_pairs[0] = {{"vf", {1, 1}}};
+  std::string old_text;
+  std::istringstream old_in(base.lines());
+  for (std::string line; std::getline(old_in, line);) {
+    nlohmann::json record = nlohmann::json::parse(line);
+    for (const char* field : {"schema", "spec", "ms_per_repeat", "missed_pairs"}) record.erase(field);
+    old_text += record.dump() + "\n";
+  }
+  testing::write_text(dir_ / "schema1.jsonl", old_text);
+  const auto old = compare(dir_ / "schema1.jsonl", write("worse.jsonl", {worse}));
+  EXPECT_EQ(old.exit_code, 1) << old.output;
+  EXPECT_NE(old.output.find("missed 0 → 1"), std::string::npos) << old.output;
+  EXPECT_NE(old.output.find("cells matched by resolved name"), std::string::npos) << old.output;
+}
+
+TEST_F(Compare, MalformedFieldsAreBadInputAndNothingIsWritten) {
+  SyntheticCell before, after;
+  after.missed_pairs = {{{"vf", {2, 3}}}, {}, {}};
+  const auto base = write("base.jsonl", {before});
+  const std::string good = after.lines();
+  struct Case {
+    std::string from, to, where;
+  };
+  // Each: a field of the head's records made wrong, and where the refusal must point.
+  const std::vector<Case> cases = {{"\"thickness\":0.01,\"thickness_from\"", "\"thickness\":\"0.01\",\"thickness_from\"", "line 4.thickness"},
+                                   {"\"ms_per_repeat\":[30.0", "\"ms_per_repeat\":[null", "line 4.ms_per_repeat"},
+                                   {"\"missed\":1,", "\"missed\":\"1\",", "line 1.missed"},
+                                   {"\"ids\":[2,3]", "\"ids\":[2]", "line 1.missed_pairs[0].ids"},
+                                   {"\"answers\":\"a1\"", "\"answers\":5", "line 2.answers"}};
+  for (const Case& c : cases) {
+    std::string text = good;
+    const std::size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from << " in " << text;
+    text.replace(at, c.from.size(), c.to);
+    testing::write_text(dir_ / "head.jsonl", text);
+    std::filesystem::remove_all(dir_ / "replay");
+    const auto refused = compare(base, dir_ / "head.jsonl", "--markdown " + quoted(dir_ / "c.md"));
+    EXPECT_EQ(refused.exit_code, 2) << c.to << ": " << refused.output;
+    EXPECT_NE(refused.output.find("head.jsonl:" + c.where + ": "), std::string::npos) << c.to << ": " << refused.output;
+    EXPECT_FALSE(std::filesystem::exists(dir_ / "c.md"));
+    EXPECT_FALSE(std::filesystem::exists(dir_ / "replay"));
+  }
+  testing::write_text(dir_ / "empty.jsonl", "");
+  const auto empty = compare(base, dir_ / "empty.jsonl");
+  EXPECT_EQ(empty.exit_code, 2) << empty.output;
+  EXPECT_NE(empty.output.find("no summary of any cell"), std::string::npos) << empty.output;
 }
 
 TEST_F(Compare, RefusesWhatIsNotAResultSet) {
@@ -342,8 +415,15 @@ TEST_F(GateRoundTrip, TheCiExampleScriptGatesTheHeadAndComparesItWithTheBase) {
   ASSERT_EQ(written.exit_code, 0) << written.output;
   EXPECT_EQ(read_json(dir_ / "baseline.json")[0]["strategy"], "plugin:head/libmy_ccd.so");
   std::filesystem::remove_all(dir_ / "work");
-  const auto same = testing::run_command("HEAD_BUILD=" + quoted(plugins) + " " + settings + script + arguments);
+  // An unchanged plugin, built again in the head's own folder.
+  std::filesystem::create_directories(dir_ / "same-build");
+  std::filesystem::copy_file(plugins / "libmy_ccd.so", dir_ / "same-build" / "libmy_ccd.so");
+  const auto same = testing::run_command("HEAD_BUILD=" + quoted(dir_ / "same-build") + " " + settings + script + arguments);
   EXPECT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_NE(same.output.find("fold8 / plugin:base/libmy_ccd.so → plugin:head/libmy_ccd.so / δ 0.001"), std::string::npos) << same.output;
+  EXPECT_NE(same.output.find("no verdict got worse"), std::string::npos) << same.output;
+  EXPECT_NE(same.output.find("fold8 / plugin:base/libmy_ccd.so → plugin:head/libmy_ccd.so / δ 0.001"), std::string::npos) << same.output;
+  EXPECT_NE(same.output.find("no verdict got worse"), std::string::npos) << same.output;
   std::filesystem::remove_all(dir_ / "work");
   const auto regressed = testing::run_command("HEAD_BUILD=" + quoted(dir_ / "head-build") + " " + settings + script + arguments);
   EXPECT_EQ(regressed.exit_code, 1) << regressed.output;
