@@ -1,4 +1,5 @@
 #include "datasets/frame_source.hpp"
+#include "datasets/mesh_file.hpp"
 
 #include "core/error.hpp"
 #include "datasets/mesh_frame.hpp"

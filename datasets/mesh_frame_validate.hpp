@@ -1,5 +1,6 @@
 #pragma once
-// Template definition of validate_mesh_frame (mesh_frame.hpp); included from there only.
+/// @file
+/// The checks every mesh reader shares (ply.cpp, obj.cpp).
 
 #include "core/error.hpp"
 #include "datasets/mesh_frame.hpp"
@@ -8,6 +9,9 @@
 
 namespace ccd::datasets {
 
+/// Checks the rules every reader shares (finite coordinates, valid faces) and warns about unused vertices.
+/// `where_vertex(i)`/`where_face(i)` give the location text for element i (e.g. its line).
+/// @throws InputError attributed to `path`.
 template <class WhereVertex, class WhereFace>
 void validate_mesh_frame(const std::filesystem::path& path, const MeshFrame& frame, WhereVertex where_vertex, WhereFace where_face) {
   static constexpr const char* kAxis[3] = {"x", "y", "z"};

@@ -3,6 +3,7 @@
 #include "core/error.hpp"
 #include "datasets/atomic_file.hpp"
 #include "datasets/input_file.hpp"
+#include "datasets/mesh_frame_validate.hpp"
 
 #include <charconv>
 #include <fstream>

@@ -7,7 +7,7 @@
 #include "datasets/frame_cache.hpp"
 #include "datasets/ply.hpp"
 #include "datasets/procedural/scene_setup.hpp"
-#include "datasets/scene_file.hpp"
+#include "datasets/shape_json.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -306,36 +306,14 @@ std::filesystem::path procedural_cache_root() {
   return std::filesystem::temp_directory_path() / "ccdbench-cache";
 }
 
-void register_procedural_scene_generators() {
-  for (const SceneDefinition& definition : definitions()) {
-    const std::string name = definition.info.name;
-    register_scene_generator(name, [name](const nlohmann::json& block, const std::filesystem::path& file) {
-      SceneParameters parameters;
-      for (const auto& item : block.items()) {
-        if (item.value().is_string()) {
-          const auto choice = scene_parameter_choice(name, item.key(), item.value().get<std::string>());
-          if (!choice) throw InputError(file, "generator." + item.key(), "must be a number or one of the parameter's choices");
-          parameters[item.key()] = *choice;
-          continue;
-        }
-        if (!item.value().is_number()) throw InputError(file, "generator." + item.key(), "must be a number");
-        parameters[item.key()] = item.value().get<double>();
-      }
-      GenerateResult generated;
-      try {
-        const SceneParameters resolved = resolve_parameters(find_definition(name).info, parameters);
-        // FNV-1a of the key names the folder: stable across runs and machines, unlike std::hash.
-        std::uint64_t hash = 14695981039346656037ull;
-        for (char ch : cache_key(name, resolved)) hash = (hash ^ static_cast<unsigned char>(ch)) * 1099511628211ull;
-        std::ostringstream folder;
-        folder << name << '-' << std::hex << std::setw(16) << std::setfill('0') << hash;
-        generated = generate_procedural_scene({name, resolved, procedural_cache_root() / folder.str(), {}, {}});
-      } catch (const std::invalid_argument& error) {
-        throw InputError(file, "generator", error.what());
-      }
-      return load_scene_file(generated.scene_file);
-    });
-  }
+GenerateResult generate_cached_scene(const std::string& name, const SceneParameters& given) {
+  const SceneParameters resolved = resolve_parameters(find_definition(name).info, given);
+  // FNV-1a of the key names the folder: stable across runs and machines, unlike std::hash.
+  std::uint64_t hash = 14695981039346656037ull;
+  for (char ch : cache_key(name, resolved)) hash = (hash ^ static_cast<unsigned char>(ch)) * 1099511628211ull;
+  std::ostringstream folder;
+  folder << name << '-' << std::hex << std::setw(16) << std::setfill('0') << hash;
+  return generate_procedural_scene({name, resolved, procedural_cache_root() / folder.str(), {}, {}});
 }
 
 }  // namespace ccd::datasets

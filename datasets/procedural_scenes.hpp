@@ -8,6 +8,8 @@
 /// with obstacles=shape analytic shapes (spinning-ball's sphere, drape's table and pile's ground as boxes, fold's
 /// blade as a thin box and a ball driven through the sheet).
 
+#include "datasets/scene_parameters.hpp"
+
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -17,33 +19,8 @@
 
 namespace ccd::datasets {
 
-struct SceneParameter {
-  std::string name;
-  double default_value;
-  std::string description;
-  /// A parameter with named values ("obstacles": mesh, shape) holds the index of the chosen one.
-  std::vector<std::string> choices = {};
-};
-
-struct ProceduralSceneInfo {
-  std::string name;
-  std::string description;
-  /// resolution, frames and seed first, then the scene's own.
-  std::vector<SceneParameter> parameters;
-};
-
 /// Every built-in scene with its parameters and defaults.
 const std::vector<ProceduralSceneInfo>& procedural_scenes();
-
-/// Parameter values by name; a missing name takes its default.
-using SceneParameters = std::map<std::string, double>;
-
-/// Per-frame measurements that show what the scene does (e.g. spinning-ball: the cloth's distance to the ball
-/// and its rotation).
-struct FrameReport {
-  std::size_t frame = 0;
-  std::vector<std::pair<std::string, double>> metrics;
-};
 
 struct GenerateRequest {
   std::string name;
@@ -85,6 +62,10 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request);
 std::filesystem::path procedural_cache_root();
 
 /// Registers every built-in scene as a scene-file generator: {"generator": {"name": "flag", "wind": 12}}.
-void register_procedural_scene_generators();
+
+/// Generates the built-in scene `name` with `given` parameters (the rest at their defaults) into a folder of the cache
+/// named by its resolved parameters, or reads the folder a same call made before. What a scene file's
+/// {"generator": ...} block runs (scene_file.cpp). @throws std::invalid_argument for an unknown scene or parameter.
+GenerateResult generate_cached_scene(const std::string& name, const SceneParameters& given);
 
 }  // namespace ccd::datasets

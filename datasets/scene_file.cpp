@@ -28,10 +28,39 @@ std::mutex& generator_registry_mutex() {
   return mutex;
 }
 
+/// The built-in procedural scenes as generators: a block's parameters (numbers, or a parameter's named choices) to the
+/// scene generated into the cache (procedural_scenes.hpp), read back as a scene file.
+void register_builtin_generators() {
+  std::lock_guard lock(generator_registry_mutex());
+  for (const ProceduralSceneInfo& info : procedural_scenes()) {
+    const std::string name = info.name;
+    generator_registry()[name] = [name](const nlohmann::json& block, const std::filesystem::path& file) {
+      SceneParameters parameters;
+      for (const auto& item : block.items()) {
+        if (item.value().is_string()) {
+          const auto choice = scene_parameter_choice(name, item.key(), item.value().get<std::string>());
+          if (!choice) throw InputError(file, "generator." + item.key(), "must be a number or one of the parameter's choices");
+          parameters[item.key()] = *choice;
+          continue;
+        }
+        if (!item.value().is_number()) throw InputError(file, "generator." + item.key(), "must be a number");
+        parameters[item.key()] = item.value().get<double>();
+      }
+      GenerateResult generated;
+      try {
+        generated = generate_cached_scene(name, parameters);
+      } catch (const std::invalid_argument& error) {
+        throw InputError(file, "generator", error.what());
+      }
+      return load_scene_file(generated.scene_file);
+    };
+  }
+}
+
 /// The built-in procedural scenes join the registry the first time anyone looks into it.
 void ensure_builtin_generators() {
   static std::once_flag once;
-  std::call_once(once, register_procedural_scene_generators);
+  std::call_once(once, register_builtin_generators);
 }
 
 /// Reports keys outside `allowed` in object `value` found at `where`.
@@ -156,15 +185,6 @@ SceneSequence scene_from_generator(const json& block, const std::filesystem::pat
 }
 
 }  // namespace
-
-void put_shape_keys(json& object, const Shape& shape) {
-  object["shape"] = std::string(to_string(shape.kind));
-  if (shape.kind == ShapeKind::sphere) {
-    object["radius"] = shape.radius;
-  } else {
-    object["half_extents"] = {shape.half_extents.x(), shape.half_extents.y(), shape.half_extents.z()};
-  }
-}
 
 void register_scene_generator(const std::string& name, SceneGeneratorFunction generator) {
   std::lock_guard lock(generator_registry_mutex());

@@ -40,10 +40,6 @@ namespace ccd::datasets {
 /// @throws InputError naming the file and the JSON location (line, or key path like "objects[1].frames").
 SceneSequence load_scene_file(const std::filesystem::path& path);
 
-/// Writes a shape's keys as a scene file names them into `object`: "shape", then "radius" or "half_extents"
-/// (what generators write and `inspect` shows).
-void put_shape_keys(nlohmann::json& object, const Shape& shape);
-
 /// Builds a scene from a parsed scene-file document; `base` resolves relative paths; `file` names errors.
 SceneSequence scene_from_json(const nlohmann::json& document, const std::filesystem::path& base, const std::filesystem::path& file);
 

@@ -3,10 +3,12 @@
 #include "core/error.hpp"
 #include "core/step.hpp"
 #include "datasets/frame_cache.hpp"
+#include "datasets/mesh_file.hpp"
 #include "datasets/mesh_frame.hpp"
 #include "datasets/query_file.hpp"
 #include "datasets/sample_step.hpp"
 #include "datasets/scene_file.hpp"
+#include "datasets/shape_json.hpp"
 #include "harness/progress.hpp"
 
 #include <fstream>

@@ -2,6 +2,7 @@
 
 #include "harness/table.hpp"
 #include "strategies/narrowphase/registry.hpp"
+#include "strategies/plugin/isolation.hpp"
 #include "strategies/plugin/library.hpp"
 #include "strategies/registry.hpp"
 

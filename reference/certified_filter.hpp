@@ -4,7 +4,7 @@
 /// sign conditions (sign_conditions.hpp). It answers "certainly no" or "certainly yes" for the easy pairs and
 /// "inconclusive" otherwise; it is never wrong.
 
-#include "reference/elementary_pair.hpp"
+#include "reference/exact_pair.hpp"
 
 #include <CGAL/Interval_nt.h>
 

@@ -3,7 +3,7 @@
 /// The exact path: every sign condition expanded into polynomials in t with rational coefficients and decided by
 /// real root isolation with CGAL's univariate algebraic kernel.
 
-#include "reference/elementary_pair.hpp"
+#include "reference/exact_pair.hpp"
 
 #include <optional>
 

@@ -7,7 +7,7 @@
 #include "core/scene.hpp"
 #include "core/shape.hpp"
 #include "datasets/cloth_simulator.hpp"
-#include "datasets/procedural_scenes.hpp"
+#include "datasets/scene_parameters.hpp"
 #include "datasets/shapes.hpp"
 
 #include <functional>

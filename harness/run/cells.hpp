@@ -3,7 +3,7 @@
 /// One cell of `ccdbench run`: a strategy over every step of a scene, timed, judged against the truth, recorded.
 
 #include "core/collision_set.hpp"
-#include "harness/run.hpp"
+#include "harness/run/options.hpp"
 
 #include <nlohmann/json.hpp>
 

@@ -26,7 +26,7 @@
 /// flat too, and rounding separates them).
 
 #include "ccd/config.hpp"
-#include "strategies/registry.hpp"
+#include "strategies/strategy_entry.hpp"
 
 #include <stdexcept>
 

@@ -15,7 +15,7 @@
 #include "strategies/face_shape.hpp"
 #include "strategies/object_hierarchies.hpp"
 #include "strategies/opencl/full_opencl.hpp"
-#include "strategies/registry.hpp"
+#include "strategies/strategy_entry.hpp"
 
 #include <stdexcept>
 

@@ -7,8 +7,8 @@
 /// advances by is rounded, so it can miss or report a TOI late by that rounding (no bound on it is derived here).
 /// Grazing passes take many steps; the cap then answers "collides".
 
+#include "strategies/narrowphase/entry.hpp"
 #include "strategies/narrowphase/primitive_distance.hpp"
-#include "strategies/narrowphase/registry.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 /// and t = 1 the primitives' distance is compared with δ + η. Fast; it misses contacts without a sign change of
 /// the cubic (tangential double roots, coplanar motion) and near-misses of the tolerance.
 
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase/entry.hpp"
 #include "strategies/narrowphase/shared.hpp"
 
 namespace ccd::narrowphase {

@@ -5,7 +5,7 @@
 /// the iteration cap was hit (reported). Its TOI is never later than the exact earliest contact, and no earlier than
 /// a proven contact by more than toi_tolerance.
 
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase/entry.hpp"
 #include "strategies/narrowphase/round_to_nearest.hpp"
 #include "strategies/narrowphase/shared.hpp"
 

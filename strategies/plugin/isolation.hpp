@@ -33,6 +33,11 @@ int serve_plugin(int argc, char** argv);
 /// The first argument that makes ccdbench a plugin's child process.
 inline constexpr const char* kPluginHostCommand = "plugin-host";
 
+/// The description of the plugin at `path`, made once per process (by a child process: plugin-host --describe).
+/// @throws std::invalid_argument "plugin PATH: REASON" when it cannot be loaded, its table is refused, or its child
+///         crashed or hung while loading it.
+const PluginDescription& plugin_description(const std::string& path);
+
 /// The plugin at `path` described by a child process (plugin-host --describe).
 /// @throws std::invalid_argument "plugin PATH: REASON": its table is refused, or the child crashed, exited or hung
 ///         while loading it.

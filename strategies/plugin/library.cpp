@@ -1,11 +1,9 @@
 #include "strategies/plugin/library.hpp"
 
 #include "ccd/config.hpp"
-#include "strategies/plugin/isolation.hpp"
 
 #include <dlfcn.h>
 #include <link.h>
-#include <xxhash.h>
 
 #include <algorithm>
 #include <atomic>
@@ -29,18 +27,6 @@ bool plain_name(const std::string& name) {
 }
 
 std::string text_or(const char* text, const char* fallback) { return text != nullptr ? text : fallback; }
-
-std::string hex128(const XXH128_hash_t& hash) {
-  char text[33];
-  std::snprintf(text, sizeof text, "%016llx%016llx", static_cast<unsigned long long>(hash.high64), static_cast<unsigned long long>(hash.low64));
-  return text;
-}
-
-void hash_file(XXH3_state_t* state, const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  char buffer[1 << 16];
-  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) XXH3_128bits_update(state, buffer, static_cast<std::size_t>(in.gcount()));
-}
 
 // A plugin's timeout: from a millisecond (a test of one) to a day (a whole step of a huge mesh).
 constexpr narrowphase::SpecRange kTimeoutRange{0.001, 86400};
@@ -75,32 +61,6 @@ PluginTable read_table(const ccdbench_plugin& table) {
 }
 
 }  // namespace
-
-std::string bytes_digest(std::string_view bytes) { return hex128(XXH3_128bits(bytes.data(), bytes.size())); }
-
-std::string content_digest(const std::filesystem::path& path) {
-  XXH3_state_t* state = XXH3_createState();
-  XXH3_128bits_reset(state);
-  if (std::filesystem::is_directory(path)) {
-    std::vector<std::filesystem::path> files;
-    for (const auto& entry : std::filesystem::recursive_directory_iterator(path)) {
-      if (entry.is_regular_file()) files.push_back(entry.path());
-    }
-    std::sort(files.begin(), files.end());
-    for (const std::filesystem::path& file : files) {
-      const std::string name = std::filesystem::relative(file, path).generic_string();
-      XXH3_128bits_update(state, name.c_str(), name.size() + 1);
-      hash_file(state, file);
-      const char separator = '\0';
-      XXH3_128bits_update(state, &separator, 1);
-    }
-  } else {
-    hash_file(state, path);
-  }
-  const XXH128_hash_t hash = XXH3_128bits_digest(state);
-  XXH3_freeState(state);
-  return hex128(hash);
-}
 
 PluginDescription describe(const std::string& path, const PluginTable& table, std::vector<LoadedObject> objects, std::string environment_at_load) {
   auto refuse = [&](const std::string& reason) { return std::invalid_argument("plugin " + path + ": " + reason); };
@@ -371,32 +331,9 @@ std::shared_ptr<const Library> library_at(const std::string& path) {
 
 }  // namespace
 
-const PluginDescription& plugin_description(const std::string& given) {
-  static std::map<std::string, std::unique_ptr<const PluginDescription>> described;
-  const std::string key = std::filesystem::absolute(given).lexically_normal().string();
-  {
-    std::lock_guard lock(registry_mutex());
-    if (const auto it = described.find(key); it != described.end()) return *it->second;
-  }
-#if CCDBENCH_GUARD_DESCRIBE_IN_CHILD
-  PluginDescription made = describe_in_child(given);
-#if CCDBENCH_GUARD_IDENTITY
-  // Its identity is this process's to find, from its files, never the child's to say: the code the child ran could
-  // have written any description.
-  made.objects = plugin_objects_on_disk(made.path);
-  made.digest = combined_digest(made.objects);
-#endif
+std::shared_ptr<const Library> library_loaded_at(const std::string& path) {
   std::lock_guard lock(registry_mutex());
-#else
-  // Without the guard: loaded into this process to be described (a crash at load ends the run).
-  std::lock_guard lock(registry_mutex());
-  std::error_code error;
-  const std::filesystem::path canonical = std::filesystem::weakly_canonical(std::filesystem::absolute(given), error);
-  PluginDescription made = library_at((error ? std::filesystem::absolute(given) : canonical).string())->description();
-#endif
-  auto it = described.find(key);
-  if (it == described.end()) it = described.emplace(key, std::make_unique<const PluginDescription>(std::move(made))).first;
-  return *it->second;
+  return library_at(path);
 }
 
 std::shared_ptr<const Library> load_library(const PluginDescription& description) {

@@ -11,6 +11,7 @@
 #include "strategies/narrowphase/spec.hpp"
 #include "strategies/plugin/call_guard.hpp"
 #include "strategies/plugin/ccdbench_plugin.h"
+#include "strategies/plugin/digest.hpp"
 #include "strategies/plugin/fp_environment.hpp"
 #include "strategies/plugin/loaded_code.hpp"
 
@@ -73,11 +74,6 @@ struct PluginDescription {
 /// its keys) and makes the description. @throws std::invalid_argument "plugin PATH: REASON".
 PluginDescription describe(const std::string& path, const PluginTable& table, std::vector<LoadedObject> objects, std::string environment_at_load);
 
-/// The description of the plugin at `path`, made once per process (by a child process: plugin-host --describe).
-/// @throws std::invalid_argument "plugin PATH: REASON" when it cannot be loaded, its table is refused, or its child
-///         crashed or hung while loading it.
-const PluginDescription& plugin_description(const std::string& path);
-
 /// A description sent between processes, and read back (checked as `describe` checks). A reply that is not one is
 /// refused: @throws std::invalid_argument.
 std::vector<char> encode(const PluginDescription& description);
@@ -105,13 +101,9 @@ class Library {
   FpEnvironment environment_;
 };
 
-/// XXH3-128 of bytes, as 32 hex digits.
-std::string bytes_digest(std::string_view bytes);
-
-/// XXH3-128 of a file's bytes, or of every file under a folder (their relative paths and bytes, in path order), as
-/// 32 hex digits, read apart from any use of them: what builds with the identity and read-once guards left out
-/// record (CCDBENCH_PLUGIN_GUARDS_OFF), where it stands for the earlier, weaker digests.
-std::string content_digest(const std::filesystem::path& path);
+/// The library at `path` (absolute), loaded into this process once and kept, unchecked: what a build without the
+/// describe-in-child guard describes in this process.
+std::shared_ptr<const Library> library_loaded_at(const std::string& path);
 
 /// The library described by `description`, loaded into this process once and kept (a loaded library is never
 /// unloaded while an entry may point into it), after checking that the code loaded here is the code described.

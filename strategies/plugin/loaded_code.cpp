@@ -1,6 +1,6 @@
 #include "strategies/plugin/loaded_code.hpp"
 
-#include "strategies/plugin/library.hpp"
+#include "strategies/plugin/digest.hpp"
 
 #include <elf.h>
 #include <fcntl.h>

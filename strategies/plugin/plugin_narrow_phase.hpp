@@ -6,7 +6,7 @@
 /// an outcome the ABI does not define is a fault (NarrowPhaseResult::fault), counted apart and counted for the
 /// verdicts as the `errors` key says.
 
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase/entry.hpp"
 #include "strategies/plugin/ccdbench_plugin.h"
 
 #include <string>

@@ -6,7 +6,7 @@
 /// Every contact they report is checked (contact_check.hpp); what fails is a fault of the step, counted apart and
 /// written out to reproduce, never an answer.
 
-#include "strategies/registry.hpp"
+#include "strategies/strategy_entry.hpp"
 
 #include <string>
 

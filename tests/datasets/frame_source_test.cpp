@@ -1,5 +1,6 @@
 #include "datasets/frame_source.hpp"
 #include "core/error.hpp"
+#include "datasets/mesh_file.hpp"
 #include "datasets/mesh_frame.hpp"
 #include "datasets/scene_sequence.hpp"
 #include "tests/support/test_support.hpp"

@@ -1,5 +1,6 @@
 #include "datasets/obj.hpp"
 #include "core/error.hpp"
+#include "datasets/mesh_file.hpp"
 #include "datasets/mesh_frame.hpp"
 #include "tests/support/test_support.hpp"
 

@@ -1,5 +1,6 @@
 #include "datasets/scene_file.hpp"
 #include "core/error.hpp"
+#include "datasets/mesh_file.hpp"
 #include "datasets/mesh_frame.hpp"
 #include "tests/support/test_support.hpp"
 

@@ -35,7 +35,7 @@
 #include "strategies/elementary_tests.hpp"
 #include "strategies/face_shape.hpp"
 #include "strategies/object_hierarchies.hpp"
-#include "strategies/registry.hpp"
+#include "strategies/strategy_entry.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
