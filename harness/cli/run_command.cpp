@@ -1,0 +1,162 @@
+// ccdbench run: strategies over every step of the scenes, verified, timed, recorded (harness/run.hpp).
+#include "datasets/scene_file.hpp"
+#include "harness/cli/cli.hpp"
+#include "harness/run.hpp"
+#include "strategies/narrowphase/registry.hpp"
+#include "strategies/registry.hpp"
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+
+namespace ccd::cli {
+
+namespace {
+
+struct RunCommandOptions {
+  harness::RunOptions run;
+  std::string suite, strategies = "full", verify = "exact", thickness;
+  std::vector<std::string> frames, scenes, answer_folders;
+  CLI::App* app = nullptr;
+};
+
+/// "full, apccd, brute, fcl, fcl-bvh": the registry's strategies.
+std::string strategy_list() {
+  std::string names;
+  for (const strategies::StrategyEntry& entry : strategies::strategy_entries()) names += (names.empty() ? "" : ", ") + entry.name;
+  return names;
+}
+
+void add_run_options(CLI::App* run, RunCommandOptions& o, Shared& shared) {
+  run->add_option("--suite", o.suite,
+                  "built-in suite: ci (seconds), default (what scripts/run.sh runs), paper, large (the spinning\n"
+                  "ball at about 1M triangles, 3 steps of contact)");
+  run->add_option("--scene", o.scenes, "scene files (or folders with scene.json); repeat or list several");
+  run->add_option("--frames", o.frames, "mesh files: one deformable self-colliding object, one step per pair")->expected(2, 100000);
+  run->add_option("--strategy", o.strategies, "comma-separated strategy specs")->capture_default_str();
+  run->add_option("--thickness", o.thickness,
+                  "thickness δ >= 0, or `scene` (the scene's own; the default, 0 for --frames); a comma-separated list\n"
+                  "(e.g. scene,0) runs every scene at each, and a strategy that refuses one (fcl at δ > 0) is left out there");
+  run->add_option("--verify", o.verify, "exact (every step against the exact truth) or none")
+      ->check(CLI::IsMember({"exact", "none"}))
+      ->capture_default_str();
+  run->add_option("--repeat", o.run.repeats, "timed passes (1 to 1000); ms per step is the median")->check(CLI::Range(1, kMaxRepeats));
+  run->add_option("--out", o.run.out,
+                  "results folder: cells/ (one file per finished cell, reused by a later run only when its inputs,\n"
+                  "steps, δ, strategy, repeats, threads and executable are all the same) and results.jsonl (the step\n"
+                  "records and summary of every finished cell of every run into this folder)")
+      ->capture_default_str();
+  run->add_option("--json", o.run.json, "write the summaries (one per scene and strategy) as a JSON array");
+  run->add_option("--report", o.run.report, "write a Markdown page (table, steps.json for the plots) here");
+  run->add_flag("--toi", o.run.toi,
+                "also compare every reported time of impact with the exact earliest contact (exact TOIs are computed\n"
+                "once and cached with the truth): toi_late (later than exact: a defect for conservative methods),\n"
+                "toi_error_max and toi_error_mean; needs --verify exact");
+  run->add_option("--max-steps", o.run.max_steps, "only the first N steps of each scene (0: all)")
+      ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 40));
+  run->add_flag("--fresh", o.run.fresh, "rerun cells kept from an earlier run");
+  run->add_option("--misses", o.run.misses,
+                  "write each cell's missed pairs here as rational query files by cause (DIR/SCENE/CELL/{vertex-face,"
+                  "edge-edge}/CAUSE.csv; cause culled or tested, or for fcl why FCL's test said no), to replay with "
+                  "`ccdbench queries`");
+  run->add_option("--answers", o.answer_folders,
+                  "also judge the answers in this folder as a strategy, answers:DIR: DIR/SCENE/step_0000.csv, ... one\n"
+                  "colliding pair per line (README: Answer files)");
+  run->add_option("--write-answers", o.run.write_answers,
+                  "write each cell's answers here as DIR/STRATEGY/SCENE/step_0000.csv, ..., as --answers DIR/STRATEGY\n"
+                  "reads them (STRATEGY@δ when the run has several δ: a folder of answers is for one δ)");
+  add_isolation_flags(run, shared);
+  run->add_option("--faults", o.run.faults,
+                  "where what a step could not answer (a plugin's errors, crashes, hangs) is written to replay\n"
+                  "(default: OUT/faults)");
+}
+
+/// The scenes the options name: a suite, scene files, or one object's frames. Labels come from the paths as given,
+/// loads from their absolute paths, fixed now (a scene is loaded when its first cell comes, after plugins may have
+/// run). Returns a refusal's status, or 0.
+int add_run_scenes(RunCommandOptions& o) {
+  const int sources = (o.suite.empty() ? 0 : 1) + (o.scenes.empty() ? 0 : 1) + (o.frames.empty() ? 0 : 1);
+  if (sources != 1) return refuse({}, "give exactly one of --suite, --scene, --frames");
+  if (!o.suite.empty()) o.run.scenes = harness::suite_scenes(o.suite);
+  for (const std::string& scene : o.scenes) {
+    const std::filesystem::path absolute = std::filesystem::absolute(scene);
+    o.run.scenes.push_back({harness::scene_file_label(scene), [absolute] { return datasets::load_scene_file(absolute); }});
+  }
+  if (!o.frames.empty()) {
+    std::vector<std::filesystem::path> files;
+    for (const std::string& frame : o.frames) files.push_back(std::filesystem::absolute(frame));
+    const std::filesystem::path first(o.frames[0]);
+    const std::string folder = first.parent_path().filename().string();
+    o.run.scenes.push_back(
+        {(folder.empty() ? "" : folder + "/") + first.filename().string(), [files] { return datasets::scene_from_frame_files(files, 0.0); }});
+  }
+  return 0;
+}
+
+/// --thickness: `scene` or numbers, comma-separated. Returns a refusal's status, or 0.
+int add_thicknesses(RunCommandOptions& o) {
+  if (o.thickness.empty()) return 0;
+  for (const std::string& value : CLI::detail::split(o.thickness, ',')) {
+    if (value == "scene") {
+      o.run.thicknesses.emplace_back(std::nullopt);
+      continue;
+    }
+    std::size_t used = 0;
+    double thickness = -1;
+    try {
+      thickness = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != value.size() || !(thickness >= 0) || !std::isfinite(thickness)) {
+      return refuse("--thickness " + value, "must be `scene` or a finite number >= 0");
+    }
+    o.run.thicknesses.emplace_back(thickness);
+  }
+  return 0;
+}
+
+int run_run(RunCommandOptions& o, const Shared& shared) {
+  harness::RunOptions& run = o.run;
+  make_absolute(run.out);
+  for (std::optional<std::filesystem::path>* output : {&run.json, &run.report, &run.misses, &run.faults, &run.write_answers}) make_absolute(*output);
+  if (const int refused = add_run_scenes(o)) return refused;
+  if (const int refused = add_thicknesses(o)) return refused;
+  run.strategies = CLI::detail::split(o.strategies, ',');
+  // Answers alone (no --strategy) are judged alone: the default `full` is for runs that name no strategy at all.
+  if (!o.answer_folders.empty() && o.app->count("--strategy") == 0) run.strategies.clear();
+  for (const std::string& folder : o.answer_folders) run.strategies.push_back("answers:" + folder);
+  harness::check_run_outputs(run);
+  for (const std::string& spec : run.strategies) {
+    try {
+      strategies::make_strategy(spec);
+    } catch (const std::invalid_argument& error) {
+      return refuse("--strategy " + spec, error.what());
+    }
+  }
+  run.verify = o.verify == "exact";
+  if (run.toi && !run.verify) return refuse("--toi", "TOIs are compared with the exact truth: it needs --verify exact");
+  run.command_line = shared.command_line;
+  harness::run_benchmark(run, std::cout);
+  return 0;
+}
+
+}  // namespace
+
+Command add_run(CLI::App& app, Shared& shared) {
+  auto options = std::make_shared<RunCommandOptions>();
+  options->app = app.add_subcommand("run",
+                                    "Run strategies over every step of the scenes, verify every step against the exact truth, and print per\n"
+                                    "scene and strategy: ms per step (median; stage breakdown), speed-up over `full` (cells of this run only),\n"
+                                    "candidate triangle pairs, elementary tests, colliding pairs, missed (culled: never tested / tested: the\n"
+                                    "elementary test said no) and false alarms. Strategies: NAME[+NARROW][:key=value...], comma-separated:\n"
+                                    "NAME is " +
+                                        strategy_list() + "; NARROW is " + narrowphase::narrow_phase_list() +
+                                        " (default conservative).\n"
+                                        "`ccdbench strategies` lists what each is, its keys with their values and defaults, and its backends.\n"
+                                        "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
+  add_run_options(options->app, *options, shared);
+  return {options->app, [options, &shared] { return run_run(*options, shared); }, true};
+}
+
+}  // namespace ccd::cli
