@@ -90,6 +90,278 @@ struct PlannedItem {
 
 std::string on_rank(int rank) { return rank_info().size > 1 ? " (rank " + std::to_string(rank) + ")" : std::string(); }
 
+/// A run as rank 0 plans it and every rank works on it: the scenes this rank holds, the cells kept or finished,
+/// the work items of the scene being planned, and the progress shown.
+class Benchmark {
+ public:
+  explicit Benchmark(const RunOptions& options)
+      : options_(options),
+        planner_(rank_info().rank == 0),
+        truth_cache_(datasets::procedural_cache_root() / "truth"),
+        variants_(scene_variants(options)),
+        store_(options, variants_),
+        cell_total_(variants_.size() * options.strategies.size()) {
+    // Rank 0's view of the run: cells done of every cell planned (a bar on a terminal, plain lines in a log).
+    if (planner_) progress_.emplace("run: cells", cell_total_);
+  }
+
+  WorkFunction work() {
+    return [this](const std::string& payload) { return work_on(payload); };
+  }
+
+  /// Plans and runs every cell: one process scene by scene (each scene loaded once, when its turn comes), MPI ranks
+  /// every scene at once.
+  void run_all();
+
+  /// The table, notes and outputs of the cells, and their summaries.
+  std::vector<json> report(std::ostream& out) const;
+
+ private:
+  void say(const std::string& text) {
+    if (progress_) {
+      progress_->line(text);
+    } else {
+      std::cerr << text << "\n";
+    }
+  }
+
+  /// A cell in progress on rank 0: its steps move the estimate; a log gets a line per pass.
+  void cell_moved(int pass, std::size_t step, const std::string& strategy);
+  /// A work item (harness/work_queue.hpp): {"truth", scene, step} computes or reads one step's truth into the cache
+  /// (and this rank's memory); {"cell", scene, spec, file} runs a cell. Steps of a cell are never split: strategies
+  /// keep state from step to step.
+  std::string work_on(const std::string& payload);
+  /// Plans scene s: its kept cells go into cells_, its truth steps and pending cells become work items.
+  void plan_scene(std::size_t s);
+  /// The cell of `spec` on scene s, kept from an earlier run (true) or to run; false when the strategy refuses the
+  /// scene at one of several δ (left out and said so).
+  struct Pending {
+    std::string spec;
+    std::filesystem::path file;
+    CellKey key;
+    std::size_t slot;  // cells keep the order of --strategy, kept or computed
+  };
+  std::optional<Pending> plan_cell(std::size_t s, const std::string& spec, const std::string& content);
+  void item_done(std::size_t index, const std::string& text, int rank);
+
+  const RunOptions& options_;
+  const bool planner_;
+  const TruthCache truth_cache_;
+  const std::vector<SceneVariant> variants_;
+  SceneStore store_;
+  std::size_t cell_total_, cells_finished_ = 0, cell_count_ = 0, cells_done_ = 0;
+  std::optional<Progress> progress_;
+  std::vector<std::optional<json>> cells_;
+  std::vector<std::string> cell_specs_;  // each cell's spec as --strategy gave it (the table's short name)
+  std::vector<WorkItem> items_;
+  std::vector<PlannedItem> planned_;
+  /// Cells a strategy refused (several δ only): per spec, the scenes and δ, and the first refusal's reason.
+  std::vector<std::pair<std::string, std::pair<std::vector<std::string>, std::string>>> left_out_;
+};
+
+void Benchmark::cell_moved(int pass, std::size_t step, const std::string& strategy) {
+  if (!progress_) return;
+  const SceneData* data = store_.last();
+  const std::size_t steps = data ? data->steps : 1;
+  const double passes = std::max(1, options_.repeats);
+  const double fraction = (pass + static_cast<double>(step + 1) / static_cast<double>(steps)) / passes;
+  const std::string label = data ? data->label : "";
+  progress_->update(static_cast<double>(cells_finished_) + fraction, cell_total_,
+                    label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + ", step " + std::to_string(step + 1) +
+                        "/" + std::to_string(steps));
+  if (!progress_->terminal() && step + 1 == steps) {
+    say("run: " + label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + " of " +
+        std::to_string(options_.repeats) + " done");
+  }
+}
+
+std::string Benchmark::work_on(const std::string& payload) {
+  const json task = json::parse(payload);
+  // A cell's key (and file name, chosen by rank 0) holds rank 0's thread count: a rank with another would write
+  // cells that no rerun can find.
+  if (task.at("threads").get<std::size_t>() != worker_threads()) {
+    throw std::invalid_argument("rank " + std::to_string(rank_info().rank) + " has " + std::to_string(worker_threads()) +
+                                " worker threads and rank 0 " + task.at("threads").dump() +
+                                ": give --threads so that every rank has the same (timings, and so cell keys, depend on it)");
+  }
+  SceneData& data = store_.get(task.at("scene").get<std::size_t>());
+  const Scene& scene = data.sequence.scene();
+  auto load_truth = [&](std::size_t k) {
+    bool computed = false;
+    data.truth[k] = truth_cache_.truth(scene, data.frames[k], data.frames[k + 1], computed, options_.toi);
+    data.has_truth[k] = true;
+    return computed;
+  };
+  if (task.at("kind") == "truth") return json{{"computed", load_truth(task.at("step"))}}.dump();
+  if (options_.verify) {
+    // Truth steps computed on other ranks are in the cache by now (they finished before this cell was handed out).
+    for (std::size_t k = 0; k < data.steps; ++k) {
+      if (!data.has_truth[k]) load_truth(k);
+    }
+  }
+  const CellProgress moved = [this](int pass, std::size_t step, const std::string& strategy) { cell_moved(pass, step, strategy); };
+  return run_cell(data, task.at("spec"), options_, data.steps, task.at("file"), planner_ ? moved : CellProgress{}, task.at("strategy")).dump();
+}
+
+std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const std::string& spec, const std::string& content) {
+  const SceneSource& source = *variants_[s].source;
+  const SceneData& data = store_.get(s);
+  const Scene& scene = data.sequence.scene();
+  const auto strategy = strategies::make_strategy(spec);
+  if (options_.thicknesses.size() > 1) {
+    try {
+      strategy->check_scene(scene);
+    } catch (const std::invalid_argument& refusal) {
+      auto it = std::find_if(left_out_.begin(), left_out_.end(), [&](const auto& entry) { return entry.first == spec; });
+      if (it == left_out_.end()) it = left_out_.insert(left_out_.end(), {spec, {{}, refusal.what()}});
+      it->second.first.push_back(source.label + " at δ " + significant(scene.thickness(), 3));
+      --cell_total_;
+      return std::nullopt;
+    }
+  }
+  CellKey key{source.label,    content,      data.steps,       scene.thickness(), data.thickness_from, strategy->name(),
+              options_.verify, options_.toi, options_.repeats, worker_threads(),  executable_digest()};
+  const auto file = options_.out / "cells" / cell_file_name(key);
+  std::optional<json> kept;
+  if (!options_.fresh) {
+    try {
+      kept = read_cell(file, key);
+    } catch (const InputError& corrupt) {
+      throw InputError(corrupt.file(), corrupt.where(), corrupt.reason() + " (remove the file, or rerun with --fresh)");
+    }
+  }
+  cell_specs_.push_back(spec);
+  if (!kept) {
+    cells_.emplace_back();
+    return Pending{spec, file, std::move(key), cells_.size() - 1};
+  }
+  // The cell is kept under its resolved name; the strategy as given is this run's: results.jsonl names it so
+  // (compare and check match cells by it), rank 0 alone writing.
+  if ((*kept)["summary"].value("spec", json()) != json(spec)) {
+    (*kept)["summary"]["spec"] = spec;
+    write_cell(file, *kept);
+    rebuild_results_log(options_.out, std::cerr);
+  }
+  (*kept)["summary"]["resumed"] = true;
+  say("run: " + source.label + " / " + key.strategy +
+      ": kept from an earlier run with the same inputs, strategy, steps, δ, repeats, threads and executable (--fresh reruns it)" +
+      (options_.misses ? "; its misses are not written to --misses again" : ""));
+  ++cells_finished_;
+  cells_.push_back(std::move(*kept));
+  return std::nullopt;
+}
+
+void Benchmark::plan_scene(std::size_t s) {
+  const SceneSource& source = *variants_[s].source;
+  say("run: loading " + source.label + (variants_[s].thickness ? " at δ " + significant(*variants_[s].thickness, 6) : std::string()));
+  const SceneData& data = store_.get(s);
+  const std::size_t steps = data.steps;
+  const Scene& scene = data.sequence.scene();
+  const std::string content = scene_content_digest(scene, data.frames);
+  std::vector<Pending> pending;
+  for (const std::string& spec : options_.strategies) {
+    if (std::optional<Pending> cell = plan_cell(s, spec, content)) pending.push_back(std::move(*cell));
+  }
+  if (pending.empty()) return;
+  // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
+  for (const Pending& cell : pending) strategies::make_strategy(cell.spec)->check_scene(scene);
+  std::vector<std::size_t> truth_items;
+  if (options_.verify) {
+    for (std::size_t k = 0; k < steps; ++k) {
+      truth_items.push_back(items_.size());
+      items_.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}, {"threads", worker_threads()}}.dump(), {}});
+      planned_.push_back({source.label, k, steps, false, 0, {}, {}});
+    }
+  }
+  for (Pending& cell : pending) {
+    const std::string file = cell.file.filename().string();
+    items_.push_back(
+        {json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"strategy", cell.key.strategy}, {"file", file}, {"threads", worker_threads()}}
+             .dump(),
+         truth_items});
+    planned_.push_back({source.label, 0, steps, true, cell.slot, std::move(cell.file), std::move(cell.key)});
+  }
+}
+
+void Benchmark::item_done(std::size_t index, const std::string& text, int rank) {
+  PlannedItem& item = planned_.at(index);
+  json result = json::parse(text);
+  if (!item.cell) {
+    const std::string truth = item.label + ": truth of step " + std::to_string(item.step + 1) + "/" + std::to_string(item.steps) +
+                              (result.at("computed").get<bool>() ? " computed" : " cached") + on_rank(rank);
+    // In a log only computed truth gets a line (read from the cache it is quick); the bar shows either.
+    if (progress_->terminal()) {
+      progress_->update(static_cast<double>(cells_finished_), cell_total_, truth);
+    } else if (result.at("computed").get<bool>()) {
+      say("run: " + truth);
+    }
+    return;
+  }
+  result["key"] = item.key.to_json();
+  result["summary"]["key"] = result["key"];
+  write_cell(item.file, result);
+  rebuild_results_log(options_.out, std::cerr);
+  ++cells_done_;
+  ++cells_finished_;
+  progress_->update(static_cast<double>(cells_finished_), cell_total_, item.label + " / " + strategies::short_label(item.key.strategy) + " done");
+  if (rank_info().size > 1) {
+    say("run: " + item.label + " / " + item.key.strategy + ": cell " + std::to_string(cells_done_) + " of " + std::to_string(cell_count_) + " done" +
+        on_rank(rank));
+  }
+  cells_[item.slot] = std::move(result);
+}
+
+void Benchmark::run_all() {
+  const DoneFunction done = [this](std::size_t index, const std::string& text, int rank) { item_done(index, text, rank); };
+  if (rank_info().size == 1) {
+    for (std::size_t s = 0; s < variants_.size(); ++s) {
+      items_.clear();
+      planned_.clear();
+      plan_scene(s);
+      distribute(items_, work(), done);
+    }
+    return;
+  }
+  for (std::size_t s = 0; s < variants_.size(); ++s) plan_scene(s);
+  cell_count_ = static_cast<std::size_t>(std::count_if(planned_.begin(), planned_.end(), [](const PlannedItem& p) { return p.cell; }));
+  say_on_termination("run: stopped before every cell finished (a rank died, or the run was interrupted): finished cells are kept in " +
+                     (options_.out / "cells").string() + "; the same command again, with any number of ranks, runs only the rest\n");
+  distribute(items_, work(), done);
+  say_on_termination({});
+}
+
+std::vector<json> Benchmark::report(std::ostream& out) const {
+  std::vector<json> summaries;
+  for (std::size_t c = 0; c < cells_.size(); ++c) {
+    summaries.push_back(cells_[c]->at("summary"));
+    summaries.back()["spec"] = cell_specs_[c];
+  }
+  attach_speedups(summaries);
+  const Table table = summary_table(summaries);
+  table.print(out);
+  out << summary_notes(table) << resolved_names(summaries);
+  for (const json& s : summaries) {
+    if (s.value("errors", 0) == 0) continue;
+    out << "errors: " << s["scene"].get<std::string>() << " / " << s.value("spec", s["strategy"].get<std::string>()) << ": " << s["errors"]
+        << " answers could not be taken (counted apart, and as the plugin's errors= key says); written to "
+        << s.value("errors_written", std::string("(kept from an earlier run)")) << "/FAULTS.txt\n";
+  }
+  for (const auto& [spec, refused] : left_out_) {
+    out << "left out: " << spec << " on " << refused.first.size() << " scene" << (refused.first.size() == 1 ? "" : "s") << " (";
+    for (std::size_t i = 0; i < refused.first.size(); ++i) out << (i ? ", " : "") << refused.first[i];
+    out << "), which it refuses; the first said: " << refused.second << "\n";
+  }
+  if (options_.json) datasets::write_json_file(*options_.json, summaries);
+  if (options_.report) {
+    std::vector<json> finished;
+    for (const std::optional<json>& cell : cells_) finished.push_back(*cell);
+    write_report(*options_.report, table, summaries, finished, options_.command_line);
+    out << "report: " << (*options_.report / "README.md").string() << "\n";
+  }
+  out << "results: " << (options_.out / "results.jsonl").string() << " (every finished cell of every run into " << options_.out.string() << ")\n";
+  return summaries;
+}
+
 }  // namespace
 
 void check_run_outputs(const RunOptions& options) {
@@ -108,241 +380,13 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   // any plugin is loaded; then unknown names fail.
   check_run_outputs(options);
   for (const std::string& spec : options.strategies) strategies::make_strategy(spec);
-  const bool planner = rank_info().rank == 0;
-  const TruthCache truth_cache(datasets::procedural_cache_root() / "truth");
-  const std::vector<SceneVariant> variants = scene_variants(options);
-  SceneStore store(options, variants);
-  // Rank 0's view of the run: cells done of every cell planned (a bar on a terminal, plain lines in a log).
-  std::size_t cell_total = variants.size() * options.strategies.size(), cells_finished = 0;
-  std::optional<Progress> progress;
-  if (planner) progress.emplace("run: cells", cell_total);
-  auto say = [&](const std::string& text) {
-    if (progress) {
-      progress->line(text);
-    } else {
-      std::cerr << text << "\n";
-    }
-  };
-  // A cell in progress on rank 0: its steps move the estimate; a log gets a line per pass, as before.
-  const CellProgress cell_progress = [&](int pass, std::size_t step, const std::string& strategy) {
-    if (!progress) return;
-    const SceneData* data = store.last();
-    const std::size_t steps = data ? data->steps : 1;
-    const double passes = std::max(1, options.repeats);
-    const double fraction = (pass + static_cast<double>(step + 1) / static_cast<double>(steps)) / passes;
-    const std::string label = data ? data->label : "";
-    progress->update(static_cast<double>(cells_finished) + fraction, cell_total,
-                     label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + ", step " + std::to_string(step + 1) +
-                         "/" + std::to_string(steps));
-    if (!progress->terminal() && step + 1 == steps) {
-      say("run: " + label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + " of " +
-          std::to_string(options.repeats) + " done");
-    }
-  };
-
-  // Work items (harness/work_queue.hpp): {"truth", scene, step} computes or reads one step's truth into the cache
-  // (and this rank's memory); {"cell", scene, spec, file} runs a cell. Steps of a cell are never split: strategies
-  // keep state from step to step.
-  const WorkFunction work = [&](const std::string& payload) -> std::string {
-    const json task = json::parse(payload);
-    // A cell's key (and file name, chosen by rank 0) holds rank 0's thread count: a rank with another would write
-    // cells that no rerun can find.
-    if (task.at("threads").get<std::size_t>() != worker_threads()) {
-      throw std::invalid_argument("rank " + std::to_string(rank_info().rank) + " has " + std::to_string(worker_threads()) +
-                                  " worker threads and rank 0 " + task.at("threads").dump() +
-                                  ": give --threads so that every rank has the same (timings, and so cell keys, depend on it)");
-    }
-    SceneData& data = store.get(task.at("scene").get<std::size_t>());
-    const Scene& scene = data.sequence.scene();
-    auto load_truth = [&](std::size_t k) {
-      bool computed = false;
-      data.truth[k] = truth_cache.truth(scene, data.frames[k], data.frames[k + 1], computed, options.toi);
-      data.has_truth[k] = true;
-      return computed;
-    };
-    if (task.at("kind") == "truth") {
-      const std::size_t k = task.at("step");
-      const bool computed = load_truth(k);
-      return json{{"computed", computed}}.dump();
-    }
-    if (options.verify) {
-      // Truth steps computed on other ranks are in the cache by now (they finished before this cell was handed out).
-      for (std::size_t k = 0; k < data.steps; ++k) {
-        if (!data.has_truth[k]) load_truth(k);
-      }
-    }
-    json result =
-        run_cell(data, task.at("spec"), options, data.steps, task.at("file"), planner ? cell_progress : CellProgress{}, task.at("strategy"));
-    return result.dump();
-  };
-  if (!planner) {
-    distribute({}, work, {});
+  Benchmark benchmark(options);
+  if (rank_info().rank != 0) {
+    distribute({}, benchmark.work(), {});
     return {};
   }
-
-  std::vector<std::optional<json>> cells;
-  std::vector<std::string> cell_specs;  // each cell's spec as --strategy gave it (the table's short name)
-  std::vector<WorkItem> items;
-  std::vector<PlannedItem> planned;
-  // Plans scene s: its kept cells go into `cells`, its truth steps and pending cells become work items.
-  // Cells a strategy refused (several δ only): per spec, the scenes and δ, and the first refusal's reason.
-  std::vector<std::pair<std::string, std::pair<std::vector<std::string>, std::string>>> left_out;
-  auto plan_scene = [&](std::size_t s) {
-    const SceneSource& source = *variants[s].source;
-    say("run: loading " + source.label + (variants[s].thickness ? " at δ " + significant(*variants[s].thickness, 6) : std::string()));
-    const SceneData& data = store.get(s);
-    const std::size_t steps = data.steps;
-    const Scene& scene = data.sequence.scene();
-    const std::string content = scene_content_digest(scene, data.frames);
-    struct Pending {
-      std::string spec;
-      std::filesystem::path file;
-      CellKey key;
-      std::size_t slot;  // cells keep the order of --strategy, kept or computed
-    };
-    std::vector<Pending> pending;
-    for (const std::string& spec : options.strategies) {
-      const auto strategy = strategies::make_strategy(spec);
-      if (options.thicknesses.size() > 1) {
-        try {
-          strategy->check_scene(scene);
-        } catch (const std::invalid_argument& refusal) {
-          auto it = std::find_if(left_out.begin(), left_out.end(), [&](const auto& entry) { return entry.first == spec; });
-          if (it == left_out.end()) it = left_out.insert(left_out.end(), {spec, {{}, refusal.what()}});
-          it->second.first.push_back(source.label + " at δ " + significant(scene.thickness(), 3));
-          --cell_total;
-          continue;
-        }
-      }
-      CellKey key{source.label,   content,     steps,           scene.thickness(), data.thickness_from, strategy->name(),
-                  options.verify, options.toi, options.repeats, worker_threads(),  executable_digest()};
-      const auto file = options.out / "cells" / cell_file_name(key);
-      std::optional<json> kept;
-      if (!options.fresh) {
-        try {
-          kept = read_cell(file, key);
-        } catch (const InputError& corrupt) {
-          throw InputError(corrupt.file(), corrupt.where(), corrupt.reason() + " (remove the file, or rerun with --fresh)");
-        }
-      }
-      if (kept) {
-        // The cell is kept under its resolved name; the strategy as given is this run's: results.jsonl names it so
-        // (compare and check match cells by it), rank 0 alone writing.
-        if (rank_info().rank == 0 && (*kept)["summary"].value("spec", json()) != json(spec)) {
-          (*kept)["summary"]["spec"] = spec;
-          write_cell(file, *kept);
-          rebuild_results_log(options.out, std::cerr);
-        }
-        (*kept)["summary"]["resumed"] = true;
-        say("run: " + source.label + " / " + key.strategy +
-            ": kept from an earlier run with the same inputs, strategy, steps, δ, "
-            "repeats, threads and executable (--fresh reruns it)" +
-            (options.misses ? "; its misses are not written to --misses again" : ""));
-        ++cells_finished;
-        cells.push_back(std::move(*kept));
-        cell_specs.push_back(spec);
-      } else {
-        pending.push_back({spec, file, std::move(key), cells.size()});
-        cells.emplace_back();
-        cell_specs.push_back(spec);
-      }
-    }
-    if (pending.empty()) return;
-    // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
-    for (const Pending& cell : pending) strategies::make_strategy(cell.spec)->check_scene(scene);
-    std::vector<std::size_t> truth_items;
-    if (options.verify) {
-      for (std::size_t k = 0; k < steps; ++k) {
-        truth_items.push_back(items.size());
-        items.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}, {"threads", worker_threads()}}.dump(), {}});
-        planned.push_back({source.label, k, steps, false, 0, {}, {}});
-      }
-    }
-    for (Pending& cell : pending) {
-      const std::string file = cell.file.filename().string();
-      items.push_back(
-          {json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"strategy", cell.key.strategy}, {"file", file}, {"threads", worker_threads()}}
-               .dump(),
-           truth_items});
-      planned.push_back({source.label, 0, steps, true, cell.slot, std::move(cell.file), std::move(cell.key)});
-    }
-  };
-  std::size_t cell_count = 0, cells_done = 0;
-  const DoneFunction done = [&](std::size_t index, const std::string& text, int rank) {
-    PlannedItem& item = planned.at(index);
-    json result = json::parse(text);
-    if (!item.cell) {
-      const std::string truth = item.label + ": truth of step " + std::to_string(item.step + 1) + "/" + std::to_string(item.steps) +
-                                (result.at("computed").get<bool>() ? " computed" : " cached") + on_rank(rank);
-      // In a log only computed truth gets a line (read from the cache it is quick); the bar shows either.
-      if (progress->terminal()) {
-        progress->update(static_cast<double>(cells_finished), cell_total, truth);
-      } else if (result.at("computed").get<bool>()) {
-        say("run: " + truth);
-      }
-      return;
-    }
-    result["key"] = item.key.to_json();
-    result["summary"]["key"] = result["key"];
-    write_cell(item.file, result);
-    rebuild_results_log(options.out, std::cerr);
-    ++cells_done;
-    ++cells_finished;
-    progress->update(static_cast<double>(cells_finished), cell_total, item.label + " / " + strategies::short_label(item.key.strategy) + " done");
-    if (rank_info().size > 1) {
-      say("run: " + item.label + " / " + item.key.strategy + ": cell " + std::to_string(cells_done) + " of " + std::to_string(cell_count) + " done" +
-          on_rank(rank));
-    }
-    cells[item.slot] = std::move(result);
-  };
-  if (rank_info().size == 1) {
-    // One process: scene by scene, as before MPI (each scene loaded once, when its turn comes).
-    for (std::size_t s = 0; s < variants.size(); ++s) {
-      items.clear();
-      planned.clear();
-      plan_scene(s);
-      distribute(items, work, done);
-    }
-  } else {
-    for (std::size_t s = 0; s < variants.size(); ++s) plan_scene(s);
-    cell_count = static_cast<std::size_t>(std::count_if(planned.begin(), planned.end(), [](const PlannedItem& p) { return p.cell; }));
-    say_on_termination(
-        "run: stopped before every cell finished (a rank died, or the run was interrupted): finished "
-        "cells are kept in " +
-        (options.out / "cells").string() + "; the same command again, with any number of ranks, runs only the rest\n");
-    distribute(items, work, done);
-    say_on_termination({});
-  }
-
-  std::vector<json> summaries;
-  for (std::size_t c = 0; c < cells.size(); ++c) {
-    summaries.push_back(cells[c]->at("summary"));
-    summaries.back()["spec"] = cell_specs[c];
-  }
-  attach_speedups(summaries);
-  const Table table = summary_table(summaries);
-  table.print(out);
-  out << summary_notes(table) << resolved_names(summaries);
-  for (const json& s : summaries) {
-    if (s.value("errors", 0) == 0) continue;
-    out << "errors: " << s["scene"].get<std::string>() << " / " << s.value("spec", s["strategy"].get<std::string>()) << ": " << s["errors"]
-        << " answers could not be taken (counted apart, and as the plugin's errors= key says); written to "
-        << s.value("errors_written", std::string("(kept from an earlier run)")) << "/FAULTS.txt\n";
-  }
-  for (const auto& [spec, refused] : left_out) {
-    out << "left out: " << spec << " on " << refused.first.size() << " scene" << (refused.first.size() == 1 ? "" : "s") << " (";
-    for (std::size_t i = 0; i < refused.first.size(); ++i) out << (i ? ", " : "") << refused.first[i];
-    out << "), which it refuses; the first said: " << refused.second << "\n";
-  }
-  if (options.json) datasets::write_json_file(*options.json, summaries);
-  if (options.report) {
-    std::vector<json> finished;
-    for (const std::optional<json>& cell : cells) finished.push_back(*cell);
-    write_report(*options.report, table, summaries, finished, options.command_line);
-    out << "report: " << (*options.report / "README.md").string() << "\n";
-  }
-  out << "results: " << (options.out / "results.jsonl").string() << " (every finished cell of every run into " << options.out.string() << ")\n";
-  return summaries;
+  benchmark.run_all();
+  return benchmark.report(out);
 }
 
 }  // namespace ccd::harness
