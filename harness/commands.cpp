@@ -88,11 +88,13 @@ void write_query_faults(const std::vector<QueryScore>& scores, const std::vector
 
 }  // namespace
 
-int run_queries(const QueriesOptions& options, std::ostream& out) {
-  std::vector<std::string> methods = options.sweep ? sweep_methods(options.methods) : options.methods;
-  auto answer_file = [](const std::string& method) { return method.rfind("answers:", 0) == 0; };
-  // Outputs are checked before any work and before any plugin is loaded; then unknown names fail, answer files once
-  // they are matched to the queries, below.
+namespace {
+
+bool is_answer_file(const std::string& method) { return method.rfind("answers:", 0) == 0; }
+
+/// Outputs are checked before any work and before any plugin is loaded; then unknown names fail, answer files once
+/// they are matched to the queries.
+void check_query_outputs(const QueriesOptions& options, const std::vector<std::string>& methods) {
   if (rank_info().rank == 0) {  // only rank 0 writes
     if (options.json) datasets::require_writable_file(*options.json);
     if (options.report) datasets::require_writable_directory(*options.report);
@@ -100,21 +102,24 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
     // Where faults would go, when a method can have some (code or answers from outside ccdbench): made only when
     // there are faults, but it must be possible to make it.
     const bool from_outside = std::any_of(methods.begin(), methods.end(), [&](const std::string& method) {
-      return answer_file(method) || method.find(std::string(narrowphase::kPluginHead) + ":") != std::string::npos;
+      return is_answer_file(method) || method.find(std::string(narrowphase::kPluginHead) + ":") != std::string::npos;
     });
     if (from_outside) datasets::require_creatable_directory(options.faults);
   }
   for (const std::string& method : methods) {
-    if (!answer_file(method)) make_query_method(method);
+    if (!is_answer_file(method)) make_query_method(method);
   }
+}
+
+/// The query files to score, answer files matched to them; unlabelled files refused unless allowed.
+std::vector<datasets::QueryFile> load_query_files(const QueriesOptions& options, std::vector<std::string>& methods) {
   std::vector<datasets::QueryFile> files;
   for (const auto& path : datasets::discover_query_files(options.paths)) files.push_back(datasets::read_query_file(path));
   if (options.extremes) {
     for (datasets::QueryFile& file : extremes_query_files(datasets::extremes_suite())) files.push_back(std::move(file));
   }
   if (files.empty()) throw InputError({}, {}, "no query files found under the given paths");
-  const bool any_answer_file = std::any_of(methods.begin(), methods.end(), answer_file);
-  if (any_answer_file && options.scale_exponent != 0) {
+  if (std::any_of(methods.begin(), methods.end(), is_answer_file) && options.scale_exponent != 0) {
     throw InputError("command line", "--scale-exponent", "answer files answer the queries as written: they cannot be scaled");
   }
   // Answer files are matched to the queries before any work: one that does not answer exactly these is refused.
@@ -129,58 +134,56 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
                            "FP shown as '-'");
     }
   }
-  double thickness = options.thickness;
-  if (options.scale_exponent != 0) {
-    // δ scales with the queries; rounded up where it loses bits (a larger δ only adds contacts).
-    thickness = std::ldexp(options.thickness, options.scale_exponent);
-    if (!std::isfinite(thickness)) {
-      throw InputError("command line", "--thickness", "δ times 2^" + std::to_string(options.scale_exponent) + " overflows");
-    }
-    if (std::ldexp(thickness, -options.scale_exponent) < options.thickness) thickness = std::nextafter(thickness, INFINITY);
+  return files;
+}
+
+/// δ as the queries are scored: scaled with them by 2^K, rounded up where it loses bits (a larger δ only adds
+/// contacts).
+double scaled_thickness(const QueriesOptions& options) {
+  if (options.scale_exponent == 0) return options.thickness;
+  double thickness = std::ldexp(options.thickness, options.scale_exponent);
+  if (!std::isfinite(thickness))
+    throw InputError("command line", "--thickness", "δ times 2^" + std::to_string(options.scale_exponent) + " overflows");
+  if (std::ldexp(thickness, -options.scale_exponent) < options.thickness) thickness = std::nextafter(thickness, INFINITY);
+  return thickness;
+}
+
+/// Under MPI, one work item per file (harness/work_queue.hpp): every rank has read the files; each scales and scores
+/// the ones it is handed, and rank 0 puts the scores back in file order. nullopt on the other ranks.
+std::optional<std::vector<QueryScore>> score_over_ranks(const std::vector<datasets::QueryFile>& files, const QueryScoringRequest& request,
+                                                        int scale_exponent, std::size_t& left_out) {
+  const WorkFunction work = [&](const std::string& payload) {
+    std::vector<datasets::QueryFile> one{files.at(std::stoull(payload))};
+    const std::size_t left = scale_exponent != 0 ? scale_query_files(one, scale_exponent) : 0;
+    nlohmann::json message = {{"left_out", left}, {"scores", nlohmann::json::array()}};
+    for (const QueryScore& score : score_query_file(one.front(), request)) message["scores"].push_back(to_message(score));
+    return message.dump();
+  };
+  if (rank_info().rank != 0) {
+    distribute({}, work, {});
+    return std::nullopt;
   }
-  const QueryScoringRequest request{methods, thickness, options.repeats, options.toi, options.write_answers.has_value()};
-  std::size_t left_out = 0;
+  std::vector<WorkItem> items;
+  for (std::size_t i = 0; i < files.size(); ++i) items.push_back({std::to_string(i), {}});
+  std::vector<nlohmann::json> results(files.size());
+  Progress progress("queries: files", files.size());
+  std::size_t finished = 0;
+  distribute(items, work, [&](std::size_t index, const std::string& result, int) {
+    results[index] = nlohmann::json::parse(result);
+    progress.update(++finished);
+  });
   std::vector<QueryScore> scores;
-  if (rank_info().size == 1) {
-    if (options.scale_exponent != 0) left_out = scale_query_files(files, options.scale_exponent);
-  } else {
-    // One work item per file (harness/work_queue.hpp): every rank has read the files; each scales and scores the
-    // ones it is handed, and rank 0 puts the scores back in file order.
-    const WorkFunction work = [&](const std::string& payload) {
-      std::vector<datasets::QueryFile> one{files.at(std::stoull(payload))};
-      const std::size_t left = options.scale_exponent != 0 ? scale_query_files(one, options.scale_exponent) : 0;
-      nlohmann::json message = {{"left_out", left}, {"scores", nlohmann::json::array()}};
-      for (const QueryScore& score : score_query_file(one.front(), request)) message["scores"].push_back(to_message(score));
-      return message.dump();
-    };
-    if (rank_info().rank != 0) {
-      distribute({}, work, {});
-      return 0;
-    }
-    std::vector<WorkItem> items;
-    for (std::size_t i = 0; i < files.size(); ++i) items.push_back({std::to_string(i), {}});
-    std::vector<nlohmann::json> results(files.size());
-    Progress progress("queries: files", files.size());
-    std::size_t finished = 0;
-    distribute(items, work, [&](std::size_t index, const std::string& result, int) {
-      results[index] = nlohmann::json::parse(result);
-      progress.update(++finished);
-    });
-    for (const nlohmann::json& result : results) {
-      left_out += result.at("left_out").get<std::size_t>();
-      for (const nlohmann::json& score : result.at("scores")) scores.push_back(from_message(score));
-    }
-    append_query_totals(scores, methods);
+  for (const nlohmann::json& result : results) {
+    left_out += result.at("left_out").get<std::size_t>();
+    for (const nlohmann::json& score : result.at("scores")) scores.push_back(from_message(score));
   }
-  if (options.scale_exponent != 0) {
-    out << "scaled every query by 2^" << options.scale_exponent << " (δ " << thickness << ")";
-    if (left_out > 0) out << "; " << left_out << " queries left out: a coordinate overflows at this scale";
-    out << "\n";
-  }
-  if (rank_info().size == 1) {
-    Progress progress("queries: files", files.size());
-    scores = score_query_files(files, request, [&](std::size_t done, std::size_t) { progress.update(done); });
-  }
+  append_query_totals(scores, request.methods);
+  return scores;
+}
+
+/// The table, the notes, and what the options ask written.
+void report_query_scores(const std::vector<QueryScore>& scores, const std::vector<datasets::QueryFile>& files, const QueriesOptions& options,
+                         std::ostream& out) {
   print_query_scores(scores, out);
   write_query_faults(scores, files, options, out);
   if (options.write_answers) {
@@ -209,6 +212,35 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
     write_query_report(*options.report, scores, options.command_line);
     out << "report: " << (*options.report / "README.md").string() << "\n";
   }
+}
+
+}  // namespace
+
+int run_queries(const QueriesOptions& options, std::ostream& out) {
+  std::vector<std::string> methods = options.sweep ? sweep_methods(options.methods) : options.methods;
+  check_query_outputs(options, methods);
+  std::vector<datasets::QueryFile> files = load_query_files(options, methods);
+  const double thickness = scaled_thickness(options);
+  const QueryScoringRequest request{methods, thickness, options.repeats, options.toi, options.write_answers.has_value()};
+  std::size_t left_out = 0;
+  std::vector<QueryScore> scores;
+  if (rank_info().size == 1) {
+    if (options.scale_exponent != 0) left_out = scale_query_files(files, options.scale_exponent);
+  } else {
+    std::optional<std::vector<QueryScore>> gathered = score_over_ranks(files, request, options.scale_exponent, left_out);
+    if (!gathered) return 0;
+    scores = std::move(*gathered);
+  }
+  if (options.scale_exponent != 0) {
+    out << "scaled every query by 2^" << options.scale_exponent << " (δ " << thickness << ")";
+    if (left_out > 0) out << "; " << left_out << " queries left out: a coordinate overflows at this scale";
+    out << "\n";
+  }
+  if (rank_info().size == 1) {
+    Progress progress("queries: files", files.size());
+    scores = score_query_files(files, request, [&](std::size_t done, std::size_t) { progress.update(done); });
+  }
+  report_query_scores(scores, files, options, out);
   return 0;
 }
 

@@ -45,6 +45,88 @@ std::string answer_number(double value) {
   return std::string(text, result.ptr);
 }
 
+namespace {
+
+/// One answer line's fields, by the header's columns. @throws InputError (the line) for a bad field.
+AnswerLine parse_answer_line(const std::vector<std::string>& fields, const std::map<std::string, std::size_t>& column,
+                             const std::filesystem::path& path, const std::string& where) {
+  if (fields.size() != column.size()) {
+    throw InputError(path, where, std::to_string(fields.size()) + " fields, but the header names " + std::to_string(column.size()));
+  }
+  AnswerLine answer;
+  answer.file = fields[column.at("file")];
+  if (answer.file.empty()) throw InputError(path, where, "no file");
+  const std::string& index = fields[column.at("index")];
+  const auto [at, error] = std::from_chars(index.data(), index.data() + index.size(), answer.index);
+  if (error != std::errc() || at != index.data() + index.size() || index.empty())
+    throw InputError(path, where, "index '" + index + "' is not a whole number");
+  const std::string& hit = fields[column.at("hit")];
+  if (hit == "1") {
+    answer.hit = 1;
+  } else if (hit == "0") {
+    answer.hit = 0;
+  } else if (hit == "error") {
+    answer.hit = -1;
+  } else {
+    throw InputError(path, where, "hit '" + hit + "' is none of 1, 0, error");
+  }
+  if (column.count("toi") && !fields[column.at("toi")].empty()) {
+    const std::string& toi = fields[column.at("toi")];
+    const auto [end_of, bad] = std::from_chars(toi.data(), toi.data() + toi.size(), answer.toi);
+    if (bad != std::errc() || end_of != toi.data() + toi.size() || !(answer.toi >= 0.0 && answer.toi <= 1.0)) {
+      throw InputError(path, where, "toi '" + toi + "' is not a number in [0, 1]");
+    }
+  }
+  if (column.count("method")) answer.method = fields[column.at("method")];
+  return answer;
+}
+
+/// The header's columns. @throws InputError (the line) for a column named twice or a required one missing.
+std::map<std::string, std::size_t> parse_answer_header(const std::vector<std::string>& fields, const std::filesystem::path& path,
+                                                       const std::string& where) {
+  std::map<std::string, std::size_t> column;
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    if (!column.emplace(fields[k], k).second) throw InputError(path, where, "column '" + fields[k] + "' is named twice");
+  }
+  for (const char* required : {"file", "index", "hit"}) {
+    if (!column.count(required)) {
+      throw InputError(path, where,
+                       std::string("the header names no '") + required + "' column (an answer file starts with a header: file,index,hit,toi)");
+    }
+  }
+  return column;
+}
+
+/// The method a table is of: the one asked for (by its whole name or its head, "cubic64" for "cubic64:eta=1e-06"),
+/// or the only one; the other methods' lines are dropped.
+void pick_answer_method(AnswerTable& table, const std::set<std::string>& methods, const std::string& method) {
+  auto head = [](const std::string& name) { return name.substr(0, name.find(':')); };
+  std::string listed;
+  for (const std::string& m : methods) listed += (listed.empty() ? "" : ", ") + (m.empty() ? std::string("(none)") : m);
+  if (method.empty()) {
+    if (methods.size() > 1)
+      throw InputError(table.path, {}, "holds the answers of several methods (" + listed + "): pick one with answers:FILE:method=NAME");
+    table.method = methods.empty() ? "" : *methods.begin();
+    return;
+  }
+  std::vector<std::string> matching;
+  for (const std::string& m : methods) {
+    if (m == method) matching = {m};
+  }
+  if (matching.empty()) {
+    for (const std::string& m : methods) {
+      if (head(m) == method) matching.push_back(m);
+    }
+  }
+  if (matching.size() != 1) {
+    throw InputError(table.path, {}, "method=" + method + " names " + (matching.empty() ? "none" : "several") + " of its methods (" + listed + ")");
+  }
+  table.method = matching.front();
+  std::erase_if(table.lines, [&](const AnswerLine& line) { return line.method != table.method; });
+}
+
+}  // namespace
+
 AnswerTable read_answer_table(const std::filesystem::path& path, const std::string& method) {
   // A folder, a FIFO or a device is no answer file: refused before anything is read from it.
   std::error_code status_error;
@@ -81,77 +163,18 @@ AnswerTable read_answer_table(const std::filesystem::path& path, const std::stri
     if (line.empty() || line.front() == '#') continue;
     const std::vector<std::string> fields = fields_of(line);
     if (column.empty()) {
-      for (std::size_t k = 0; k < fields.size(); ++k) {
-        if (!column.emplace(fields[k], k).second) throw InputError(path, where, "column '" + fields[k] + "' is named twice");
-      }
-      for (const char* required : {"file", "index", "hit"}) {
-        if (!column.count(required)) {
-          throw InputError(path, where,
-                           std::string("the header names no '") + required + "' column (an answer file starts with a header: file,index,hit,toi)");
-        }
-      }
+      column = parse_answer_header(fields, path, where);
       continue;
     }
-    if (fields.size() != column.size()) {
-      throw InputError(path, where, std::to_string(fields.size()) + " fields, but the header names " + std::to_string(column.size()));
-    }
-    AnswerLine answer;
+    AnswerLine answer = parse_answer_line(fields, column, path, where);
     answer.line = line_number;
-    answer.file = fields[column.at("file")];
-    if (answer.file.empty()) throw InputError(path, where, "no file");
-    const std::string& index = fields[column.at("index")];
-    const auto [at, error] = std::from_chars(index.data(), index.data() + index.size(), answer.index);
-    if (error != std::errc() || at != index.data() + index.size() || index.empty()) {
-      throw InputError(path, where, "index '" + index + "' is not a whole number");
-    }
-    const std::string& hit = fields[column.at("hit")];
-    if (hit == "1") {
-      answer.hit = 1;
-    } else if (hit == "0") {
-      answer.hit = 0;
-    } else if (hit == "error") {
-      answer.hit = -1;
-    } else {
-      throw InputError(path, where, "hit '" + hit + "' is none of 1, 0, error");
-    }
-    if (column.count("toi") && !fields[column.at("toi")].empty()) {
-      const std::string& toi = fields[column.at("toi")];
-      const auto [end_of, bad] = std::from_chars(toi.data(), toi.data() + toi.size(), answer.toi);
-      if (bad != std::errc() || end_of != toi.data() + toi.size() || !(answer.toi >= 0.0 && answer.toi <= 1.0)) {
-        throw InputError(path, where, "toi '" + toi + "' is not a number in [0, 1]");
-      }
-    }
-    if (column.count("method")) answer.method = fields[column.at("method")];
     methods.insert(answer.method);
     table.lines.push_back(std::move(answer));
   }
   if (in.bad()) throw InputError(path, {}, "cannot be read");
   table.digest = digest.hex();
   if (column.empty()) throw InputError(path, {}, "empty: an answer file starts with a header (file,index,hit,toi)");
-  // The method: the one asked for (by its whole name or its head, "cubic64" for "cubic64:eta=1e-06"), or the only one.
-  auto head = [](const std::string& name) { return name.substr(0, name.find(':')); };
-  std::string listed;
-  for (const std::string& m : methods) listed += (listed.empty() ? "" : ", ") + (m.empty() ? std::string("(none)") : m);
-  if (method.empty()) {
-    if (methods.size() > 1)
-      throw InputError(path, {}, "holds the answers of several methods (" + listed + "): pick one with answers:FILE:method=NAME");
-    table.method = methods.empty() ? "" : *methods.begin();
-  } else {
-    std::vector<std::string> matching;
-    for (const std::string& m : methods) {
-      if (m == method) matching = {m};
-    }
-    if (matching.empty()) {
-      for (const std::string& m : methods) {
-        if (head(m) == method) matching.push_back(m);
-      }
-    }
-    if (matching.size() != 1) {
-      throw InputError(path, {}, "method=" + method + " names " + (matching.empty() ? "none" : "several") + " of its methods (" + listed + ")");
-    }
-    table.method = matching.front();
-    std::erase_if(table.lines, [&](const AnswerLine& line) { return line.method != table.method; });
-  }
+  pick_answer_method(table, methods, method);
   return table;
 }
 

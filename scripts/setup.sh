@@ -7,7 +7,7 @@
 set -euo pipefail
 
 packages=(
-  g++ cmake ninja-build pkg-config git clang-format
+  g++ cmake ninja-build pkg-config git clang-format universal-ctags
   libeigen3-dev libtbb-dev libcgal-dev libgmp-dev libmpfr-dev
   libfcl-dev libccd-dev
   ocl-icd-opencl-dev opencl-headers pocl-opencl-icd

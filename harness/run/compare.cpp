@@ -458,6 +458,38 @@ std::filesystem::path write_replay(const CellComparison& c, std::size_t number, 
   return folder;
 }
 
+/// The comparison as Markdown, for a pull request's comment.
+void write_markdown(const std::filesystem::path& path, bool worse, const Table& table, const std::string& more,
+                    const std::vector<std::string>& only_base, const std::vector<std::string>& only_head) {
+  datasets::AtomicFile file(path, std::ios::out);
+  file.stream() << "### ccdbench compare\n\n" << (worse ? "**A verdict got worse.**" : "No verdict got worse.") << "\n\n";
+  table.print_markdown(file.stream());
+  if (!more.empty()) file.stream() << "\n```\n" << more << "```\n";
+  for (const std::string& name : only_base) file.stream() << "\n- only in the base (the head lost it): " << name;
+  for (const std::string& name : only_head) file.stream() << "\n- only in the head: " << name;
+  file.stream() << "\n";
+  file.commit();
+}
+
+/// The comparison as JSON, for scripts.
+void write_comparison_json(const std::filesystem::path& path, const std::vector<CellComparison>& cells, const std::vector<std::string>& only_base,
+                           const std::vector<std::string>& only_head) {
+  json document = json::array();
+  for (const CellComparison& c : cells) {
+    json row = {{"cell", c.name}, {"worse", c.worse}, {"slower_beyond_noise", c.slower}, {"notes", c.notes}, {"changed_steps", c.changed_steps}};
+    for (const char* field : {"missed", "errors", "false_alarms", "toi_late", "toi_error_median", "toi_error_p99", "toi_error_max", "host_peak_bytes",
+                              "device_bytes", "ms_per_step"}) {
+      row[field] = {{"base", c.base.value(field, json())}, {"head", c.head.value(field, json())}};
+    }
+    if (c.time_test) row["time"] = {{"ratio", c.ratio}, {"p", c.time_test->p}, {"u", c.time_test->u}};
+    json missed = json::array();
+    for (const auto& [step, pair] : c.newly_missed) missed.push_back({{"step", step}, {"kind", pair["kind"]}, {"ids", pair["ids"]}});
+    row["newly_missed"] = missed;
+    document.push_back(row);
+  }
+  datasets::write_json_file(path, json{{"cells", document}, {"only_in_base", only_base}, {"only_in_head", only_head}});
+}
+
 }  // namespace
 
 int run_compare(const CompareOptions& options, std::ostream& out) {
@@ -539,33 +571,8 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
   // A cell the base had and the head lacks is a verdict the head cannot show.
   const bool worse = !only_base.empty() || std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.worse; });
   const bool slower = std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.slower; });
-  if (options.markdown) {
-    datasets::AtomicFile file(*options.markdown, std::ios::out);
-    file.stream() << "### ccdbench compare\n\n" << (worse ? "**A verdict got worse.**" : "No verdict got worse.") << "\n\n";
-    table.print_markdown(file.stream());
-    const std::string more = details(cells, written);
-    if (!more.empty()) file.stream() << "\n```\n" << more << "```\n";
-    for (const std::string& name : only_base) file.stream() << "\n- only in the base (the head lost it): " << name;
-    for (const std::string& name : only_head) file.stream() << "\n- only in the head: " << name;
-    file.stream() << "\n";
-    file.commit();
-  }
-  if (options.json) {
-    json document = json::array();
-    for (const CellComparison& c : cells) {
-      json row = {{"cell", c.name}, {"worse", c.worse}, {"slower_beyond_noise", c.slower}, {"notes", c.notes}, {"changed_steps", c.changed_steps}};
-      for (const char* field : {"missed", "errors", "false_alarms", "toi_late", "toi_error_median", "toi_error_p99", "toi_error_max",
-                                "host_peak_bytes", "device_bytes", "ms_per_step"}) {
-        row[field] = {{"base", c.base.value(field, json())}, {"head", c.head.value(field, json())}};
-      }
-      if (c.time_test) row["time"] = {{"ratio", c.ratio}, {"p", c.time_test->p}, {"u", c.time_test->u}};
-      json missed = json::array();
-      for (const auto& [step, pair] : c.newly_missed) missed.push_back({{"step", step}, {"kind", pair["kind"]}, {"ids", pair["ids"]}});
-      row["newly_missed"] = missed;
-      document.push_back(row);
-    }
-    datasets::write_json_file(*options.json, json{{"cells", document}, {"only_in_base", only_base}, {"only_in_head", only_head}});
-  }
+  if (options.markdown) write_markdown(*options.markdown, worse, table, details(cells, written), only_base, only_head);
+  if (options.json) write_comparison_json(*options.json, cells, only_base, only_head);
   out << "compare: " << (worse ? "a verdict got WORSE" : "no verdict got worse") << (slower ? "; a cell got slower beyond the noise" : "") << "\n";
   return worse || (options.fail_on_slower && slower) ? 1 : 0;
 }

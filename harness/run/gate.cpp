@@ -110,6 +110,56 @@ std::uint64_t result_count(const json& result, const char* field, const std::fil
   return result[field].get<std::uint64_t>();
 }
 
+/// Gates one result against its entry: prints its line, and whether it passes.
+bool gate_result(const json& result, const BaselineEntry& entry_ref, const std::filesystem::path& results_file, const std::string& where,
+                 const std::string& name, std::ostream& out) {
+  const BaselineEntry* entry = &entry_ref;
+  if (!result.value("verified", false) || !result.contains("missed")) {
+    out << "FAIL " << name << ": not verified (run with --verify exact)\n";
+    return false;
+  }
+  const std::uint64_t missed = result_count(result, "missed", results_file, where);
+  const std::uint64_t colliding = result_count(result, "colliding", results_file, where);
+  if (entry->steps && result_count(result, "steps", results_file, where) != *entry->steps) {
+    out << "FAIL " << name << ": " << result["steps"].dump() << " steps, the baseline pins " << *entry->steps << "\n";
+    return false;
+  } else if (entry->colliding && colliding != *entry->colliding) {
+    out << "FAIL " << name << ": " << colliding << " colliding pairs, the baseline pins " << *entry->colliding
+        << " (the scene or the truth changed: check why before updating the baseline)\n";
+    return false;
+  } else if (entry->max_toi_late && !result.contains("toi_late")) {
+    out << "FAIL " << name << ": the baseline gates late TOIs but the results have none (run with --toi)\n";
+    return false;
+  } else if (entry->max_toi_late && result_count(result, "toi_late", results_file, where) > *entry->max_toi_late) {
+    out << "FAIL " << name << ": " << result["toi_late"].dump() << " TOIs later than the exact earliest contact, "
+        << "baseline allows " << *entry->max_toi_late << "\n";
+    return false;
+  } else if (colliding == 0) {
+    out << "FAIL " << name << ": no colliding pair in any step, so it cannot miss: this cell gates nothing\n";
+    return false;
+#if CCDBENCH_GUARD_GATE
+  } else if (!result.contains("errors")) {
+    out << "FAIL " << name << ": the results say nothing of errors (made by an older ccdbench: run it again)\n";
+    return false;
+  } else if (const std::uint64_t errors = result_count(result, "errors", results_file, where); errors > entry->max_errors) {
+    out << "FAIL " << name << ": " << errors << " answers could not be taken (errors: crashes, hangs, refused answers), baseline allows "
+        << entry->max_errors << " (max_errors)\n";
+    return false;
+  } else if (result.contains("nondeterministic_at_step") && !entry->allow_nondeterministic) {
+    out << "FAIL " << name << ": its answers differed between two passes of step " << result["nondeterministic_at_step"].dump()
+        << " (nondeterministic; baseline entry allow_nondeterministic: true accepts it)\n";
+    return false;
+#endif
+  } else if (missed > entry->max_missed) {
+    out << "FAIL " << name << ": missed " << missed << " of " << colliding << " (culled " << result.value("missed_culled", json(0)).dump()
+        << ", tested " << result.value("missed_tested", json(0)).dump() << "), baseline allows " << entry->max_missed << "\n";
+    return false;
+  } else {
+    out << "ok   " << name << ": missed " << missed << " of " << colliding << " <= " << entry->max_missed << "\n";
+  }
+  return true;
+}
+
 }  // namespace
 
 bool check_against_baseline(const json& baseline, const std::filesystem::path& baseline_file,
@@ -169,50 +219,7 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
       ok = false;
       continue;
     }
-    if (!result.value("verified", false) || !result.contains("missed")) {
-      out << "FAIL " << name << ": not verified (run with --verify exact)\n";
-      ok = false;
-      continue;
-    }
-    const std::uint64_t missed = result_count(result, "missed", results_file, where);
-    const std::uint64_t colliding = result_count(result, "colliding", results_file, where);
-    if (entry->steps && result_count(result, "steps", results_file, where) != *entry->steps) {
-      out << "FAIL " << name << ": " << result["steps"].dump() << " steps, the baseline pins " << *entry->steps << "\n";
-      ok = false;
-    } else if (entry->colliding && colliding != *entry->colliding) {
-      out << "FAIL " << name << ": " << colliding << " colliding pairs, the baseline pins " << *entry->colliding
-          << " (the scene or the truth changed: check why before updating the baseline)\n";
-      ok = false;
-    } else if (entry->max_toi_late && !result.contains("toi_late")) {
-      out << "FAIL " << name << ": the baseline gates late TOIs but the results have none (run with --toi)\n";
-      ok = false;
-    } else if (entry->max_toi_late && result_count(result, "toi_late", results_file, where) > *entry->max_toi_late) {
-      out << "FAIL " << name << ": " << result["toi_late"].dump() << " TOIs later than the exact earliest contact, "
-          << "baseline allows " << *entry->max_toi_late << "\n";
-      ok = false;
-    } else if (colliding == 0) {
-      out << "FAIL " << name << ": no colliding pair in any step, so it cannot miss: this cell gates nothing\n";
-      ok = false;
-#if CCDBENCH_GUARD_GATE
-    } else if (!result.contains("errors")) {
-      out << "FAIL " << name << ": the results say nothing of errors (made by an older ccdbench: run it again)\n";
-      ok = false;
-    } else if (const std::uint64_t errors = result_count(result, "errors", results_file, where); errors > entry->max_errors) {
-      out << "FAIL " << name << ": " << errors << " answers could not be taken (errors: crashes, hangs, refused answers), baseline allows "
-          << entry->max_errors << " (max_errors)\n";
-      ok = false;
-    } else if (result.contains("nondeterministic_at_step") && !entry->allow_nondeterministic) {
-      out << "FAIL " << name << ": its answers differed between two passes of step " << result["nondeterministic_at_step"].dump()
-          << " (nondeterministic; baseline entry allow_nondeterministic: true accepts it)\n";
-      ok = false;
-#endif
-    } else if (missed > entry->max_missed) {
-      out << "FAIL " << name << ": missed " << missed << " of " << colliding << " (culled " << result.value("missed_culled", json(0)).dump()
-          << ", tested " << result.value("missed_tested", json(0)).dump() << "), baseline allows " << entry->max_missed << "\n";
-      ok = false;
-    } else {
-      out << "ok   " << name << ": missed " << missed << " of " << colliding << " <= " << entry->max_missed << "\n";
-    }
+    if (!gate_result(result, *entry, results_file, where, name, out)) ok = false;
   }
   for (std::size_t e = 0; e < entries.size(); ++e) {
     if (matches[e] == 0) {

@@ -1,0 +1,215 @@
+// QueryScore as records leave the process: the message ranks exchange (to_message, from_message), the table, the
+// answer file --write-answers writes, and the report page. Scoring itself is query_scoring.cpp's.
+#include "datasets/atomic_file.hpp"
+#include "datasets/rational.hpp"
+#include "harness/query_scoring.hpp"
+#include "harness/statistics.hpp"
+#include "harness/table.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <map>
+#include <ostream>
+#include <sstream>
+
+namespace ccd::harness {
+
+namespace {
+
+std::string labelled_text(const QueryScore& s, std::size_t count) { return s.any_labelled() ? std::to_string(count) : "-"; }
+
+/// NaN is not JSON: null stands for it in messages.
+nlohmann::json number_list(const std::vector<double>& values) {
+  nlohmann::json list = nlohmann::json::array();
+  for (double v : values) list.push_back(std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v));
+  return list;
+}
+std::vector<double> numbers_of(const nlohmann::json& list) {
+  std::vector<double> values;
+  for (const nlohmann::json& v : list) values.push_back(v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>());
+  return values;
+}
+nlohmann::json fault_list(const QueryScore& s) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const QueryScore::Fault& f : s.fault_queries) list.push_back({f.index, f.line, f.message});
+  return list;
+}
+nlohmann::json label_list(const QueryScore& s) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const std::optional<bool>& label : s.labels) list.push_back(label ? nlohmann::json(*label) : nlohmann::json(nullptr));
+  return list;
+}
+nlohmann::json answer_list(const QueryScore& s) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const QueryAnswer& a : s.answers) {
+    list.push_back({a.collides, std::isnan(a.toi) ? nlohmann::json(nullptr) : nlohmann::json(a.toi), a.fault});
+  }
+  return list;
+}
+
+}  // namespace
+
+nlohmann::json to_message(const QueryScore& s) {
+  return {{"method", s.method},
+          {"file", s.file},
+          {"thickness", s.thickness},
+          {"queries", s.queries},
+          {"positives", s.positives},
+          {"reported", s.reported},
+          {"false_negatives", s.false_negatives},
+          {"false_positives", s.false_positives},
+          {"unlabeled", s.unlabeled},
+          {"ns_per_query", s.ns_per_query},
+          {"with_toi", s.with_toi},
+          {"toi_checked", s.toi_checked},
+          {"toi_late", s.toi_late},
+          {"toi_error_max", s.toi_error_max},
+          {"toi_error_sum", s.toi_error_sum},
+          {"toi_errors", s.toi_errors},
+          {"false_negative_lines", s.false_negative_lines},
+          {"faults", s.faults},
+          {"changed_between_passes", s.changed_between_passes},
+          {"fault_queries", fault_list(s)},
+          {"answers", answer_list(s)},
+          {"exact_toi", number_list(s.exact_toi)},
+          {"labels", label_list(s)}};
+}
+
+QueryScore from_message(const nlohmann::json& m) {
+  QueryScore s;
+  s.method = m.at("method");
+  s.file = m.at("file");
+  s.thickness = m.at("thickness");
+  s.queries = m.at("queries");
+  s.positives = m.at("positives");
+  s.reported = m.at("reported");
+  s.false_negatives = m.at("false_negatives");
+  s.false_positives = m.at("false_positives");
+  s.unlabeled = m.at("unlabeled");
+  s.ns_per_query = m.at("ns_per_query");
+  s.with_toi = m.at("with_toi");
+  s.toi_checked = m.at("toi_checked");
+  s.toi_late = m.at("toi_late");
+  s.toi_error_max = m.at("toi_error_max");
+  s.toi_error_sum = m.at("toi_error_sum");
+  s.toi_errors = m.at("toi_errors").get<std::vector<double>>();
+  s.false_negative_lines = m.at("false_negative_lines").get<std::vector<std::size_t>>();
+  s.faults = m.at("faults");
+  s.changed_between_passes = m.at("changed_between_passes");
+  for (const nlohmann::json& f : m.at("fault_queries")) s.fault_queries.push_back({f.at(0), f.at(1), f.at(2)});
+  for (const nlohmann::json& a : m.at("answers")) {
+    s.answers.push_back(
+        {a.at(0).get<bool>(), a.at(1).is_null() ? std::numeric_limits<double>::quiet_NaN() : a.at(1).get<double>(), a.at(2).get<std::string>()});
+  }
+  s.exact_toi = numbers_of(m.at("exact_toi"));
+  for (const nlohmann::json& label : m.at("labels")) s.labels.push_back(label.is_null() ? std::nullopt : std::optional<bool>(label.get<bool>()));
+  return s;
+}
+
+namespace {
+
+/// The scores as a table: text on a terminal, Markdown in a report.
+Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
+  using Align = Table::Align;
+  Table table({{"method"},
+               {"file"},
+               {"queries", Align::right},
+               {"positives", Align::right},
+               {"reported", Align::right},
+               {"FN", Align::right},
+               {"FP", Align::right},
+               {"ns/query", Align::right}});
+  const bool with_toi = !scores.empty() && scores.front().with_toi;
+  // An error is its own outcome (a method that gave no answer): a column wherever a method can give one.
+  const bool with_errors = std::any_of(scores.begin(), scores.end(),
+                                       [](const QueryScore& s) { return s.faults > 0 || plugin::names_plugin(s.method) || names_answers(s.method); });
+  if (with_errors) table.add_column({"errors", Align::right});
+  const bool with_changes = std::any_of(scores.begin(), scores.end(), [](const QueryScore& s) { return s.changed_between_passes > 0; });
+  if (with_changes) table.add_column({"changed between passes", Align::right});
+  if (with_toi) {
+    for (const char* header : {"TOI late", "TOI error mean", "median", "p99", "max"}) table.add_column({header, Align::right});
+  }
+  for (const QueryScore& s : scores) {
+    std::vector<std::string> row = {markdown ? "`" + s.method + "`" : s.method,
+                                    s.file,
+                                    std::to_string(s.queries),
+                                    labelled_text(s, s.positives),
+                                    std::to_string(s.reported),
+                                    labelled_text(s, s.false_negatives),
+                                    labelled_text(s, s.false_positives),
+                                    fixed(s.ns_per_query, 0)};
+    if (with_errors) row.push_back(std::to_string(s.faults));
+    if (with_changes) row.push_back(std::to_string(s.changed_between_passes));
+    if (with_toi && s.toi_checked == 0) {
+      // Nothing checked (no TOI reported on a colliding query): '-', never a 0 nobody measured.
+      for (int k = 0; k < 5; ++k) row.push_back("-");
+    } else if (with_toi) {
+      row.push_back(std::to_string(s.toi_late));
+      row.push_back(significant(s.toi_error_sum / static_cast<double>(s.toi_checked), 3));
+      row.push_back(significant(percentile(s.toi_errors, 50), 3));
+      row.push_back(significant(percentile(s.toi_errors, 99), 3));
+      row.push_back(significant(s.toi_error_max, 3));
+    }
+    table.add_row(std::move(row));
+  }
+  return table;
+}
+
+}  // namespace
+
+void print_query_scores(const std::vector<QueryScore>& scores, std::ostream& out) { query_table(scores, false).print(out); }
+
+void write_query_answers(const std::filesystem::path& path, const std::vector<QueryScore>& scores) {
+  // Per file, per query, per method, in the order scored; the label and exact TOI once per query and method.
+  std::map<std::string, std::vector<const QueryScore*>> by_file;
+  std::vector<std::string> file_order;
+  for (const QueryScore& score : scores) {
+    if (score.file == "(all)") continue;
+    if (!by_file.count(score.file)) file_order.push_back(score.file);
+    by_file[score.file].push_back(&score);
+  }
+  datasets::AtomicFile file(path, std::ios::out);
+  std::ostream& out = file.stream();
+  out << "file,index,method,hit,toi,label,exact_toi\n";
+  for (const std::string& name : file_order) {
+    const std::vector<const QueryScore*>& of_file = by_file[name];
+    const std::size_t count = of_file.front()->answers.size();
+    for (std::size_t q = 0; q < count; ++q) {
+      for (const QueryScore* score : of_file) {
+        const QueryAnswer& a = score->answers.at(q);
+        const double exact = score->exact_toi.at(q);
+        const std::optional<bool>& label = score->labels.at(q);
+        out << name << ',' << q << ',' << score->method << ','
+            << (!a.fault.empty() ? "error"
+                : a.collides     ? "1"
+                                 : "0")
+            << ',' << (a.collides && !std::isnan(a.toi) ? answer_number(a.toi) : "") << ',' << (label ? (*label ? "1" : "0") : "") << ','
+            << (std::isnan(exact) ? "" : answer_number(exact)) << '\n';
+      }
+    }
+  }
+  file.commit();
+}
+
+void write_query_report(const std::filesystem::path& directory, const std::vector<QueryScore>& scores, const std::string& command) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const QueryScore& score : scores) rows.push_back(to_json(score));
+  datasets::write_json_file(directory / "scores.json", rows);
+  datasets::AtomicFile file(directory / "README.md", std::ios::out);
+  std::ostream& out = file.stream();
+  out << "# Narrow phases: time per query against misses and false alarms\n\n"
+      << "Every method on the same queries, in one run. ns/query is the median over the repeats of each file's time\n"
+      << "divided by its queries; FN are missed collisions (truth positive, answer no), FP false alarms. Narrow phases\n"
+      << "get the doubles the query's rationals round to; `exact` is the reference on the rationals. The truth labels are\n"
+      << "for zero thickness. Reproduce every number with:\n\n```sh\n"
+      << command << "\n```\n\n";
+  query_table(scores, true).print_markdown(out);
+  out << "\nThe trade, per variant over all files (`(all)` rows), can be drawn with `/usr/bin/python3 "
+         "scripts/plot_narrowphase.py scores.json tradeoff.png` (`scripts/narrowphase-report.sh` does).\n";
+  file.commit();
+}
+
+}  // namespace ccd::harness
