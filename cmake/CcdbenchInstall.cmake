@@ -1,13 +1,18 @@
 # `cmake --install BUILD --prefix PREFIX` puts ccdbench where a plugin project finds it (README "Audit your CCD"):
 #   PREFIX/bin/ccdbench
-#   PREFIX/include/ccdbench/ccdbench_plugin.h, ccdbench_plugin.hpp
+#   PREFIX/include/ccdbench/ccdbench_plugin.h, ccdbench_plugin.hpp (the plugin ABI), ccdbench.hpp (the C++ API)
+#   PREFIX/lib/libccdbench.so (the C++ API)
 #   PREFIX/lib/cmake/ccdbench/ccdbenchConfig.cmake (+ version and targets): find_package(ccdbench) gives
-#     ccdbench::plugin (the headers; a plugin links nothing else) and ccdbench::ccdbench (the program).
+#     ccdbench::plugin (the headers; a plugin links nothing else), ccdbench::library (the C++ API) and
+#     ccdbench::ccdbench (the program).
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 install(TARGETS ccdbench EXPORT ccdbenchTargets RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(TARGETS ccdbench_plugin_header EXPORT ccdbenchTargets)
+set_target_properties(ccdbench_library PROPERTIES EXPORT_NAME library)
+install(TARGETS ccdbench_library EXPORT ccdbenchTargets LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+install(FILES ${PROJECT_SOURCE_DIR}/api/ccdbench/ccdbench.hpp DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ccdbench)
 install(FILES ${PROJECT_SOURCE_DIR}/strategies/plugin/ccdbench_plugin.h ${PROJECT_SOURCE_DIR}/strategies/plugin/ccdbench_plugin.hpp
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ccdbench)
 install(EXPORT ccdbenchTargets NAMESPACE ccdbench:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/ccdbench)

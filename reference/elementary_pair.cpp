@@ -16,12 +16,12 @@ Decision filter_then_exact(PairKind kind, const std::array<IntervalPoint, 8>& in
                            ExactInputs exact_inputs) {
   if (request.use_filter) {
     const FilterVerdict verdict = filter_decide(kind, intervals, thickness);
-    if (verdict == FilterVerdict::certainly_no) return {false, DecidedBy::filter, std::nullopt, std::nullopt};
-    if (verdict == FilterVerdict::certainly_yes && !request.want_toi) return {true, DecidedBy::filter, std::nullopt, std::nullopt};
+    if (verdict == FilterVerdict::certainly_no) return {false, DecidedBy::filter, std::nullopt, std::nullopt, std::nullopt};
+    if (verdict == FilterVerdict::certainly_yes && !request.want_toi) return {true, DecidedBy::filter, std::nullopt, std::nullopt, std::nullopt};
   }
   const auto [pair, exact_thickness] = exact_inputs();
   const ExactResult exact = decide_exactly(pair, exact_thickness, request.want_toi ? request.toi_bits : 0);
-  return {exact.collides, DecidedBy::exact, exact.toi, exact.toi_floor};
+  return {exact.collides, DecidedBy::exact, exact.toi, exact.toi_floor, exact.toi_ceiling};
 }
 
 }  // namespace

@@ -129,6 +129,13 @@ double floor_to_double(const AlgebraicReal& t) {
   return floor;
 }
 
+/// The smallest double >= t, given the largest double <= t: the same double when t equals it (an exact
+/// comparison), else the next one up.
+double ceiling_to_double(const AlgebraicReal& t, double floor) {
+  const AlgebraicKernel kernel;
+  return kernel.compare_1_object()(t, Bound(mpq_class(floor).get_mpq_t())) == CGAL::EQUAL ? floor : std::nextafter(floor, 2.0);
+}
+
 Vector3<RationalPolynomial> moving_point(const RationalPoint& at0, const RationalPoint& at1) {
   return {RationalPolynomial::linear(at0[0], at1[0] - at0[0]), RationalPolynomial::linear(at0[1], at1[1] - at0[1]),
           RationalPolynomial::linear(at0[2], at1[2] - at0[2])};
@@ -167,6 +174,7 @@ ExactResult decide_exactly(const ExactPair& pair, const mpq_class& thickness, un
     const auto bounds = kernel.approximate_absolute_1_object()(*earliest, static_cast<int>(toi_bits));
     result.toi = RationalInterval{to_mpq(bounds.first), to_mpq(bounds.second)};
     result.toi_floor = floor_to_double(*earliest);
+    result.toi_ceiling = ceiling_to_double(*earliest, *result.toi_floor);
   }
   return result;
 }

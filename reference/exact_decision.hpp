@@ -17,6 +17,8 @@ struct ExactResult {
   /// With a TOI: the largest double <= the earliest contact time, decided exactly. A double TOI t is later than
   /// the true one exactly when t > toi_floor (no double lies strictly between toi_floor and the true time).
   std::optional<double> toi_floor;
+  /// With a TOI: the smallest double >= the earliest contact time (toi_floor when that time is a double).
+  std::optional<double> toi_ceiling;
 };
 
 /// Decides exactly. Method, per condition: isolate the real roots in [0, 1] of every polynomial of the

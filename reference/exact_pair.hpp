@@ -53,6 +53,8 @@ struct Decision {
   /// With want_toi and collides: the largest double <= the earliest such t, exactly. A double TOI is later than
   /// the true one exactly when it is greater than this.
   std::optional<double> toi_floor;
+  /// With want_toi and collides: the smallest double >= the earliest such t (toi_floor when t is a double).
+  std::optional<double> toi_ceiling;
 };
 
 }  // namespace ccd::reference

@@ -29,6 +29,7 @@ void merge(Decision& into, const Decision& part) {
     into.collides = true;
     into.toi = part.toi;
     into.toi_floor = part.toi_floor;
+    into.toi_ceiling = part.toi_ceiling;
     return;
   }
   // The earliest TOI lies in [min of lowers, min of uppers]: no wider than the narrowest part's interval.
@@ -39,6 +40,8 @@ void merge(Decision& into, const Decision& part) {
     into.toi = part.toi;
   }
   if (part.toi_floor && (!into.toi_floor || *part.toi_floor < *into.toi_floor)) into.toi_floor = part.toi_floor;
+  // Both are monotone in t: the earliest time's ceiling is the least of the parts'.
+  if (part.toi_ceiling && (!into.toi_ceiling || *part.toi_ceiling < *into.toi_ceiling)) into.toi_ceiling = part.toi_ceiling;
 }
 
 }  // namespace
@@ -84,13 +87,14 @@ Decision decide_face_shape(const Shape& shape, const FaceShapeRows& rows, double
     throw std::invalid_argument("reference: a box's half extents must be finite and > 0");
   }
   const RationalPoint half = rational(shape.half_extents);
-  Decision decision{false, DecidedBy::filter, std::nullopt, std::nullopt};
+  Decision decision{false, DecidedBy::filter, std::nullopt, std::nullopt, std::nullopt};
   if (triangle_meets_box(face0, c0, half)) {
     decision.collides = true;
     decision.decided_by = DecidedBy::exact;
     if (request.want_toi) {
       decision.toi = RationalInterval{0, 0};
       decision.toi_floor = 0.0;
+      decision.toi_ceiling = 0.0;
     }
     return decision;
   }

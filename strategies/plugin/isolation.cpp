@@ -18,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <thread>
@@ -25,6 +26,30 @@
 extern char** environ;
 
 namespace ccd::plugin {
+
+namespace {
+
+std::mutex& host_program_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+std::string& host_program_path() {
+  static std::string path = "/proc/self/exe";
+  return path;
+}
+
+}  // namespace
+
+void set_host_program(const std::string& path) {
+  std::lock_guard lock(host_program_mutex());
+  host_program_path() = path;
+}
+
+std::string host_program() {
+  std::lock_guard lock(host_program_mutex());
+  return host_program_path();
+}
 
 using namespace child_protocol;
 
@@ -78,13 +103,15 @@ Child spawn_child(const std::vector<std::string>& plugin_host_arguments, int bat
   if (prepared == 0 && batch >= 0) prepared = posix_spawn_file_actions_adddup2(&actions, batch, kBatchFd);
   // Nothing else of this process goes to the child (descriptors not marked close-on-exec by the libraries).
   if (prepared == 0) prepared = posix_spawn_file_actions_addclosefrom_np(&actions, kBatchFd + 1);
-  std::vector<std::string> arguments{"/proc/self/exe", kPluginHostCommand};
+  const std::string program = host_program();
+  std::vector<std::string> arguments{program, kPluginHostCommand};
   arguments.insert(arguments.end(), plugin_host_arguments.begin(), plugin_host_arguments.end());
   std::vector<char*> argv;
   for (std::string& argument : arguments) argv.push_back(argument.data());
   argv.push_back(nullptr);
-  // This program's own file through /proc/self/exe, not a name looked up on PATH nor its path: the child is this
-  // very build, even when the file was rebuilt or removed since this process started.
+  // This program's own file through /proc/self/exe (unless set_host_program named another: a process using the C++
+  // API names the ccdbench program), not a name looked up on PATH nor its path: the child is this very build, even
+  // when the file was rebuilt or removed since this process started.
   // The child leads a process group of its own, so that killing it kills what it started too (unless that left the
   // group on purpose).
   posix_spawnattr_t attributes;
@@ -92,7 +119,7 @@ Child spawn_child(const std::vector<std::string>& plugin_host_arguments, int bat
   if (prepared == 0) prepared = posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
   if (prepared == 0) prepared = posix_spawnattr_setpgroup(&attributes, 0);
   Child child;
-  const int spawned = prepared != 0 ? prepared : ::posix_spawn(&child.pid, "/proc/self/exe", &actions, &attributes, argv.data(), environ);
+  const int spawned = prepared != 0 ? prepared : ::posix_spawn(&child.pid, program.c_str(), &actions, &attributes, argv.data(), environ);
   posix_spawnattr_destroy(&attributes);
   posix_spawn_file_actions_destroy(&actions);
   if (batch >= 0) ::close(batch);
@@ -541,43 +568,6 @@ void IsolatedPlugin::end() {
   std::vector<char> reply;
   std::string why;
   exchange({kEnd}, reply, kStatusSize, why);
-}
-
-namespace {
-
-std::mutex& description_mutex() {
-  static std::mutex mutex;
-  return mutex;
-}
-
-}  // namespace
-
-const PluginDescription& plugin_description(const std::string& given) {
-  static std::map<std::string, std::unique_ptr<const PluginDescription>> described;
-  const std::string key = std::filesystem::absolute(given).lexically_normal().string();
-  {
-    std::lock_guard lock(description_mutex());
-    if (const auto it = described.find(key); it != described.end()) return *it->second;
-  }
-#if CCDBENCH_GUARD_DESCRIBE_IN_CHILD
-  PluginDescription made = describe_in_child(given);
-#if CCDBENCH_GUARD_IDENTITY
-  // Its identity is this process's to find, from its files, never the child's to say: the code the child ran could
-  // have written any description.
-  made.objects = plugin_objects_on_disk(made.path);
-  made.digest = combined_digest(made.objects);
-#endif
-  std::lock_guard lock(description_mutex());
-#else
-  // Without the guard: loaded into this process to be described (a crash at load ends the run).
-  std::lock_guard lock(description_mutex());
-  std::error_code error;
-  const std::filesystem::path canonical = std::filesystem::weakly_canonical(std::filesystem::absolute(given), error);
-  PluginDescription made = library_loaded_at((error ? std::filesystem::absolute(given) : canonical).string())->description();
-#endif
-  auto it = described.find(key);
-  if (it == described.end()) it = described.emplace(key, std::make_unique<const PluginDescription>(std::move(made))).first;
-  return *it->second;
 }
 
 }  // namespace ccd::plugin

@@ -30,6 +30,12 @@ namespace ccd::plugin {
 /// PROGRAM plugin-host --describe PATH. Returns the process's exit status.
 int serve_plugin(int argc, char** argv);
 
+/// The program an isolated plugin's child runs: this process's own file (/proc/self/exe), the ccdbench program,
+/// unless set otherwise. A process that is not ccdbench (a program using the C++ API) sets the ccdbench program
+/// installed beside the library.
+void set_host_program(const std::string& path);
+std::string host_program();
+
 /// The first argument that makes ccdbench a plugin's child process.
 inline constexpr const char* kPluginHostCommand = "plugin-host";
 
