@@ -185,8 +185,10 @@ TEST(Api, TheExampleBuiltAgainstAnInstalledCcdbenchRuns) {
   ASSERT_EQ(install.exit_code, 0) << install.output;
   for (const char* file : {"lib/libccdbench.so", "include/ccdbench/ccdbench.hpp", "bin/ccdbench"})
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "prefix" / file)) << file;
-  const auto configure = run_command(cmake + " -S " + quoted(std::filesystem::path(CCDBENCH_SOURCE_DIR) / "examples" / "api") + " -B " +
-                                     quoted(dir.path() / "build") + " -DCMAKE_PREFIX_PATH=" + quoted(dir.path() / "prefix"));
+  const auto configure =
+      run_command(cmake + " -S " + quoted(std::filesystem::path(CCDBENCH_SOURCE_DIR) / "examples" / "api") + " -B " + quoted(dir.path() / "build") +
+                  " -DCMAKE_PREFIX_PATH=" + quoted(dir.path() / "prefix") + " -DCMAKE_CXX_COMPILER=" + quoted(CCDBENCH_TEST_CXX_COMPILER) +
+                  " -DCMAKE_CXX_FLAGS=" + quoted(CCDBENCH_TEST_CXX_FLAGS) + " -DCMAKE_EXE_LINKER_FLAGS=" + quoted(CCDBENCH_TEST_EXE_LINKER_FLAGS));
   ASSERT_EQ(configure.exit_code, 0) << configure.output;
   const auto built = run_command(cmake + " --build " + quoted(dir.path() / "build"));
   ASSERT_EQ(built.exit_code, 0) << built.output;
