@@ -13,9 +13,11 @@
 #include "harness/run.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/plugin/fp_environment.hpp"
+#include "strategies/plugin/host_method.hpp"
 #include "strategies/plugin/isolation.hpp"
 #include "strategies/registry.hpp"
 
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <nlohmann/json.hpp>
 
@@ -28,6 +30,8 @@
 #include <stdexcept>
 
 namespace ccdbench {
+
+static_assert(sizeof(Rows) == 24 * sizeof(double), "a pair's rows are 24 doubles, as a query array's (N, 8, 3) rows are");
 
 namespace detail {
 
@@ -210,6 +214,67 @@ ExactAnswer exact_oracle(PairKind kind, const RationalRows& rows, const std::str
     return answer_of(ccd::reference::decide(pair, delta, decision_request(want_toi)));
   });
 }
+
+std::vector<ExactAnswer> exact_oracle(PairKind kind, const Rows* rows, std::size_t count, double thickness, bool want_toi) {
+  if (!std::isfinite(thickness) || thickness < 0) throw std::invalid_argument("thickness must be a finite number >= 0");
+  for (std::size_t i = 0; i < count; ++i) {
+    for (const Point& point : rows[i]) {
+      for (double coordinate : point) {
+        if (!std::isfinite(coordinate)) throw std::invalid_argument("pair " + std::to_string(i) + ": a coordinate is not finite");
+      }
+    }
+  }
+  return guarded([&] {
+    std::vector<ExactAnswer> answers(count);
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
+      std::array<ccd::Vec3, 8> points;
+      for (std::size_t r = 0; r < 8; ++r) points[r] = ccd::Vec3(rows[i][r][0], rows[i][r][1], rows[i][r][2]);
+      answers[i] = answer_of(ccd::reference::decide(reference_kind(kind), points, thickness, decision_request(want_toi)));
+    });
+    return answers;
+  });
+}
+
+std::vector<ExactAnswer> exact_oracle(const QueryFile& file, const std::string& thickness, bool want_toi) {
+  return guarded([&] {
+    const mpq_class delta = rational(thickness, "thickness");
+    if (delta < 0) throw std::invalid_argument("thickness must be >= 0");
+    // Every rational read first (a malformed one is refused before any work), then decided on every core.
+    std::vector<ccd::reference::ExactPair> pairs(file.exact.size());
+    for (std::size_t q = 0; q < pairs.size(); ++q) {
+      pairs[q].kind = reference_kind(file.kind);
+      for (std::size_t r = 0; r < 8; ++r) {
+        for (std::size_t k = 0; k < 3; ++k) {
+          pairs[q].rows[r][k] = rational(file.exact[q][r][k], file.path + ": query " + std::to_string(q) + " row " + std::to_string(r));
+        }
+      }
+    }
+    std::vector<ExactAnswer> answers(pairs.size());
+    tbb::parallel_for(std::size_t{0}, pairs.size(),
+                      [&](std::size_t q) { answers[q] = answer_of(ccd::reference::decide(pairs[q], delta, decision_request(want_toi))); });
+    return answers;
+  });
+}
+
+void register_method(const std::string& name, Method method, std::size_t batch) {
+  if (!method) throw std::invalid_argument("register_method: no method given for '" + name + "'");
+  ccd::plugin::HostMethodSettings settings;
+  settings.batch = batch;
+  ccd::plugin::register_host_method(
+      name,
+      [method = std::move(method)](const ccd::plugin::HostBatch& pairs, ccd::plugin::HostAnswers& answers) {
+        MethodBatch asked{pairs.vertex_face ? PairKind::vertex_face : PairKind::edge_edge, reinterpret_cast<const Rows*>(pairs.rows), pairs.count,
+                          pairs.thickness};
+        MethodAnswers given;
+        method(asked, given);
+        answers.hits = std::move(given.hits);
+        answers.tois = std::move(given.tois);
+        answers.errors = std::move(given.errors);
+      },
+      settings);
+}
+
+void unregister_method(const std::string& name) { ccd::plugin::unregister_host_method(name); }
 
 QueryFile read_query_file(const std::string& path) {
   return guarded([&] {

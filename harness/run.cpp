@@ -223,7 +223,7 @@ std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const std:
               options_.verify, options_.toi, options_.repeats, worker_threads(),  executable_digest()};
   const auto file = options_.out / "cells" / cell_file_name(key);
   std::optional<json> kept;
-  if (!options_.fresh) {
+  if (!options_.fresh && !strategies::runs_host_method(spec)) {
     try {
       kept = read_cell(file, key);
     } catch (const InputError& corrupt) {

@@ -14,6 +14,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev libxxhash-dev
   libopenmpi-dev openmpi-bin
+  python3-dev pybind11-dev python3-numpy python3-pytest
   "$@"
 )
 

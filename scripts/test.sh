@@ -16,6 +16,14 @@ status=0
 ctest --preset "$preset" -j "$(nproc)" --timeout 600 | sed '/^The following tests did not run:/,/^$/d' || status=$?
 scripts/ctest-skips.sh "build/$preset"
 [ "$status" -eq 0 ] || exit "$status"
+# The Python module's tests (python/tests, pytest's summary below), where the module was built (not under the
+# sanitizers: an uninstrumented python3 cannot load it). Debian's python3, which has numpy and pytest.
+if [ -f "build/$preset/python/ccdbench/__init__.py" ]; then
+  PYTHONPATH=$PWD/build/$preset/python /usr/bin/python3 -m pytest -p no:cacheprovider -q python/tests
+elif [ "$preset" = release ]; then
+  echo "test.sh: the Python module was not built (pybind11-dev or python3-dev missing: scripts/setup.sh installs them)" >&2
+  exit 1
+fi
 out=build/$preset/ci-results
 # The gate: full and apccd (conservative) and full+cubic64 at the scenes' δ and at δ = 0, every step verified, TOIs too. Every
 # gated cell has colliding pairs (check fails a cell that has none), and every cell needs its baseline entry.

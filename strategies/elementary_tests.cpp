@@ -166,12 +166,12 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     ScopedStageTimer timer(stages, narrow_stage);
     Local& local = locals.local();
     auto batches = [&](const auto& pairs, bool vertex_face) {
-      constexpr std::size_t kBatch = 4096;
+      const std::size_t batch = narrow_phase.preferred_batch();
       std::vector<narrowphase::PairRows> rows;
       std::vector<narrowphase::NarrowPhase::BatchPair> asked;
       std::vector<narrowphase::NarrowPhaseResult> results;
-      for (std::size_t first = 0; first < pairs.size(); first += kBatch) {
-        const std::size_t count = std::min(kBatch, pairs.size() - first);
+      for (std::size_t first = 0; first < pairs.size(); first += batch) {
+        const std::size_t count = std::min(batch, pairs.size() - first);
         rows.resize(count);
         asked.resize(count);
         results.assign(count, {});

@@ -116,6 +116,12 @@ bool from_outside(const std::string& spec) {
          narrowphase::is_file_head(names.narrow_phase.substr(0, names.narrow_phase.find(':')));
 }
 
+bool runs_host_method(const std::string& spec) {
+  const StrategySpec names = strategy_names_of(spec);
+  auto host = [](const std::string& name) { return name.substr(0, name.find(':')) == narrowphase::kHostMethodHead; };
+  return host(names.name) || host(names.narrow_phase);
+}
+
 std::string short_label(const std::string& spec) {
   const StrategySpec names = strategy_names_of(spec);
   auto shorten = [](const std::string& name) {

@@ -49,6 +49,10 @@ StrategySpec strategy_names_of(const std::string& spec);
 /// narrow phase, or answer files): its errors and nondeterminism are verdicts, where a built-in's are defects.
 bool from_outside(const std::string& spec);
 
+/// Whether a spec runs a method of the calling program (callable:NAME, strategies/plugin/host_method.hpp): code
+/// ccdbench cannot digest, so its cells are never kept for a later run.
+bool runs_host_method(const std::string& spec);
+
 /// A spec's or resolved name's head, short, for progress lines and file names: "full+cubic64", "fcl", and a file
 /// head by its file's name ("full+plugin:libmy_ccd.so", "answers:run-7").
 std::string short_label(const std::string& spec);

@@ -21,6 +21,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -28,7 +29,7 @@
 #include <vector>
 
 #define CCDBENCH_API_VERSION_MAJOR 0
-#define CCDBENCH_API_VERSION_MINOR 1
+#define CCDBENCH_API_VERSION_MINOR 2
 #define CCDBENCH_API_VERSION_PATCH 0
 
 #if defined(CCDBENCH_BUILDING_LIBRARY)
@@ -76,6 +77,10 @@ CCDBENCH_API ExactAnswer exact_oracle(PairKind kind, const Rows& rows, double th
 /// thickness δ >= 0 given as a rational. @throws std::invalid_argument for text that is not a rational.
 CCDBENCH_API ExactAnswer exact_oracle(PairKind kind, const RationalRows& rows, const std::string& thickness, bool want_toi = true);
 
+/// The exact answers for `count` pairs of one kind (rows[i] for pair i) at thickness δ >= 0, on every core.
+/// @throws std::invalid_argument as the single-pair form does, naming the pair.
+CCDBENCH_API std::vector<ExactAnswer> exact_oracle(PairKind kind, const Rows* rows, std::size_t count, double thickness, bool want_toi = true);
+
 /// A query file (CSV of rationals, 8 rows a query; README "Inputs").
 struct QueryFile {
   std::string path;
@@ -90,6 +95,10 @@ struct QueryFile {
 
 /// Reads a query file; its kind from its folder (vertex-face/, edge-edge/) or name (*vf.csv, *ee.csv).
 CCDBENCH_API QueryFile read_query_file(const std::string& path);
+
+/// The exact answers for every query of `file`, on its rationals (which its labels belong to), at thickness δ >= 0
+/// given as a rational, on every core.
+CCDBENCH_API std::vector<ExactAnswer> exact_oracle(const QueryFile& file, const std::string& thickness = "0", bool want_toi = true);
 
 /// Writes `file`'s queries (their rationals and labels) to `path`, atomically; the kind is the path's, as read.
 CCDBENCH_API void write_query_file(const std::string& path, const QueryFile& file);
@@ -110,6 +119,34 @@ struct Score {
 /// "answers:FILE") on query files or folders, per file and in total, at thickness δ.
 CCDBENCH_API std::vector<Score> score_queries(const std::vector<std::string>& paths, const std::vector<std::string>& methods, double thickness = 0,
                                               bool toi = false, int repeats = 1);
+
+/// A method of the calling program, audited as a plugin is (Python's callables enter this way): once registered
+/// under NAME, `callable:NAME` names it wherever a narrow phase is named: as a method of score_queries, and in a
+/// run's strategy (`full+callable:NAME`: full's broad phase gives it each step's candidate pairs, of one kind per
+/// call). It is asked from one thread at a time, in batches, and gets a copy of the pairs' rows. It answers
+/// per pair: hits 1 (contact) or 0 (apart); TOIs for every pair (NaN on a contact is an error) or none at all (a
+/// method without TOIs); an error message (or none). A throw, answers of another size, a TOI outside [0, 1] or a
+/// change of the floating-point environment is an error of the pairs it concerns, counted apart, never an answer (a
+/// batch that throws is asked again one pair at a time). Its cells are never kept for a later run (its code has
+/// no digest). A crash or a hang inside it is the calling process's.
+struct MethodBatch {
+  PairKind kind = PairKind::vertex_face;
+  const Rows* rows = nullptr;
+  std::size_t count = 0;
+  double thickness = 0;
+};
+struct MethodAnswers {
+  std::vector<std::uint8_t> hits;
+  std::vector<double> tois;
+  std::vector<std::string> errors;
+};
+using Method = std::function<void(const MethodBatch&, MethodAnswers&)>;
+
+/// Registers `method` as `callable:NAME` until unregister_method(NAME); `batch`: pairs asked at a time (0: a whole
+/// step's pairs of one kind, or a whole query file, in one call). @throws std::invalid_argument for a name that is
+/// empty, holds ':' or '+', or is taken.
+CCDBENCH_API void register_method(const std::string& name, Method method, std::size_t batch = 0);
+CCDBENCH_API void unregister_method(const std::string& name);
 
 /// A built-in procedural scene and its parameters with their defaults.
 struct SceneInfo {

@@ -74,6 +74,9 @@ class NarrowPhase {
   /// Whether answering many pairs in one call costs much less than one call each (an isolated plugin: one round
   /// trip to its process per batch instead of per pair): callers then gather pairs and call `answer_batch`.
   virtual bool prefers_batches() const { return false; }
+  /// With prefers_batches: how many pairs of one kind a caller gathers into one call (a step's pairs are asked in
+  /// calls of at most this many).
+  virtual std::size_t preferred_batch() const { return 4096; }
   /// The answers of `pairs`, in order, into `results` (as large): the same answers as one call each.
   virtual void answer_batch(std::span<const BatchPair> pairs, std::span<NarrowPhaseResult> results) const {
     for (std::size_t i = 0; i < pairs.size(); ++i) {

@@ -1,6 +1,7 @@
 #include "strategies/narrowphase/registry.hpp"
 
 #include "strategies/narrowphase/entry_list.hpp"
+#include "strategies/plugin/host_method.hpp"
 #include "strategies/plugin/plugin_narrow_phase.hpp"
 
 namespace ccd::narrowphase {
@@ -21,11 +22,15 @@ const std::vector<NarrowPhaseEntry>& narrow_phases() {
 
 std::string narrow_phase_list() { return entry_names(narrow_phases()); }
 
-bool is_narrow_phase(const std::string& name) { return plugin::names_plugin(name) || find_entry(narrow_phases(), name) != nullptr; }
+bool is_narrow_phase(const std::string& name) {
+  return plugin::names_plugin(name) || plugin::names_host_method(name) || find_entry(narrow_phases(), name) != nullptr;
+}
 
 const NarrowPhaseEntry& find_narrow_phase(const std::string& name) {
   // A plugin enters beside the built-ins: its entry is made from its library at the first lookup.
   if (plugin::names_plugin(name)) return entry_made_once<NarrowPhaseEntry>(name, plugin::narrow_phase_entry);
+  // A method of the calling program (the C++ API's register_method), for as long as it is registered.
+  if (plugin::names_host_method(name)) return plugin::host_method_entry(name);
   return entry_named(narrow_phases(), name, "narrow phase");
 }
 

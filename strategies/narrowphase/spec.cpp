@@ -173,6 +173,6 @@ std::pair<std::string, SpecParameters> split_spec(const std::string& spec) {
   return {parts[0], parameters};
 }
 
-bool is_file_head(const std::string& head) { return head == kPluginHead || head == kAnswersHead; }
+bool is_file_head(const std::string& head) { return head == kPluginHead || head == kAnswersHead || head == kHostMethodHead; }
 
 }  // namespace ccd::narrowphase

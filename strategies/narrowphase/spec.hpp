@@ -92,10 +92,12 @@ std::string format_spec_number(double value);
 /// The names of `keys`, comma-separated ("none" for none), for messages.
 std::string key_names(const std::vector<KeySpec>& keys);
 
-/// The heads that name a file: plugin:PATH (a shared library, strategies/plugin/ccdbench_plugin.h) and answers:DIR (a
-/// folder of answer files). The path is one part of the spec: it may not hold ':'.
+/// The heads that name code or answers from outside ccdbench: plugin:PATH (a shared library,
+/// strategies/plugin/ccdbench_plugin.h), answers:DIR (a folder of answer files) and callable:NAME (a method of the
+/// calling program, strategies/plugin/host_method.hpp). The path or name is one part of the spec: it may not hold ':'.
 inline constexpr const char* kPluginHead = "plugin";
 inline constexpr const char* kAnswersHead = "answers";
+inline constexpr const char* kHostMethodHead = "callable";
 bool is_file_head(const std::string& head);
 
 /// Splits `HEAD[:key=value...]` into HEAD and its parameters; a head that names a file (`plugin:PATH`, and
