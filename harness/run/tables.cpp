@@ -61,61 +61,104 @@ void attach_speedups(std::vector<json>& summaries) {
   }
 }
 
-Table summary_table(const std::vector<json>& summaries) {
+namespace {
+
+/// One column of the run table: its header, alignment, whether the table shows it (given every summary), and its
+/// cell of one summary. A column is one entry of run_columns().
+struct RunColumn {
+  const char* header;
+  Table::Align align;
+  bool (*shown)(const std::vector<json>& summaries);
+  std::string (*cell)(const json& s);
+};
+
+bool always(const std::vector<json>&) { return true; }
+
+bool any_toi(const std::vector<json>& summaries) {
+  return std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s.contains("toi_late"); });
+}
+
+/// A count that only verification gives ("-" for a cell not verified).
+std::string verified_count(const json& s, const char* field) {
+  return s.value("verified", false) ? std::to_string(s[field].get<std::size_t>()) : std::string("-");
+}
+
+/// Memory by kind, MiB (a cell kept from before a field existed shows "-").
+std::string mib(const json& s, const char* field) {
+  return s.contains(field) ? fixed(s[field].get<double>() / (1024.0 * 1024.0), 0) : std::string("-");
+}
+
+const std::vector<RunColumn>& run_columns() {
   using Align = Table::Align;
-  Table table({{"scene"},
-               {"δ", Align::right},
-               {"strategy"},
-               {"ms/step", Align::right},
-               {"vs full", Align::right},
-               {"colliding", Align::right},
-               {"missed (culled/tested)", Align::right},
-               {"false alarms", Align::right}});
-  const bool with_toi = std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s.contains("toi_late"); });
-  // An error is its own outcome (an answer a plugin or an answer file could not give), and answers that changed
-  // between two passes are a verdict too: a column when any cell has either, or comes from outside ccdbench.
-  const bool with_errors = std::any_of(summaries.begin(), summaries.end(), [](const json& s) {
-    return s.value("errors", 0) > 0 || s.contains("nondeterministic_at_step") || strategies::from_outside(s["strategy"]);
-  });
-  if (with_errors) table.add_column({"errors", Align::right});
-  if (with_toi) table.add_column({"TOI late (error max / mean)", Align::right});
-  for (const char* header : {"candidates/step", "tests/step", "triangles", "steps"}) table.add_column({header, Align::right});
-  table.add_column({"MiB kept/device/host peak", Align::right});
-  table.add_column({"stages (ms)"});
+  static const std::vector<RunColumn> columns = {
+      {"scene", Align::left, always, [](const json& s) { return s["scene"].get<std::string>() + (s.value("resumed", false) ? " (resumed)" : ""); }},
+      {"δ", Align::right, always,
+       [](const json& s) { return significant(s["thickness"].get<double>(), 3) + (s.value("thickness_from", "") == "scene" ? " (scene's)" : ""); }},
+      {"strategy", Align::left, always,
+       [](const json& s) {
+         return s.value("spec", s["strategy"].get<std::string>()) + (s.value("judged_by", "") == "triangle pairs" ? kTrianglePairMark : "");
+       }},
+      {"ms/step", Align::right, always, [](const json& s) { return fixed(s["ms_per_step"].get<double>(), 3); }},
+      {"vs full", Align::right, always,
+       [](const json& s) {
+         return s.contains("speedup") && s["speedup"].is_number() ? fixed(s["speedup"].get<double>(), 2) + "x" : std::string("-");
+       }},
+      {"colliding", Align::right, always, [](const json& s) { return verified_count(s, "colliding"); }},
+      {"missed (culled/tested)", Align::right, always,
+       [](const json& s) {
+         if (!s.value("verified", false)) return std::string("-");
+         return verified_count(s, "missed") + " (" + verified_count(s, "missed_culled") + "/" + verified_count(s, "missed_tested") + ")";
+       }},
+      {"false alarms", Align::right, always, [](const json& s) { return verified_count(s, "false_alarms"); }},
+      // An error is its own outcome (an answer a plugin or an answer file could not give), and answers that changed
+      // between two passes are a verdict too: a column when any cell has either, or comes from outside ccdbench.
+      {"errors", Align::right,
+       [](const std::vector<json>& summaries) {
+         return std::any_of(summaries.begin(), summaries.end(), [](const json& s) {
+           return s.value("errors", 0) > 0 || s.contains("nondeterministic_at_step") || strategies::from_outside(s["strategy"]);
+         });
+       },
+       [](const json& s) {
+         std::string errors = std::to_string(s.value("errors", 0));
+         if (s.contains("nondeterministic_at_step")) errors += "; answers changed between passes at step " + s["nondeterministic_at_step"].dump();
+         return errors;
+       }},
+      {"TOI late (error max / mean)", Align::right, any_toi,
+       [](const json& s) {
+         if (!s.contains("toi_late")) return std::string("-");
+         return std::to_string(s["toi_late"].get<std::size_t>()) + " of " + std::to_string(s["toi_checked"].get<std::size_t>()) + " (" +
+                significant(s["toi_error_max"].get<double>(), 3) + " / " + significant(s["toi_error_mean"].get<double>(), 3) + ")";
+       }},
+      {"candidates/step", Align::right, always, [](const json& s) { return fixed(s["candidate_pairs"].get<double>(), 0); }},
+      {"tests/step", Align::right, always, [](const json& s) { return fixed(s["elementary_tests"].get<double>(), 0); }},
+      {"triangles", Align::right, always, [](const json& s) { return std::to_string(s["triangles"].get<std::size_t>()); }},
+      {"steps", Align::right, always, [](const json& s) { return std::to_string(s["steps"].get<std::size_t>()); }},
+      {"MiB kept/device/host peak", Align::right, always,
+       [](const json& s) { return mib(s, "kept_bytes") + "/" + mib(s, "device_bytes") + "/" + mib(s, "host_peak_bytes"); }},
+      {"stages (ms)", Align::left, always,
+       [](const json& s) {
+         std::string stages;
+         for (const auto& [stage, ms] : s["stage_ms"].items()) stages += (stages.empty() ? "" : ", ") + stage + " " + fixed(ms.get<double>(), 2);
+         return stages;
+       }},
+  };
+  return columns;
+}
+
+}  // namespace
+
+Table summary_table(const std::vector<json>& summaries) {
+  std::vector<const RunColumn*> shown;
+  std::vector<Table::Column> headers;
+  for (const RunColumn& column : run_columns()) {
+    if (!column.shown(summaries)) continue;
+    shown.push_back(&column);
+    headers.push_back({column.header, column.align});
+  }
+  Table table(std::move(headers));
   for (const json& s : summaries) {
-    const std::string speedup = s.contains("speedup") && s["speedup"].is_number() ? fixed(s["speedup"].get<double>(), 2) + "x" : "-";
-    std::string stages;
-    for (const auto& [stage, ms] : s["stage_ms"].items()) stages += (stages.empty() ? "" : ", ") + stage + " " + fixed(ms.get<double>(), 2);
-    const bool verified = s.value("verified", false);
-    auto count = [&](const char* field) { return verified ? std::to_string(s[field].get<std::size_t>()) : std::string("-"); };
-    std::vector<std::string> row = {
-        s["scene"].get<std::string>() + (s.value("resumed", false) ? " (resumed)" : ""),
-        significant(s["thickness"].get<double>(), 3) + (s.value("thickness_from", "") == "scene" ? " (scene's)" : ""),
-        s.value("spec", s["strategy"].get<std::string>()) + (s.value("judged_by", "") == "triangle pairs" ? kTrianglePairMark : ""),
-        fixed(s["ms_per_step"].get<double>(), 3),
-        speedup,
-        count("colliding"),
-        verified ? count("missed") + " (" + count("missed_culled") + "/" + count("missed_tested") + ")" : "-",
-        count("false_alarms")};
-    if (with_errors) {
-      std::string errors = std::to_string(s.value("errors", 0));
-      if (s.contains("nondeterministic_at_step")) errors += "; answers changed between passes at step " + s["nondeterministic_at_step"].dump();
-      row.push_back(errors);
-    }
-    if (with_toi) {
-      row.push_back(s.contains("toi_late")
-                        ? std::to_string(s["toi_late"].get<std::size_t>()) + " of " + std::to_string(s["toi_checked"].get<std::size_t>()) + " (" +
-                              significant(s["toi_error_max"].get<double>(), 3) + " / " + significant(s["toi_error_mean"].get<double>(), 3) + ")"
-                        : "-");
-    }
-    // Memory by kind (a cell kept from before these fields existed shows "-").
-    auto mib = [&](const char* field) { return s.contains(field) ? fixed(s[field].get<double>() / (1024.0 * 1024.0), 0) : std::string("-"); };
-    const std::string memory = mib("kept_bytes") + "/" + mib("device_bytes") + "/" + mib("host_peak_bytes");
-    for (const std::string& cell :
-         {fixed(s["candidate_pairs"].get<double>(), 0), fixed(s["elementary_tests"].get<double>(), 0),
-          std::to_string(s["triangles"].get<std::size_t>()), std::to_string(s["steps"].get<std::size_t>()), memory, stages}) {
-      row.push_back(cell);
-    }
+    std::vector<std::string> row;
+    for (const RunColumn* column : shown) row.push_back(column->cell(s));
     table.add_row(std::move(row));
   }
   return table;
