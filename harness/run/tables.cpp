@@ -129,6 +129,11 @@ const std::vector<RunColumn>& run_columns() {
          return std::to_string(s["toi_late"].get<std::size_t>()) + " of " + std::to_string(s["toi_checked"].get<std::size_t>()) + " (" +
                 significant(s["toi_error_max"].get<double>(), 3) + " / " + significant(s["toi_error_mean"].get<double>(), 3) + ")";
        }},
+      // The TOI error's 99th percentile (nearest rank), beside its max: one bad query or a tail.
+      {"TOI error p99", Align::right, any_toi,
+       [](const json& s) {
+         return s.contains("toi_error_p99") && s["toi_error_p99"].is_number() ? significant(s["toi_error_p99"].get<double>(), 3) : "-";
+       }},
       {"candidates/step", Align::right, always, [](const json& s) { return fixed(s["candidate_pairs"].get<double>(), 0); }},
       {"tests/step", Align::right, always, [](const json& s) { return fixed(s["elementary_tests"].get<double>(), 0); }},
       {"triangles", Align::right, always, [](const json& s) { return std::to_string(s["triangles"].get<std::size_t>()); }},

@@ -439,6 +439,7 @@ TEST(CliToi, QueriesAndRunsCountLateTimesOfImpact) {
                                                   " --out " + testing::quoted(dir / "out") + " --json " + testing::quoted(dir / "r.json"));
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("TOI late (error max / mean)"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("TOI error p99"), std::string::npos) << run.output;
   for (const auto& summary : testing::read_json(dir / "r.json")) {
     const std::string strategy = summary["strategy"];
     ASSERT_TRUE(summary.contains("toi_late")) << summary.dump();
