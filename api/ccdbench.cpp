@@ -383,7 +383,7 @@ std::vector<std::string> strategy_names() {
 
 void validate_strategy(const std::string& spec) {
   guarded([&] {
-    ccd::strategies::make_strategy(spec);
+    ccd::strategies::validate(ccd::strategies::parse_strategy_spec(spec));
     return 0;
   });
 }
@@ -396,7 +396,7 @@ std::vector<CellSummary> run(const RunRequest& request) {
       options.scenes.push_back({scene.label(), [file] { return ccd::datasets::load_scene_file(file); }});
     }
     if (options.scenes.empty()) throw std::invalid_argument("a run needs at least one scene");
-    options.strategies = request.strategies;
+    for (const std::string& spec : request.strategies) options.strategies.push_back(ccd::strategies::parse_strategy_spec(spec));
     options.thicknesses = request.thicknesses;
     options.verify = request.verify;
     options.toi = request.toi;

@@ -136,12 +136,14 @@ class Benchmark {
   /// The cell of `spec` on scene s, kept from an earlier run (true) or to run; false when the strategy refuses the
   /// scene at one of several δ (left out and said so).
   struct Pending {
-    std::string spec;
+    const strategies::StrategySpec* spec;
     std::filesystem::path file;
     CellKey key;
     std::size_t slot;  // cells keep the order of --strategy, kept or computed
   };
-  std::optional<Pending> plan_cell(std::size_t s, const std::string& spec, const std::string& content);
+  std::optional<Pending> plan_cell(std::size_t s, const strategies::StrategySpec& spec, const std::string& content);
+  /// The run's spec whose text is `text` (a work item names its cell's spec by it).
+  const strategies::StrategySpec& spec_named(const std::string& text) const;
   void item_done(std::size_t index, const std::string& text, int rank);
 
   const RunOptions& options_;
@@ -200,45 +202,53 @@ std::string Benchmark::work_on(const std::string& payload) {
     }
   }
   const CellProgress moved = [this](int pass, std::size_t step, const std::string& strategy) { cell_moved(pass, step, strategy); };
-  return run_cell(data, task.at("spec"), options_, data.steps, task.at("file"), planner_ ? moved : CellProgress{}, task.at("strategy")).dump();
+  return run_cell(data, spec_named(task.at("spec")), options_, data.steps, task.at("file"), planner_ ? moved : CellProgress{}, task.at("strategy"))
+      .dump();
 }
 
-std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const std::string& spec, const std::string& content) {
+const strategies::StrategySpec& Benchmark::spec_named(const std::string& text) const {
+  for (const strategies::StrategySpec& spec : options_.strategies) {
+    if (spec.text == text) return spec;
+  }
+  throw std::logic_error("a work item names a strategy the run was not given: " + text);
+}
+
+std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const strategies::StrategySpec& spec, const std::string& content) {
   const SceneSource& source = *variants_[s].source;
   const SceneData& data = store_.get(s);
   const Scene& scene = data.sequence.scene();
-  const auto strategy = strategies::make_strategy(spec);
   if (options_.thicknesses.size() > 1) {
     try {
-      strategy->check_scene(scene);
+      strategies::check_scene(spec, scene);
     } catch (const std::invalid_argument& refusal) {
-      auto it = std::find_if(left_out_.begin(), left_out_.end(), [&](const auto& entry) { return entry.first == spec; });
-      if (it == left_out_.end()) it = left_out_.insert(left_out_.end(), {spec, {{}, refusal.what()}});
+      auto it = std::find_if(left_out_.begin(), left_out_.end(), [&](const auto& entry) { return entry.first == spec.text; });
+      if (it == left_out_.end()) it = left_out_.insert(left_out_.end(), {spec.text, {{}, refusal.what()}});
       it->second.first.push_back(source.label + " at δ " + significant(scene.thickness(), 3));
       --cell_total_;
       return std::nullopt;
     }
   }
-  CellKey key{source.label,    content,      data.steps,       scene.thickness(), data.thickness_from, strategy->name(),
+  // Planned by the name the strategy will have, without making it (made only where the cell runs).
+  CellKey key{source.label,    content,      data.steps,       scene.thickness(), data.thickness_from, strategies::resolved_name(spec),
               options_.verify, options_.toi, options_.repeats, worker_threads(),  executable_digest()};
   const auto file = options_.out / "cells" / cell_file_name(key);
   std::optional<json> kept;
-  if (!options_.fresh && !strategies::runs_host_method(spec)) {
+  if (!options_.fresh && !strategies::runs_host_method(spec.text)) {
     try {
       kept = read_cell(file, key);
     } catch (const InputError& corrupt) {
       throw InputError(corrupt.file(), corrupt.where(), corrupt.reason() + " (remove the file, or rerun with --fresh)");
     }
   }
-  cell_specs_.push_back(spec);
+  cell_specs_.push_back(spec.text);
   if (!kept) {
     cells_.emplace_back();
-    return Pending{spec, file, std::move(key), cells_.size() - 1};
+    return Pending{&spec, file, std::move(key), cells_.size() - 1};
   }
   // The cell is kept under its resolved name; the strategy as given is this run's: results.jsonl names it so
   // (compare and check match cells by it), rank 0 alone writing.
-  if ((*kept)["summary"].value("spec", json()) != json(spec)) {
-    (*kept)["summary"]["spec"] = spec;
+  if ((*kept)["summary"].value("spec", json()) != json(spec.text)) {
+    (*kept)["summary"]["spec"] = spec.text;
     write_cell(file, *kept);
     rebuild_results_log(options_.out, std::cerr);
   }
@@ -259,12 +269,12 @@ void Benchmark::plan_scene(std::size_t s) {
   const Scene& scene = data.sequence.scene();
   const std::string content = scene_content_digest(scene, data.frames);
   std::vector<Pending> pending;
-  for (const std::string& spec : options_.strategies) {
+  for (const strategies::StrategySpec& spec : options_.strategies) {
     if (std::optional<Pending> cell = plan_cell(s, spec, content)) pending.push_back(std::move(*cell));
   }
   if (pending.empty()) return;
   // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
-  for (const Pending& cell : pending) strategies::make_strategy(cell.spec)->check_scene(scene);
+  for (const Pending& cell : pending) strategies::check_scene(*cell.spec, scene);
   std::vector<std::size_t> truth_items;
   if (options_.verify) {
     for (std::size_t k = 0; k < steps; ++k) {
@@ -275,10 +285,14 @@ void Benchmark::plan_scene(std::size_t s) {
   }
   for (Pending& cell : pending) {
     const std::string file = cell.file.filename().string();
-    items_.push_back(
-        {json{{"kind", "cell"}, {"scene", s}, {"spec", cell.spec}, {"strategy", cell.key.strategy}, {"file", file}, {"threads", worker_threads()}}
-             .dump(),
-         truth_items});
+    items_.push_back({json{{"kind", "cell"},
+                           {"scene", s},
+                           {"spec", cell.spec->text},
+                           {"strategy", cell.key.strategy},
+                           {"file", file},
+                           {"threads", worker_threads()}}
+                          .dump(),
+                      truth_items});
     planned_.push_back({source.label, 0, steps, true, cell.slot, std::move(cell.file), std::move(cell.key)});
   }
 }
@@ -379,7 +393,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   // Every output is checked before any work (a run must not compute for an hour and then fail to write), and before
   // any plugin is loaded; then unknown names fail.
   check_run_outputs(options);
-  for (const std::string& spec : options.strategies) strategies::make_strategy(spec);
+  for (const strategies::StrategySpec& spec : options.strategies) strategies::validate(spec);
   Benchmark benchmark(options);
   if (rank_info().rank != 0) {
     distribute({}, benchmark.work(), {});

@@ -84,22 +84,82 @@ class WithNarrowPhaseNotes final : public Strategy {
 
 }  // namespace
 
-StrategySpec parse_strategy_spec(const std::string& spec) {
-  StrategySpec parsed;
-  auto [head, parameters] = narrowphase::split_spec(spec);
+StrategySpec parse_strategy_spec(const std::string& text) {
+  auto [head, parameters] = narrowphase::split_spec(text);
   // The '+' that joins strategy and narrow phase comes before any path (a path may hold a '+').
   const std::size_t plus = head.substr(0, head.find(':')).find('+');
-  parsed.name = head.substr(0, plus);
-  if (plus != std::string::npos) {
-    parsed.narrow_phase = head.substr(plus + 1);
-    if (parsed.narrow_phase.empty()) throw std::invalid_argument("malformed strategy spec '" + spec + "'");
+  const std::string name = head.substr(0, plus);
+  const std::string narrow_phase = plus == std::string::npos ? std::string() : head.substr(plus + 1);
+  if (name.empty() || (plus != std::string::npos && narrow_phase.empty())) throw std::invalid_argument("malformed strategy spec '" + text + "'");
+  StrategySpec spec;
+  spec.text = text;
+  spec.entry = &find_strategy(name);
+  spec.from_outside = from_outside(text);
+  spec.label = short_label(text);
+  const StrategyEntry& entry = *spec.entry;
+  auto owns = [](const std::vector<narrowphase::KeySpec>& keys, const std::string& key) {
+    return std::any_of(keys.begin(), keys.end(), [&](const narrowphase::KeySpec& k) { return k.name == key; });
+  };
+  if (!entry.takes_narrow_phase) {
+    if (!narrow_phase.empty())
+      throw std::invalid_argument(entry.name + " uses elementary tests of its own and takes no narrow phase ('" + text + "')");
+    spec.own = std::move(parameters);
+    return spec;
   }
-  if (parsed.name.empty()) throw std::invalid_argument("malformed strategy spec '" + spec + "'");
-  parsed.parameters = std::move(parameters);
-  return parsed;
+  spec.narrow = &narrowphase::find_narrow_phase(narrow_phase.empty() ? narrowphase::kDefaultNarrowPhase : narrow_phase);
+  const narrowphase::NarrowPhaseEntry& narrow = *spec.narrow;
+  // Each key to its owner; one that neither has is refused naming both lists (so `apccd:foo=1` is not blamed on
+  // the narrow phase alone).
+  for (const auto& [key, value] : parameters) {
+    if (owns(entry.keys, key)) {
+      spec.own[key] = value;
+    } else if (owns(narrow.keys, key)) {
+      spec.narrow_keys[key] = value;
+    } else {
+      throw std::invalid_argument(entry.name + "+" + narrow.name + " has no parameter '" + key + "' (" + entry.name +
+                                  "'s: " + narrowphase::key_names(entry.keys) + "; narrow phase " + narrow.name +
+                                  "'s: " + narrowphase::key_names(narrow.keys) + ")");
+    }
+  }
+  return spec;
 }
 
-StrategySpec strategy_names_of(const std::string& spec) {
+namespace {
+
+/// The spec's narrow phase as a strategy needs to know it (an empty one for a strategy with tests of its own).
+narrowphase::ResolvedNarrowPhase narrow_of(const StrategySpec& spec) {
+  if (!spec.narrow) return {};
+  return narrowphase::resolve_narrow_phase(*spec.narrow, narrowphase::SpecReader(spec.narrow->name, spec.narrow->keys, spec.narrow_keys));
+}
+
+const StrategyEntry& available(const StrategySpec& spec) {
+  if (!spec.entry->unavailable.empty()) throw std::invalid_argument(spec.entry->name + " is not available: " + spec.entry->unavailable);
+  return *spec.entry;
+}
+
+}  // namespace
+
+void validate(const StrategySpec& spec) {
+  const StrategyEntry& entry = available(spec);
+  // Each key's value is checked as its reader is made.
+  const narrowphase::SpecReader keys(entry.name, entry.keys, spec.own);
+  const narrowphase::ResolvedNarrowPhase narrow = narrow_of(spec);
+  if (entry.check) entry.check(keys, narrow);
+}
+
+std::string resolved_name(const StrategySpec& spec) {
+  const StrategyEntry& entry = available(spec);
+  const narrowphase::SpecReader keys(entry.name, entry.keys, spec.own);
+  const narrowphase::ResolvedNarrowPhase narrow = narrow_of(spec);
+  if (entry.check) entry.check(keys, narrow);
+  return entry.resolve(keys, narrow);
+}
+
+void check_scene(const StrategySpec& spec, const Scene& scene) {
+  if (spec.entry->check_scene) spec.entry->check_scene(narrowphase::SpecReader(spec.entry->name, spec.entry->keys, spec.own), scene);
+}
+
+StrategyNames strategy_names_of(const std::string& spec) {
   std::string head = spec.substr(0, spec.find(':'));
   const std::size_t plus = head.find('+');  // before the first ':', so never inside a path
   // plugin:PATH and answers:DIR keep their path (split_spec's rule), before or after the '+'.
@@ -107,23 +167,23 @@ StrategySpec strategy_names_of(const std::string& spec) {
     const std::size_t end = spec.find(':', head.size() + 1);
     head = spec.substr(0, end);
   }
-  return {head.substr(0, plus), plus == std::string::npos ? std::string() : head.substr(plus + 1), {}};
+  return {head.substr(0, plus), plus == std::string::npos ? std::string() : head.substr(plus + 1)};
 }
 
 bool from_outside(const std::string& spec) {
-  const StrategySpec names = strategy_names_of(spec);
+  const StrategyNames names = strategy_names_of(spec);
   return narrowphase::is_file_head(names.name.substr(0, names.name.find(':'))) ||
          narrowphase::is_file_head(names.narrow_phase.substr(0, names.narrow_phase.find(':')));
 }
 
 bool runs_host_method(const std::string& spec) {
-  const StrategySpec names = strategy_names_of(spec);
+  const StrategyNames names = strategy_names_of(spec);
   auto host = [](const std::string& name) { return name.substr(0, name.find(':')) == narrowphase::kHostMethodHead; };
   return host(names.name) || host(names.narrow_phase);
 }
 
 std::string short_label(const std::string& spec) {
-  const StrategySpec names = strategy_names_of(spec);
+  const StrategyNames names = strategy_names_of(spec);
   auto shorten = [](const std::string& name) {
     const std::size_t colon = name.find(':');
     if (colon == std::string::npos || !narrowphase::is_file_head(name.substr(0, colon))) return name;
@@ -134,42 +194,19 @@ std::string short_label(const std::string& spec) {
 
 const StrategyEntry& strategy_entry_of(const std::string& spec) { return find_strategy(strategy_names_of(spec).name); }
 
-std::unique_ptr<Strategy> make_strategy(const std::string& spec) {
-  const StrategySpec parsed = parse_strategy_spec(spec);
-  const StrategyEntry& entry = find_strategy(parsed.name);
-  if (!entry.unavailable.empty()) throw std::invalid_argument(entry.name + " is not available: " + entry.unavailable);
-  auto owns = [](const std::vector<narrowphase::KeySpec>& keys, const std::string& key) {
-    return std::any_of(keys.begin(), keys.end(), [&](const narrowphase::KeySpec& k) { return k.name == key; });
-  };
-  if (!entry.takes_narrow_phase) {
-    if (!parsed.narrow_phase.empty()) {
-      throw std::invalid_argument(entry.name + " uses elementary tests of its own and takes no narrow phase ('" + spec + "')");
-    }
-    return entry.make({narrowphase::SpecReader(entry.name, entry.keys, parsed.parameters), nullptr});
-  }
-  const narrowphase::NarrowPhaseEntry& narrow =
-      narrowphase::find_narrow_phase(parsed.narrow_phase.empty() ? narrowphase::kDefaultNarrowPhase : parsed.narrow_phase);
-  // Each key to its owner; one that neither has is refused naming both lists (so `apccd:foo=1` is not blamed on
-  // the narrow phase alone).
-  narrowphase::SpecParameters own, narrow_keys;
-  for (const auto& [key, value] : parsed.parameters) {
-    if (owns(entry.keys, key)) {
-      own[key] = value;
-    } else if (owns(narrow.keys, key)) {
-      narrow_keys[key] = value;
-    } else {
-      throw std::invalid_argument(entry.name + "+" + narrow.name + " has no parameter '" + key + "' (" + entry.name +
-                                  "'s: " + narrowphase::key_names(entry.keys) + "; narrow phase " + narrow.name +
-                                  "'s: " + narrowphase::key_names(narrow.keys) + ")");
-    }
-  }
-  const narrowphase::SpecReader keys(entry.name, entry.keys, own);
-  std::unique_ptr<narrowphase::NarrowPhase> narrow_phase = narrow.make(narrowphase::SpecReader(narrow.name, narrow.keys, narrow_keys));
+std::unique_ptr<Strategy> make_strategy(const StrategySpec& spec) {
+  const StrategyEntry& entry = available(spec);
+  const narrowphase::SpecReader keys(entry.name, entry.keys, spec.own);
+  if (!spec.narrow) return entry.make({keys, nullptr});
+  const narrowphase::NarrowPhaseEntry& narrow = *spec.narrow;
+  std::unique_ptr<narrowphase::NarrowPhase> narrow_phase = narrow.make(narrowphase::SpecReader(narrow.name, narrow.keys, spec.narrow_keys));
   std::vector<std::pair<std::string, std::string>> notes = narrow_phase->provenance();
   const std::string why = narrow_phase->thread_safe() ? "" : "narrow phase " + narrow.name + " may not be called from several threads at once";
   if (!notes.empty() || !why.empty())
     return std::make_unique<WithNarrowPhaseNotes>(entry.make({keys, std::move(narrow_phase)}), std::move(notes), why);
   return entry.make({keys, std::move(narrow_phase)});
 }
+
+std::unique_ptr<Strategy> make_strategy(const std::string& text) { return make_strategy(parse_strategy_spec(text)); }
 
 }  // namespace ccd::strategies

@@ -26,24 +26,55 @@ const std::vector<StrategyEntry>& strategy_entries();
 /// The entry named `name`. @throws std::invalid_argument naming the known strategies.
 const StrategyEntry& find_strategy(const std::string& name);
 
-/// A spec `NAME[+NARROW][:key=value...]`, split. `narrow_phase` is empty when the spec names none.
+/// A `--strategy` spec `NAME[+NARROW][:key=value...]` parsed once (parse_strategy_spec), what a run carries from the
+/// command line to its cells: the entries it names and each key given to its owner. Nothing is made to parse it (a
+/// plugin's table is described by a child process, never loaded here).
 struct StrategySpec {
+  /// As given: results name the cell by it (`spec`), and the gate and `compare` match cells by it.
+  std::string text;
+  const StrategyEntry* entry = nullptr;
+  /// The narrow phase it runs (conservative unless named); null for a strategy with tests of its own.
+  const narrowphase::NarrowPhaseEntry* narrow = nullptr;
+  /// The strategy's own keys and its narrow phase's, as given.
+  narrowphase::SpecParameters own, narrow_keys;
+  /// Code or answers from outside ccdbench (a plugin, answer files, a method of the calling program): its errors
+  /// and nondeterminism are verdicts, where a built-in's are defects.
+  bool from_outside = false;
+  /// The head, short, for progress lines and file names (short_label).
+  std::string label;
+};
+
+/// Parses a spec: its strategy and narrow phase looked up, each key routed to its owner.
+/// @throws std::invalid_argument for a malformed spec, an unknown strategy or narrow phase (naming the known ones), a
+///         narrow phase given to a strategy that takes none, or a key neither owns (naming both lists).
+StrategySpec parse_strategy_spec(const std::string& text);
+
+/// Checks everything a strategy's factory would check before it builds anything: each key's value, that this build
+/// has the strategy, and its entry's own check (a key of the other backend; backend=opencl: a narrow phase the device
+/// runs, and the device). Makes nothing: no plugin is loaded, no device context made. @throws std::invalid_argument.
+void validate(const StrategySpec& spec);
+
+/// The name a strategy made from `spec` would have (Strategy::name(), every default filled in): what a run plans,
+/// keys and keeps its cells by, without making the strategy. @throws std::invalid_argument as validate does.
+std::string resolved_name(const StrategySpec& spec);
+
+/// Throws std::invalid_argument when the strategy cannot run `scene` (fcl at δ > 0), without making it.
+void check_scene(const StrategySpec& spec, const Scene& scene);
+
+/// Makes the strategy: only where a cell runs, and for its audit pass (docs/DESIGN.md §3).
+/// @throws std::invalid_argument as validate does, or for what only making it can tell (a plugin's configuration).
+std::unique_ptr<Strategy> make_strategy(const StrategySpec& spec);
+/// Parses `text` and makes the strategy (tests, and tools outside a run).
+std::unique_ptr<Strategy> make_strategy(const std::string& text);
+
+/// The strategy's and the narrow phase's names in a spec or a resolved name.
+struct StrategyNames {
   std::string name;
   std::string narrow_phase;
-  narrowphase::SpecParameters parameters;
 };
-/// @throws std::invalid_argument for a malformed spec.
-StrategySpec parse_strategy_spec(const std::string& spec);
-
-/// Makes a strategy from its spec (`full`, `full+cubic64`, `apccd:skip=off`, ...): its keys to it, the rest to its
-/// narrow phase (conservative unless named).
-/// @throws std::invalid_argument naming the known strategies, or the unknown key with both lists of keys, or a value
-///         out of range, or a backend or dependency this build lacks.
-std::unique_ptr<Strategy> make_strategy(const std::string& spec);
-
-/// The strategy's and the narrow phase's names in a spec or a resolved name ("full+cubic64:eta=1e-06:...": full,
-/// cubic64; "fcl:bv=aabb": fcl and ""), read from the head alone (a resolved name's device may hold any text).
-StrategySpec strategy_names_of(const std::string& spec);
+/// The names in a spec or a resolved name ("full+cubic64:eta=1e-06:...": full, cubic64; "fcl:bv=aabb": fcl and ""),
+/// read from the head alone (a resolved name's device may hold any text), for records read back.
+StrategyNames strategy_names_of(const std::string& spec);
 
 /// Whether a spec or resolved name runs code or answers from outside ccdbench (a plugin, as the strategy or as its
 /// narrow phase, or answer files): its errors and nondeterminism are verdicts, where a built-in's are defects.

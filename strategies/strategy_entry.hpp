@@ -3,6 +3,7 @@
 /// What a strategy is to the registry (registry.hpp): its entry. Each strategy's file defines its entries
 /// (FILE_entries()) from this alone; the registry collects them.
 
+#include "strategies/narrowphase/entry.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 #include "strategies/narrowphase/spec.hpp"
 #include "strategies/strategy.hpp"
@@ -41,6 +42,15 @@ struct StrategyEntry {
   /// Why this build cannot make it (a dependency was not found at configure time); empty when it can.
   std::string unavailable;
   std::function<std::unique_ptr<Strategy>(StrategyRequest)> make;
+  /// The name a strategy made from these keys would have (its Strategy::name()), without making one: what a run
+  /// plans and keeps its cells by. `narrow` is its narrow phase's (unused by one with tests of its own).
+  std::function<std::string(const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow)> resolve;
+  /// What its factory would refuse in these keys and narrow phase beyond each key's own range (a key of the other
+  /// backend, a narrow phase the device does not run, a device that is not there), said without making anything.
+  std::function<void(const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow)> check = {};
+  /// Throws std::invalid_argument when it cannot run `scene` (fcl at δ > 0), as its Strategy::check_scene does, before
+  /// any work. Empty: it runs any scene.
+  std::function<void(const narrowphase::SpecReader& keys, const Scene& scene)> check_scene = {};
 };
 
 }  // namespace ccd::strategies

@@ -122,16 +122,18 @@ int run_run(RunCommandOptions& o, const Shared& shared) {
   for (std::optional<std::filesystem::path>* output : {&run.json, &run.report, &run.misses, &run.faults, &run.write_answers}) make_absolute(*output);
   if (const int refused = add_run_scenes(o)) return refused;
   if (const int refused = add_thicknesses(o)) return refused;
-  run.strategies = CLI::detail::split(o.strategies, ',');
+  std::vector<std::string> specs = CLI::detail::split(o.strategies, ',');
   // Answers alone (no --strategy) are judged alone: the default `full` is for runs that name no strategy at all.
-  if (!o.answer_folders.empty() && o.app->count("--strategy") == 0) run.strategies.clear();
-  for (const std::string& folder : o.answer_folders) run.strategies.push_back("answers:" + folder);
+  if (!o.answer_folders.empty() && o.app->count("--strategy") == 0) specs.clear();
+  for (const std::string& folder : o.answer_folders) specs.push_back("answers:" + folder);
   harness::check_run_outputs(run);
-  for (const std::string& spec : run.strategies) {
+  // The one place a run's specs are parsed: every cell carries its spec from here (validated without making anything).
+  for (const std::string& text : specs) {
     try {
-      strategies::make_strategy(spec);
+      run.strategies.push_back(strategies::parse_strategy_spec(text));
+      strategies::validate(run.strategies.back());
     } catch (const std::invalid_argument& error) {
-      return refuse("--strategy " + spec, error.what());
+      return refuse("--strategy " + text, error.what());
     }
   }
   run.verify = o.verify == "exact";

@@ -47,7 +47,7 @@ std::size_t peak_resident_bytes() {
 /// What a cell runs with: its scene and truth, its strategy as given, the run's options.
 struct CellContext {
   const SceneData& data;
-  const std::string& spec;
+  const strategies::StrategySpec& spec;
   const RunOptions& options;
   std::size_t steps;
   const std::string& cell_name;
@@ -91,16 +91,15 @@ void time_pass(const CellContext& cell, Passes& passes, int repeat, const CellPr
   passes.resolved = strategy->name();
   if (!planned_name.empty() && passes.resolved != planned_name) {
     // The key this cell would be kept under names other code than the code that would run.
-    throw std::runtime_error(cell.data.label + " / " + strategies::short_label(cell.spec) + ": it was planned as " + planned_name +
-                             " and would run as " + passes.resolved +
-                             ": its code or answers changed during the run; the cells finished before are kept");
+    throw std::runtime_error(cell.data.label + " / " + cell.spec.label + ": it was planned as " + planned_name + " and would run as " +
+                             passes.resolved + ": its code or answers changed during the run; the cells finished before are kept");
   }
   for (const auto& [name, value] : strategy->provenance()) passes.environment["provenance"][name] = value;
   strategy->name_scene(cell.data.label);
   strategy->init(scene, cell.data.frames[0]);
   for (std::size_t k = 0; k < cell.steps; ++k) {
     const StepView view{&scene, k, cell.data.frames[k], cell.data.frames[k + 1]};
-    plugin::set_activity("cell " + cell.data.label + " / " + strategies::short_label(cell.spec) + ", pass " + std::to_string(repeat + 1) + ", step " +
+    plugin::set_activity("cell " + cell.data.label + " / " + cell.spec.label + ", pass " + std::to_string(repeat + 1) + ", step " +
                          std::to_string(k + 1) + " of " + std::to_string(cell.steps));
     std::optional<strategies::StepResult> answered;
     const auto start = std::chrono::steady_clock::now();
@@ -158,7 +157,7 @@ void audit(const CellContext& cell, Passes& passes, Judgement& judgement) {
   strategy->name_scene(cell.data.label);
   strategy->init(scene, cell.data.frames[0]);
   for (std::size_t k = 0; k < cell.steps && !passes.nondeterministic_step; ++k) {
-    plugin::set_activity("cell " + cell.data.label + " / " + strategies::short_label(cell.spec) + ", its audit pass, step " + std::to_string(k + 1));
+    plugin::set_activity("cell " + cell.data.label + " / " + cell.spec.label + ", its audit pass, step " + std::to_string(k + 1));
     strategies::StepResult audit = strategy->step({&scene, k, cell.data.frames[k], cell.data.frames[k + 1]}, true);
 #if CCDBENCH_GUARD_REPEATS
     // The audit pass is one more run of the same steps: its answers are compared as a timed pass's are.
@@ -204,7 +203,7 @@ Judgement judge_passes(const CellContext& cell, Passes& passes) {
 /// --write-answers: DIR/STRATEGY/SCENE (answers:DIR/STRATEGY reads it back), STRATEGY@δ when the run has several δ:
 /// a folder of answers is for one δ.
 void write_cell_answers(const CellContext& cell, const Passes& passes) {
-  std::string folder = strategies::short_label(cell.spec);
+  std::string folder = cell.spec.label;
   for (char& c : folder) c = c == '/' || c == ':' || c == '\\' ? '_' : c;
   if (cell.options.thicknesses.size() > 1) {
     folder += "@" + (cell.data.thickness_from == "scene" ? std::string("scene") : significant(cell.data.sequence.scene().thickness(), 17));
@@ -363,7 +362,7 @@ json cell_summary(const CellContext& cell, const Passes& passes, const Judgement
                   {"strategy", passes.resolved},
                   // The strategy as --strategy gave it, when the cell ran (run --json sets it to this run's): what
                   // check and compare match a plugin's cell by, its resolved name holding absolute paths and digests.
-                  {"spec", cell.spec},
+                  {"spec", cell.spec.text},
                   {"triangles", scene.topology().num_faces()},
                   {"vertices", scene.topology().num_vertices()},
                   {"steps", cell.steps},
@@ -394,10 +393,9 @@ json cell_summary(const CellContext& cell, const Passes& passes, const Judgement
 
 }  // namespace
 
-json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps, const std::string& cell_name,
+json run_cell(const SceneData& data, const strategies::StrategySpec& spec, const RunOptions& options, std::size_t steps, const std::string& cell_name,
               const CellProgress& progress, const std::string& planned_name) {
-  const strategies::StrategyEntry& entry = strategies::strategy_entry_of(spec);
-  const CellContext cell{data, spec, options, steps, cell_name, entry, strategies::from_outside(spec)};
+  const CellContext cell{data, spec, options, steps, cell_name, *spec.entry, spec.from_outside};
   Passes passes = time_passes(cell, progress, planned_name);
   const Judgement judgement = judge_passes(cell, passes);
   const std::filesystem::path fault_root = options.faults ? *options.faults : options.out / "faults";

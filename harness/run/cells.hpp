@@ -43,7 +43,7 @@ inline constexpr std::size_t kKeptMissedPairs = 100;
 /// Returns {"summary": ..., "steps": [...]} (docs/DESIGN.md §5 fields).
 /// `planned_name`: the resolved name the cell was planned (and its key made) with; a strategy that runs under another
 /// (code from outside ccdbench that changed during the run) ends the run instead of being kept under that key.
-nlohmann::json run_cell(const SceneData& data, const std::string& spec, const RunOptions& options, std::size_t steps, const std::string& cell_name,
-                        const CellProgress& progress = {}, const std::string& planned_name = {});
+nlohmann::json run_cell(const SceneData& data, const strategies::StrategySpec& spec, const RunOptions& options, std::size_t steps,
+                        const std::string& cell_name, const CellProgress& progress = {}, const std::string& planned_name = {});
 
 }  // namespace ccd::harness

@@ -3,6 +3,7 @@
 /// What `ccdbench run` is asked to do (run.hpp runs it; run/cells.hpp runs one cell of it).
 
 #include "datasets/scene_sequence.hpp"
+#include "strategies/registry.hpp"
 
 #include <filesystem>
 #include <functional>
@@ -20,7 +21,8 @@ struct SceneSource {
 
 struct RunOptions {
   std::vector<SceneSource> scenes;
-  std::vector<std::string> strategies{"full"};
+  /// Parsed once, where the run is asked for (the command line, the C++ API): every cell carries its spec.
+  std::vector<strategies::StrategySpec> strategies;
   /// The thicknesses every scene runs at: nullopt is the scene's own δ; empty means {nullopt}. With more than one, a
   /// strategy that refuses a scene at one of them (fcl at δ > 0) is left out there, and said so, not an error.
   std::vector<std::optional<double>> thicknesses;

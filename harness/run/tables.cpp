@@ -24,7 +24,7 @@ constexpr std::size_t kStrategyColumn = 2;
 /// and machine (MPI spreads cells over ranks and hosts). nullptr when there is none.
 const json* baseline_of(const json& s, const std::vector<json>& summaries) {
   if (s.value("resumed", false)) return nullptr;
-  const strategies::StrategySpec spec = strategies::strategy_names_of(s["strategy"]);
+  const strategies::StrategyNames spec = strategies::strategy_names_of(s["strategy"]);
   const strategies::StrategyEntry& entry = strategies::find_strategy(spec.name);
   const std::string& baseline = entry.baseline;
   // Answers read from files have no time of their own to compare.
@@ -32,7 +32,7 @@ const json* baseline_of(const json& s, const std::vector<json>& summaries) {
   for (const json& other : summaries) {
     if (other.value("resumed", false) || other["scene"] != s["scene"] || other["thickness"] != s["thickness"]) continue;
     if (other.value("rank", 0) != s.value("rank", 0) || other.value("machine", "") != s.value("machine", "")) continue;
-    const strategies::StrategySpec candidate = strategies::strategy_names_of(other["strategy"]);
+    const strategies::StrategyNames candidate = strategies::strategy_names_of(other["strategy"]);
     if (candidate.name != baseline) continue;
     // With the same narrow phase; a strategy with tests of its own (a whole-step plugin) against the baseline as it
     // runs by default (full: conservative), never against another cell that uses a plugin.

@@ -353,8 +353,12 @@ std::vector<StrategyEntry> fcl_strategies_entries() {
   fcl.keys = {bv};
   fcl.takes_narrow_phase = false;
   fcl.judging = Judging::triangle_pairs;
+  fcl.resolve = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase&) { return "fcl:bv=" + keys.choice("bv"); };
   StrategyEntry fcl_bvh;
   fcl_bvh.name = "fcl-bvh";
+  fcl_bvh.resolve = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow) {
+    return "fcl-bvh+" + narrow.name + ":bv=" + keys.choice("bv");
+  };
   fcl_bvh.help = "FCL's BVH as the broad phase, then this project's expansion and narrow phase (δ = 0)";
   fcl_bvh.keys = {bv};
 #if CCDBENCH_WITH_FCL
@@ -366,6 +370,8 @@ std::vector<StrategyEntry> fcl_strategies_entries() {
   fcl_bvh.make = [](StrategyRequest request) {
     return with_bounding_volume<FclBroadPhase>(request.keys.choice("bv"), std::move(request.narrow_phase));
   };
+  fcl.check_scene = [](const narrowphase::SpecReader&, const Scene& scene) { refuse_thickness(scene, "fcl"); };
+  fcl_bvh.check_scene = [](const narrowphase::SpecReader&, const Scene& scene) { refuse_thickness(scene, "fcl-bvh"); };
 #else
   for (StrategyEntry* entry : {&fcl, &fcl_bvh}) {
     entry->unavailable = "this build has CCDBENCH_WITH_FCL=OFF (install libfcl-dev libccd-dev, which scripts/setup.sh does, and reconfigure)";

@@ -113,10 +113,20 @@ std::vector<StrategyEntry> full_traversal_entries() {
     if (backend.opencl()) return make_full_opencl(std::move(request.narrow_phase), backend, filter);
     return std::make_unique<FullTraversal>(std::move(request.narrow_phase), filter);
   };
+  full.check = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow) {
+    const BackendChoice backend = read_backend(keys);
+    if (backend.opencl()) opencl_device_name("full", backend, narrow, false);
+  };
+  full.resolve = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow) {
+    const BackendChoice backend = read_backend(keys);
+    const std::string name = "full+" + narrow.name + (keys.choice("filter") == "on" ? ":filter=on" : "");
+    return backend.opencl() ? name + backend.resolved(opencl_device_name("full", backend, narrow, false), narrow.conservative) : name;
+  };
   StrategyEntry brute;
   brute.name = "brute";
   brute.help = "every triangle pair the scene lets collide, no culling (small scenes): the independent check of culling";
   brute.make = [](StrategyRequest request) -> std::unique_ptr<Strategy> { return std::make_unique<BruteForce>(std::move(request.narrow_phase)); };
+  brute.resolve = [](const narrowphase::SpecReader&, const narrowphase::ResolvedNarrowPhase& narrow) { return "brute+" + narrow.name; };
   return {std::move(full), std::move(brute)};
 }
 

@@ -30,6 +30,18 @@ struct NarrowPhaseEntry {
   std::vector<SweepAxis> sweeps;
   /// Makes an instance from its keys (`keys` says which the reader holds, already checked).
   std::function<std::unique_ptr<NarrowPhase>(const SpecReader&)> make;
+  /// Code from outside ccdbench (a plugin, a method of the calling program), which making an instance loads or
+  /// starts: the resolved name an instance made from `keys` would have, without making one. Empty for the built-ins,
+  /// which are a few settings: resolve_narrow_phase makes one to ask.
+  std::function<std::string(const SpecReader&)> resolve = {};
+};
+
+/// What a strategy needs to know of its narrow phase before anything is made (registry.hpp's resolved_name and
+/// validate): its resolved name, whether it promises no misses, and whether the OpenCL backend runs it.
+struct ResolvedNarrowPhase {
+  std::string name;
+  bool conservative = false;
+  bool on_device = false;
 };
 
 /// The narrow phase of a strategy spec that names none (docs/DESIGN.md §3): the one that never misses.

@@ -44,6 +44,13 @@ std::unique_ptr<NarrowPhase> make_narrow_phase_from_spec(const std::string& spec
   return make_narrow_phase(name, parameters);
 }
 
+ResolvedNarrowPhase resolve_narrow_phase(const NarrowPhaseEntry& entry, const SpecReader& keys) {
+  // Code from outside has no device form, and says its name without being loaded.
+  if (entry.resolve) return {entry.resolve(keys), entry.conservative, false};
+  const std::unique_ptr<NarrowPhase> made = entry.make(keys);
+  return {made->name(), made->conservative(), made->device_form().has_value()};
+}
+
 std::vector<std::string> narrow_phase_backends(const NarrowPhaseEntry& entry) {
   std::vector<std::string> backends{"cpu"};
   if (entry.make(SpecReader(entry.name, entry.keys, {}))->device_form()) backends.push_back("opencl");

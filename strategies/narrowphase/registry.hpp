@@ -35,6 +35,9 @@ std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const Sp
 /// Parses `NAME[:key=value...]` and makes the variant.
 std::unique_ptr<NarrowPhase> make_narrow_phase_from_spec(const std::string& spec);
 
+/// What a strategy needs to know of narrow phase `entry` with these keys, without loading or starting any code.
+ResolvedNarrowPhase resolve_narrow_phase(const NarrowPhaseEntry& entry, const SpecReader& keys);
+
 /// The backends an entry runs on: "cpu", and "opencl" where its default instance has a device form.
 std::vector<std::string> narrow_phase_backends(const NarrowPhaseEntry& entry);
 

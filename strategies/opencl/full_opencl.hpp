@@ -11,6 +11,7 @@
 /// face against a whole tree, which needs no synchronisation and fills the GPU at cloth sizes.
 
 #include "strategies/backend.hpp"
+#include "strategies/narrowphase/entry.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
 #include "strategies/strategy.hpp"
 
@@ -38,6 +39,13 @@ struct OpenClDeviceSummary {
 
 /// Every OpenCL device, in device=INDEX order. @throws std::invalid_argument when this build has no OpenCL.
 std::vector<OpenClDeviceSummary> opencl_devices();
+
+/// `strategy`:backend=opencl checked as its factory checks it, without making anything (registry.hpp's validate and
+/// resolved_name): the narrow phase has a device form, and the device the keys choose is there with (denormal-keeping)
+/// fp64, and 64-bit atomics where `int64_atomics`. @return the device's name, which resolved names carry.
+/// @throws std::invalid_argument as make_full_opencl does.
+std::string opencl_device_name(const std::string& strategy, const BackendChoice& backend, const narrowphase::ResolvedNarrowPhase& narrow,
+                               bool int64_atomics);
 
 /// Chooses the device (listing them) and checks it has what the kernels need, so a bad device is refused when the
 /// run is planned. The context, the program and the device's arithmetic self-test come at init().

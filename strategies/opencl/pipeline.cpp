@@ -54,16 +54,18 @@ EdgeEdgePair edge_pair(const cl_uint4& p) { return {Edge{p.s[0], p.s[1]}, Edge{p
 
 }  // namespace
 
+void refuse_host_narrow_phase(const std::string& strategy, const std::string& name) {
+  std::string runs;
+  for (const narrowphase::NarrowPhaseEntry& entry : narrowphase::narrow_phases()) {
+    const auto backends = narrowphase::narrow_phase_backends(entry);
+    if (std::find(backends.begin(), backends.end(), "opencl") != backends.end()) runs += (runs.empty() ? "" : ", ") + entry.name;
+  }
+  throw std::invalid_argument(strategy + ":backend=opencl runs the narrow phases " + runs + ", not " + name);
+}
+
 NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_ptr<narrowphase::NarrowPhase> host) {
   const std::optional<narrowphase::DeviceForm> form = host->device_form();
-  if (!form) {
-    std::string runs;
-    for (const narrowphase::NarrowPhaseEntry& entry : narrowphase::narrow_phases()) {
-      const auto backends = narrowphase::narrow_phase_backends(entry);
-      if (std::find(backends.begin(), backends.end(), "opencl") != backends.end()) runs += (runs.empty() ? "" : ", ") + entry.name;
-    }
-    throw std::invalid_argument(strategy + ":backend=opencl runs the narrow phases " + runs + ", not " + host->name());
-  }
+  if (!form) refuse_host_narrow_phase(strategy, host->name());
   return {std::move(host), *form};
 }
 

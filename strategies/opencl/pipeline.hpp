@@ -35,6 +35,9 @@ struct NarrowPhaseChoice {
 /// @throws std::invalid_argument for a narrow phase without a device form, naming those that have one.
 NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_ptr<narrowphase::NarrowPhase> host);
 
+/// @throws std::invalid_argument: `strategy`:backend=opencl runs the narrow phases that have a device form, not `name`.
+[[noreturn]] void refuse_host_narrow_phase(const std::string& strategy, const std::string& name);
+
 /// An empty slot of apccd's pending table (CCD_EMPTY_KEY in its kernels): no pair key (a, b), a < b, is all ones.
 inline constexpr cl_ulong kEmptyPendingKey = ~cl_ulong{0};
 

@@ -131,6 +131,19 @@ CollisionSet read_step_file(const std::filesystem::path& path, const std::string
   return set;
 }
 
+void refuse_answer_shapes(const std::string& name, const Scene& scene) {
+  if (!scene.shape_objects().empty()) {
+    throw std::invalid_argument(name + ": answer files name no analytic shapes; scene object '" + scene.object(scene.shape_objects().front()).name +
+                                "' is one");
+  }
+}
+
+void refuse_other_digest(const std::filesystem::path& folder, const std::string& given, const std::string& digest) {
+  if (!given.empty() && given != digest) {
+    throw std::invalid_argument("answers " + folder.string() + ": its files changed (digest " + digest + ", the spec asks for " + given + ")");
+  }
+}
+
 class AnswersStrategy final : public strategies::Strategy {
  public:
   AnswersStrategy(std::filesystem::path folder, std::shared_ptr<const FolderSnapshot> snapshot)
@@ -141,10 +154,7 @@ class AnswersStrategy final : public strategies::Strategy {
   void name_scene(const std::string& label) override { label_ = label; }
 
   void init(const Scene& scene, std::span<const Vec3>) override {
-    if (!scene.shape_objects().empty()) {
-      throw std::invalid_argument(name() + ": answer files name no analytic shapes; scene object '" +
-                                  scene.object(scene.shape_objects().front()).name + "' is one");
-    }
+    refuse_answer_shapes(name(), scene);
     const std::filesystem::path folder = folder_ / label_;
     auto step_file = [&](std::size_t k) { return snapshot_->files.find(std::filesystem::path(label_).generic_string() + "/" + step_file_name(k)); };
     if (label_.empty() || step_file(0) == snapshot_->files.end()) {
@@ -198,6 +208,13 @@ strategies::StrategyEntry answers_entry(const std::string& name) {
   entry.explain_miss = [](const narrowphase::PairRows&, bool) { return std::string("unreported"); };
   // Read once, when the entry is made (once per process): every cell of the run judges these bytes.
   std::shared_ptr<const FolderSnapshot> snapshot = read_folder(folder);
+  entry.resolve = [folder, snapshot](const narrowphase::SpecReader&, const narrowphase::ResolvedNarrowPhase&) {
+    return std::string(narrowphase::kAnswersHead) + ":" + folder.string() + ":digest=" + snapshot->digest;
+  };
+  entry.check = [folder, snapshot](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase&) {
+    refuse_other_digest(folder, keys.text("digest"), snapshot->digest);
+  };
+  entry.check_scene = [name](const narrowphase::SpecReader&, const Scene& scene) { refuse_answer_shapes(name, scene); };
   entry.make = [folder, snapshot](strategies::StrategyRequest request) -> std::unique_ptr<strategies::Strategy> {
 #if CCDBENCH_GUARD_READ_ONCE
     std::shared_ptr<const FolderSnapshot> judged = snapshot;
@@ -206,11 +223,7 @@ strategies::StrategyEntry answers_entry(const std::string& name) {
     auto judged = std::make_shared<FolderSnapshot>(*read_folder(folder));
     judged->digest = content_digest(folder);
 #endif
-    const std::string given_digest = request.keys.text("digest");
-    if (!given_digest.empty() && given_digest != judged->digest) {
-      throw std::invalid_argument("answers " + folder.string() + ": its files changed (digest " + judged->digest + ", the spec asks for " +
-                                  given_digest + ")");
-    }
+    refuse_other_digest(folder, request.keys.text("digest"), judged->digest);
     return std::make_unique<AnswersStrategy>(folder, judged);
   };
   return entry;

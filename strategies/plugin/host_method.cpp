@@ -162,6 +162,7 @@ void register_host_method(const std::string& name, HostMethod method, HostMethod
     if (!alive) throw std::invalid_argument(full + ": the method is no longer registered");
     return std::make_unique<HostNarrowPhase>(full, std::move(alive), keys.choice("errors") == "hit");
   };
+  entry.resolve = [full = head(name)](const narrowphase::SpecReader& keys) { return full + ":errors=" + keys.choice("errors"); };
   std::lock_guard lock(host_methods_mutex());
   if (!host_methods().emplace(name, std::move(registered)).second) throw std::invalid_argument("a method named '" + name + "' is registered already");
 }

@@ -139,6 +139,9 @@ narrowphase::NarrowPhaseEntry narrow_phase_entry(const std::string& name) {
   entry.make = [&description](const narrowphase::SpecReader& keys) -> std::unique_ptr<narrowphase::NarrowPhase> {
     return std::make_unique<PluginNarrowPhase>(description, keys);
   };
+  entry.resolve = [&description](const narrowphase::SpecReader& keys) {
+    return resolved_name(description, plugin_values(keys, description), read_host_settings(keys, description));
+  };
   return entry;
 }
 

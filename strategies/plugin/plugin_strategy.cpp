@@ -47,6 +47,13 @@ struct Reported {
   std::vector<EdgeEdge> edge_edge;
 };
 
+void refuse_plugin_shapes(const std::string& name, const Scene& scene) {
+  if (!scene.shape_objects().empty()) {
+    throw std::invalid_argument(name + ": the plugin ABI has no analytic shapes; scene object '" + scene.object(scene.shape_objects().front()).name +
+                                "' is one");
+  }
+}
+
 class WholeStepPlugin final : public strategies::Strategy {
  public:
   WholeStepPlugin(const PluginDescription& description, const narrowphase::SpecReader& keys) : plugin_(description, keys) {}
@@ -54,12 +61,7 @@ class WholeStepPlugin final : public strategies::Strategy {
 
   std::string name() const override { return plugin_.name(); }
 
-  void check_scene(const Scene& scene) const override {
-    if (!scene.shape_objects().empty()) {
-      throw std::invalid_argument(name() + ": the plugin ABI has no analytic shapes; scene object '" +
-                                  scene.object(scene.shape_objects().front()).name + "' is one");
-    }
-  }
+  void check_scene(const Scene& scene) const override { refuse_plugin_shapes(name(), scene); }
 
   void init(const Scene& scene, std::span<const Vec3>) override {
     check_scene(scene);
@@ -215,6 +217,10 @@ strategies::StrategyEntry whole_step_entry(const std::string& name) {
   entry.make = [&description](strategies::StrategyRequest request) -> std::unique_ptr<strategies::Strategy> {
     return std::make_unique<WholeStepPlugin>(description, request.keys);
   };
+  entry.resolve = [&description](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase&) {
+    return resolved_name(description, plugin_values(keys, description), read_host_settings(keys, description));
+  };
+  entry.check_scene = [name](const narrowphase::SpecReader&, const Scene& scene) { refuse_plugin_shapes(name, scene); };
   return entry;
 }
 

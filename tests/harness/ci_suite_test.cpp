@@ -68,7 +68,7 @@ TEST(RunSummary, StrategyCountersHaveTheirMeanAndMaxOverTheSteps) {
   ::setenv("CCDBENCH_CACHE_DIR", dir.path().c_str(), 1);
   RunOptions options;
   options.scenes = {suite_scenes("ci").back()};
-  options.strategies = {"apccd"};
+  options.strategies = {strategies::parse_strategy_spec("apccd")};
   options.verify = false;
   options.out = dir.path() / "results";
   std::ostringstream table;

@@ -30,7 +30,7 @@ TEST(TimedRegion, NoHarnessPassRunsInsideAStrategysTime) {
   options.scenes = {suite_scenes("ci")[1]};  // fold-r8-f24
   options.thicknesses = {0.0};
   // cubic32 misses on this scene at δ = 0, so that the audit pass and the miss records run too.
-  options.strategies = {"full", "full+cubic32"};
+  options.strategies = {strategies::parse_strategy_spec("full"), strategies::parse_strategy_spec("full+cubic32")};
   options.toi = true;
   options.out = dir.path() / "results";
   options.misses = dir.path() / "misses";

@@ -223,7 +223,7 @@ TEST_F(OpenClParity, ApccdOnTheDeviceMissesNothingOnTheCiSuite) {
   for (const bool zero : {false, true}) {
     harness::RunOptions options;
     options.scenes = harness::suite_scenes("ci");
-    options.strategies = {"apccd:backend=opencl", "apccd+cubic64:backend=opencl"};
+    options.strategies = {strategies::parse_strategy_spec("apccd:backend=opencl"), strategies::parse_strategy_spec("apccd+cubic64:backend=opencl")};
     if (zero) options.thicknesses = {0.0};
     options.out = cache_.path() / (zero ? "results-zero" : "results");
     std::ostringstream table;

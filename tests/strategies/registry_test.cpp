@@ -2,6 +2,7 @@
 // cell keys made from them.
 
 #include "strategies/narrowphase/registry.hpp"
+#include "ccd/config.hpp"
 #include "harness/cell_store.hpp"
 #include "strategies/registry.hpp"
 #include "tests/support/test_support.hpp"
@@ -97,6 +98,47 @@ TEST(Registry, DeviceKeysNeedTheOpenClBackend) {
     EXPECT_NE(message.find("needs backend=opencl"), std::string::npos) << spec << ": " << message;
   }
   EXPECT_THROW(make_strategy("brute:backend=opencl"), std::invalid_argument);
+}
+
+// A run plans and keeps its cells by the name the strategy will have, without making it (registry.hpp's resolved_name,
+// from each entry's resolve): it must be the made strategy's name, for every strategy, backend and narrow phase (the
+// cell's first pass checks it too, and ends the run where they differ).
+TEST(Registry, TheResolvedNameIsTheMadeStrategysName) {
+  std::vector<std::string> specs = {"full",
+                                    "full+cubic64:eta=0.125",
+                                    "full+cubic32",
+                                    "full:filter=on",
+                                    "full+advancement:max_iterations=7",
+                                    "brute",
+                                    "brute+cubic64",
+                                    "apccd",
+                                    "apccd:skip=off:nf_max=5:history=step",
+                                    "apccd+cubic32:object_pairs=session"};
+  if (CCDBENCH_WITH_FCL) specs.insert(specs.end(), {"fcl", "fcl:bv=obbrss", "fcl-bvh+cubic64:bv=kdop24"});
+  if (CCDBENCH_WITH_OPENCL) {
+    specs.insert(specs.end(), {"full:backend=opencl", "full+cubic64:backend=opencl:list_start=64", "full:backend=opencl:filter=on:sub_boxes=16",
+                               "apccd:backend=opencl:device_iterations=9", "apccd+cubic64:backend=opencl"});
+  }
+  for (const std::string& text : specs) {
+    const strategies::StrategySpec spec = strategies::parse_strategy_spec(text);
+    EXPECT_EQ(strategies::resolved_name(spec), make_strategy(spec)->name()) << text;
+    EXPECT_EQ(spec.text, text);
+    EXPECT_EQ(spec.entry->name, strategies::strategy_names_of(text).name);
+  }
+}
+
+// validate says what making the strategy would refuse, making nothing.
+TEST(Registry, ValidateRefusesWhatMakingWouldRefuse) {
+  std::vector<std::string> specs = {"full:device=0", "apccd:nf_min=5:nf_max=2", "full:sub_boxes=8", "nosuch", "full+nosuch", "fcl+cubic64",
+                                    "full:nosuch=1"};
+  if (CCDBENCH_WITH_OPENCL) specs.insert(specs.end(), {"full+advancement:backend=opencl", "full:backend=opencl:device=999"});
+  for (const std::string& text : specs) {
+    const std::string by_make = testing::error_message<std::invalid_argument>([&] { make_strategy(text); });
+    const std::string by_validate =
+        testing::error_message<std::invalid_argument>([&] { strategies::validate(strategies::parse_strategy_spec(text)); });
+    EXPECT_FALSE(by_make.empty()) << text;
+    EXPECT_EQ(by_validate, by_make) << text;
+  }
 }
 
 }  // namespace

@@ -35,6 +35,7 @@
 #include "strategies/elementary_tests.hpp"
 #include "strategies/face_shape.hpp"
 #include "strategies/object_hierarchies.hpp"
+#include "strategies/opencl/full_opencl.hpp"
 #include "strategies/strategy_entry.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -305,6 +306,16 @@ std::vector<StrategyEntry> apccd_entries() {
     const BackendChoice backend = read_backend(request.keys);
     if (backend.opencl()) return make_apccd_opencl(settings, std::move(request.narrow_phase), backend);
     return std::make_unique<Apccd>(settings, std::move(request.narrow_phase));
+  };
+  apccd.check = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow) {
+    read_apccd_settings(keys);
+    const BackendChoice backend = read_backend(keys);
+    if (backend.opencl()) opencl_device_name("apccd", backend, narrow, true);
+  };
+  apccd.resolve = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow) {
+    const BackendChoice backend = read_backend(keys);
+    const std::string name = apccd_name(read_apccd_settings(keys), narrow.name);
+    return backend.opencl() ? name + backend.resolved(opencl_device_name("apccd", backend, narrow, true), narrow.conservative) : name;
   };
   return {std::move(apccd)};
 }
