@@ -87,6 +87,8 @@ auto guarded(Call call) {
     return arena.execute(call);
   } catch (const ccd::InputError& error) {
     throw std::invalid_argument(error.what());
+  } catch (const ccd::plugin::HostMethodInterrupted& interrupted) {
+    throw MethodInterrupted(interrupted.message);
   }
 }
 
@@ -173,6 +175,7 @@ Score score_of(const ccd::harness::QueryScore& s) {
   score.ns_per_query = s.ns_per_query;
   score.toi_checked = s.toi_checked;
   score.toi_late = s.toi_late;
+  score.changed_between_passes = s.changed_between_passes;
   if (s.with_toi && s.toi_checked > 0) {
     std::vector<double> errors = s.toi_errors;
     std::sort(errors.begin(), errors.end());
@@ -266,7 +269,11 @@ void register_method(const std::string& name, Method method, std::size_t batch) 
         MethodBatch asked{pairs.vertex_face ? PairKind::vertex_face : PairKind::edge_edge, reinterpret_cast<const Rows*>(pairs.rows), pairs.count,
                           pairs.thickness};
         MethodAnswers given;
-        method(asked, given);
+        try {
+          method(asked, given);
+        } catch (const MethodInterrupted& interrupted) {
+          throw ccd::plugin::HostMethodInterrupted{interrupted.what()};
+        }
         answers.hits = std::move(given.hits);
         answers.tois = std::move(given.tois);
         answers.errors = std::move(given.errors);
@@ -371,7 +378,8 @@ Scene load_scene(const std::string& path) {
 Scene generate_scene(const std::string& name, const std::map<std::string, double>& parameters) {
   return guarded([&] {
     const ccd::datasets::SceneParameters given(parameters.begin(), parameters.end());
-    return detail::SceneAccess::load(ccd::datasets::generate_cached_scene(name, given).scene_file, name);
+    // Absolute: a relative CCDBENCH_CACHE_DIR must not move with the working directory.
+    return detail::SceneAccess::load(std::filesystem::absolute(ccd::datasets::generate_cached_scene(name, given).scene_file), name);
   });
 }
 

@@ -1,6 +1,7 @@
 #include "harness/commands.hpp"
 
 #include "core/error.hpp"
+#include "core/number_text.hpp"
 #include "datasets/atomic_file.hpp"
 #include "datasets/content_hash.hpp"
 #include "datasets/procedural_scenes.hpp"
@@ -537,15 +538,10 @@ int run_generate(const GenerateOptions& options, std::ostream& out) {
   for (const std::string& setting : options.settings) {
     const auto equals = setting.find('=');
     if (equals == std::string::npos) throw std::invalid_argument("--set takes NAME=VALUE, got '" + setting + "'");
-    std::size_t used = 0;
     const std::string value = setting.substr(equals + 1);
-    double number = 0;
-    try {
-      number = std::stod(value, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != value.size()) {
+    const std::optional<double> parsed = parse_double(value);
+    double number = parsed.value_or(0.0);
+    if (!parsed) {
       const std::string name = setting.substr(0, equals);
       const auto choice = datasets::scene_parameter_choice(options.name, name, value);
       if (!choice) {

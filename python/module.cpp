@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -80,12 +81,19 @@ void read_python_answer(const py::object& returned, std::size_t count, ccdbench:
     hits = pair[0];
     tois = pair[1];
   }
+  // Only booleans, integers and IEEE doubles (or narrower floats) are read, each exactly as a double: strings,
+  // complex numbers, masked arrays and long doubles are errors, not answers after a conversion that changes them.
   auto column = [&](const py::object& value, const char* what) {
-    auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
-    if (!array || array.ndim() != 1 || static_cast<std::size_t>(array.shape(0)) != count) {
-      throw std::runtime_error(std::string("its ") + what + " are not an array of shape (" + std::to_string(count) + ",)");
+    const py::module_ numpy = py::module_::import("numpy");
+    if (py::isinstance(value, numpy.attr("ma").attr("MaskedArray"))) throw std::runtime_error(std::string("its ") + what + " are a masked array");
+    const py::array given = numpy.attr("asarray")(value);
+    const char kind = given.dtype().kind();
+    const bool allowed = kind == 'b' || kind == 'i' || kind == 'u' || (kind == 'f' && given.dtype().itemsize() <= 8);
+    if (!allowed || given.ndim() != 1 || static_cast<std::size_t>(given.shape(0)) != count) {
+      throw std::runtime_error(std::string("its ") + what + " are not an array of shape (" + std::to_string(count) +
+                               ",) of booleans, integers or doubles");
     }
-    return array;
+    return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(given);
   };
   const auto hit_values = column(hits, "hits");
   answers.hits.resize(count);
@@ -104,16 +112,64 @@ void read_python_answer(const py::object& returned, std::size_t count, ccdbench:
   }
 }
 
+/// A Python callable held by C++ code that may drop it without the GIL (a cell ends inside a call that released
+/// it): its reference is given back with the GIL held.
+struct PythonCallable {
+  explicit PythonCallable(py::function f) : function(std::move(f)) {}
+  PythonCallable(const PythonCallable&) = delete;
+  PythonCallable& operator=(const PythonCallable&) = delete;
+  ~PythonCallable() {
+    py::gil_scoped_acquire gil;
+    function = py::function();
+  }
+  py::function function;
+};
+
+/// The exception that ended a call (KeyboardInterrupt, SystemExit: not an Exception), raised again where the call
+/// returns to Python. Read and written with the GIL held.
+std::optional<py::error_already_set>& interruption() {
+  static std::optional<py::error_already_set> pending;
+  return pending;
+}
+
+/// Re-raises the interruption a Python method made, at the call that ran it.
+[[noreturn]] void raise_interruption(const ccdbench::MethodInterrupted& interrupted) {
+  if (interruption()) {
+    py::error_already_set error = std::move(*interruption());
+    interruption().reset();
+    throw error;
+  }
+  throw std::runtime_error(interrupted.what());
+}
+
+/// Runs `call` with the GIL released; a Python method's interruption is raised again here.
+template <class Call>
+auto without_gil(Call call) {
+  try {
+    py::gil_scoped_release released;
+    return call();
+  } catch (const ccdbench::MethodInterrupted& interrupted) {
+    raise_interruption(interrupted);
+  }
+}
+
 /// Registers a Python callable f(kind, q, delta) as callable:NAME.
 void register_python_method(const std::string& name, py::function f, std::size_t batch) {
+  auto held = std::make_shared<PythonCallable>(std::move(f));
   ccdbench::register_method(
       name,
-      [f = std::move(f)](const ccdbench::MethodBatch& asked, ccdbench::MethodAnswers& answers) {
+      [held](const ccdbench::MethodBatch& asked, ccdbench::MethodAnswers& answers) {
         py::gil_scoped_acquire gil;
         try {
-          py::object returned = f(kind_name(asked.kind), rows_array(asked.rows, asked.count), asked.thickness);
+          py::object returned = held->function(kind_name(asked.kind), rows_array(asked.rows, asked.count), asked.thickness);
           read_python_answer(returned, asked.count, answers);
         } catch (py::error_already_set& error) {
+          if (!error.matches(PyExc_Exception)) {
+            // KeyboardInterrupt, SystemExit, GeneratorExit: the user's, never the batch's error. The call ends here.
+            const std::string message = error.what();
+            interruption() = std::move(error);
+            throw ccdbench::MethodInterrupted(message.substr(0, message.find('\n')));
+          }
           // The Python exception, as its type and message, is the batch's error.
           const std::string message = error.what();
           throw std::runtime_error(message.substr(0, message.find('\n')));
@@ -139,12 +195,7 @@ PYBIND11_MODULE(_ccdbench, m) {
         const auto* rows = reinterpret_cast<const ccdbench::Rows*>(array.data());
         const auto count = static_cast<std::size_t>(array.shape(0));
         const ccdbench::PairKind k = pair_kind(kind);
-        std::vector<ccdbench::ExactAnswer> answers;
-        {
-          py::gil_scoped_release released;
-          answers = ccdbench::exact_oracle(k, rows, count, delta, toi);
-        }
-        return answers_dict(answers);
+        return answers_dict(without_gil([&] { return ccdbench::exact_oracle(k, rows, count, delta, toi); }));
       },
       py::arg("kind"), py::arg("queries"), py::arg("delta") = 0.0, py::arg("toi") = true);
 
@@ -197,11 +248,7 @@ PYBIND11_MODULE(_ccdbench, m) {
   });
 
   m.def("score_queries", [](const std::vector<std::string>& paths, const std::vector<std::string>& methods, double delta, bool toi, int repeats) {
-    std::vector<ccdbench::Score> scores;
-    {
-      py::gil_scoped_release released;
-      scores = ccdbench::score_queries(paths, methods, delta, toi, repeats);
-    }
+    const std::vector<ccdbench::Score> scores = without_gil([&] { return ccdbench::score_queries(paths, methods, delta, toi, repeats); });
     py::list rows;
     auto optional = [](const auto& value) -> py::object { return value ? py::cast(*value) : py::none(); };
     for (const ccdbench::Score& s : scores) {
@@ -221,6 +268,7 @@ PYBIND11_MODULE(_ccdbench, m) {
       row["toi_error_max"] = optional(s.toi_error_max);
       row["toi_error_median"] = optional(s.toi_error_median);
       row["toi_error_p99"] = optional(s.toi_error_p99);
+      row["changed_between_passes"] = s.changed_between_passes;
       rows.append(row);
     }
     return rows;
@@ -278,11 +326,7 @@ PYBIND11_MODULE(_ccdbench, m) {
           request.repeats = repeats;
           request.max_steps = max_steps;
           request.out = out;
-          std::vector<ccdbench::CellSummary> cells;
-          {
-            py::gil_scoped_release released;
-            cells = ccdbench::run(request);
-          }
+          const std::vector<ccdbench::CellSummary> cells = without_gil([&] { return ccdbench::run(request); });
           std::vector<std::string> records;
           for (const ccdbench::CellSummary& cell : cells) records.push_back(cell.json);
           return records;

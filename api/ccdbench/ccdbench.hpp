@@ -25,6 +25,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -113,6 +114,8 @@ struct Score {
   /// With toi: TOIs compared with the exact earliest contact, those later than it, and the error's statistics.
   std::size_t toi_checked = 0, toi_late = 0;
   std::optional<double> toi_error_max, toi_error_median, toi_error_p99;
+  /// With repeats > 1: queries whose answer (outcome, TOI bits, or whether it was an error) differed between passes.
+  std::size_t changed_between_passes = 0;
 };
 
 /// Scores methods (narrow phases by spec: "conservative", "cubic64:eta=1e-6", "exact", "plugin:PATH", answer files
@@ -125,10 +128,11 @@ CCDBENCH_API std::vector<Score> score_queries(const std::vector<std::string>& pa
 /// run's strategy (`full+callable:NAME`: full's broad phase gives it each step's candidate pairs, of one kind per
 /// call). It is asked from one thread at a time, in batches, and gets a copy of the pairs' rows. It answers
 /// per pair: hits 1 (contact) or 0 (apart); TOIs for every pair (NaN on a contact is an error) or none at all (a
-/// method without TOIs); an error message (or none). A throw, answers of another size, a TOI outside [0, 1] or a
-/// change of the floating-point environment is an error of the pairs it concerns, counted apart, never an answer (a
-/// batch that throws is asked again one pair at a time). Its cells are never kept for a later run (its code has
-/// no digest). A crash or a hang inside it is the calling process's.
+/// method without TOIs: its first answer decides, and a later batch that differs is an error); an error message (or
+/// none). A throw, answers of another size, a TOI outside [0, 1], or a change of the floating-point environment, the
+/// working directory or the C locale (put back) is an error of the pairs it concerns, counted apart, never an answer
+/// (a batch that throws is asked again one pair at a time). MethodInterrupted ends the call instead. Its cells are
+/// never kept for a later run (its code has no digest). A crash or a hang inside it is the calling process's.
 struct MethodBatch {
   PairKind kind = PairKind::vertex_face;
   const Rows* rows = nullptr;
@@ -141,6 +145,12 @@ struct MethodAnswers {
   std::vector<std::string> errors;
 };
 using Method = std::function<void(const MethodBatch&, MethodAnswers&)>;
+
+/// Thrown by a Method to end the call that runs it (a user's interrupt) instead of failing its batch; the call
+/// (score_queries, run) then throws it to its caller, the cells finished before kept.
+struct MethodInterrupted : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 /// Registers `method` as `callable:NAME` until unregister_method(NAME); `batch`: pairs asked at a time (0: a whole
 /// step's pairs of one kind, or a whole query file, in one call). @throws std::invalid_argument for a name that is

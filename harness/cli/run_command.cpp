@@ -1,4 +1,5 @@
 // ccdbench run: strategies over every step of the scenes, verified, timed, recorded (harness/run.hpp).
+#include "core/number_text.hpp"
 #include "datasets/scene_file.hpp"
 #include "harness/cli/cli.hpp"
 #include "harness/run.hpp"
@@ -101,14 +102,8 @@ int add_thicknesses(RunCommandOptions& o) {
       o.run.thicknesses.emplace_back(std::nullopt);
       continue;
     }
-    std::size_t used = 0;
-    double thickness = -1;
-    try {
-      thickness = std::stod(value, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != value.size() || !(thickness >= 0) || !std::isfinite(thickness)) {
+    const double thickness = parse_double(value).value_or(-1.0);
+    if (!(thickness >= 0) || !std::isfinite(thickness)) {
       return refuse("--thickness " + value, "must be `scene` or a finite number >= 0");
     }
     o.run.thicknesses.emplace_back(thickness);

@@ -1,5 +1,6 @@
 #include "ccd/config.hpp"
 #include "core/error.hpp"
+#include "core/number_text.hpp"
 #include "harness/run.hpp"
 
 #include <nlohmann/json.hpp>
@@ -271,7 +272,9 @@ BaselineMargin BaselineMargin::parse(const std::string& text) {
   std::size_t used = 0;
   try {
     if (percent) {
-      margin.percent = std::stod(number, &used);
+      const std::optional<double> parsed = parse_double(number);
+      used = parsed ? number.size() : 0;
+      margin.percent = parsed.value_or(0.0);
     } else if (!number.empty() && number[0] != '-' && number[0] != '+') {
       margin.count = std::stoull(number, &used);
     }

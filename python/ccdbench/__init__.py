@@ -6,10 +6,13 @@ f2_t0, v_t1, f0_t1, f1_t1, f2_t1; edge-edge: ea0_t0, ea1_t0, eb0_t0, eb1_t0, the
 in [0, 1]. Kinds are "vertex-face" and "edge-edge" ("vf", "ee").
 
 A Python method is a callable f(kind, q, delta) -> hits or (hits, tois): q is a read-only (N, 8, 3) copy; hits an
-array of N booleans (or 0/1); tois N floats in [0, 1] (for the pairs reported). It is audited as a plugin is: an
-exception, None, a wrong shape, a hit that is neither 0 nor 1, a NaN or out-of-range TOI on a hit, or a change of
-the floating-point environment is an error of the queries it concerns (a batch that fails is asked again one query
-at a time), counted apart, never an answer. Bad input raises ValueError with ccdbench's FILE:WHERE: REASON text.
+array of N booleans (or 0/1 integers or doubles); tois N doubles in [0, 1] (for the pairs reported), given with every
+answer or with none (its first answer decides). It is audited as a plugin is: an exception, None, a wrong shape or
+type, a hit that is neither 0 nor 1, a NaN or out-of-range TOI on a hit, TOIs given in one batch and not in another,
+or a change of the floating-point environment, the working directory or the C locale (each put back) is an error of
+the queries it concerns (a batch that fails is asked again one query at a time), counted apart, never an answer.
+KeyboardInterrupt and SystemExit are not errors: they end the call and are raised again from it. Bad input raises
+ValueError with ccdbench's FILE:WHERE: REASON text.
 
 Everything returned is plain Python (dicts, lists, numbers, numpy arrays): json and pandas take it as it is.
 """
@@ -79,42 +82,64 @@ def write_queries(path, queries=None, labels=None, rationals=None):
     _ccdbench.write_query_file(str(path), rationals, labels)
 
 
-def _method_name(f, given, taken):
-    """callable:NAME's NAME: the one given, else the callable's __name__ (a second one of the same name in one call
-    gets -2, ...): stable from run to run, so a baseline entry names it."""
-    base = re.sub(r"[^A-Za-z0-9_.-]", "_", given or getattr(f, "__name__", "method")) or "method"
-    name, k = base, 2
-    while name in taken:
-        name, k = f"{base}-{k}", k + 1
-    taken.add(name)
-    return name
+_NAME = re.compile(r"[A-Za-z0-9_.-]+")
 
 
 class _Registered:
     """Registers the callables among `specs` for the length of a call: a callable, or (name, callable), becomes
-    callable:NAME (with `head` before it: "full+callable:NAME" in a run)."""
+    callable:NAME (with `head` before it: "full+callable:NAME" in a run). A name given is the method's name in every
+    result and baseline entry: it must be a valid name, given once, and is never changed; a callable's own __name__
+    is made valid and, where taken, numbered (-2, -3, ...) after every given name is reserved."""
 
     def __init__(self, specs, batch, head=""):
+        if not isinstance(batch, int) or isinstance(batch, bool) or batch < 0:
+            raise ValueError(f"batch must be an integer >= 0 (0: a whole step or file at a time), not {batch!r}")
         self.given, self.batch, self.head, self.names = list(specs), batch, head, []
 
+    def _parts(self):
+        """(strategy head, given name or None, callable) per callable, None per spec."""
+        parts = []
+        for spec in self.given:
+            if isinstance(spec, str):
+                parts.append(None)
+                continue
+            strategy, name, f = self.head, None, spec
+            if isinstance(spec, tuple) and len(spec) == 2:
+                name, f = spec
+                if not isinstance(name, str):
+                    raise ValueError(f"a method's name must be a string, not {name!r}")
+                if self.head and name in _ccdbench.strategy_names():
+                    strategy, name = name + "+", None  # (strategy, callable): its broad phase, the callable after it
+            if not callable(f):
+                raise ValueError(f"a method is a spec, a callable, or (name, callable): {spec!r}")
+            parts.append((strategy, name, f))
+        return parts
+
     def __enter__(self):
-        specs, taken = [], set()
+        parts = self._parts()
+        given = [p[1] for p in parts if p and p[1] is not None]
+        for name in given:
+            if not _NAME.fullmatch(name):
+                raise ValueError(f"method name {name!r}: use letters, digits, '_', '.' and '-' only (it is part of a spec)")
+            if given.count(name) > 1:
+                raise ValueError(f"method name {name!r} is given to two callables")
+        taken, specs = set(given), []
         try:
-            for spec in self.given:
-                if isinstance(spec, str):
+            for spec, part in zip(self.given, parts):
+                if part is None:
                     specs.append(spec)
                     continue
-                strategy, name, f = self.head, None, spec
-                if isinstance(spec, tuple) and len(spec) == 2 and isinstance(spec[0], str):
-                    name, f = spec
-                    if self.head and name in _ccdbench.strategy_names():
-                        strategy, name = name + "+", None  # (strategy, callable): its broad phase, the callable after it
-                if not callable(f):
-                    raise ValueError(f"a method is a spec, a callable, or (name, callable): {spec!r}")
-                registered = _method_name(f, name, taken)
-                _ccdbench.register_method(registered, f, self.batch)
-                self.names.append(registered)
-                specs.append(f"{strategy}callable:{registered}")
+                strategy, name, f = part
+                if name is None:
+                    own = getattr(f, "__name__", "method")
+                    base = re.sub(r"[^A-Za-z0-9_.-]", "_", own if isinstance(own, str) else "method") or "method"
+                    name, k = base, 2
+                    while name in taken:
+                        name, k = f"{base}-{k}", k + 1
+                    taken.add(name)
+                _ccdbench.register_method(name, f, self.batch)
+                self.names.append(name)
+                specs.append(f"{strategy}callable:{name}")
         except BaseException:
             self.__exit__()
             raise
@@ -138,7 +163,7 @@ def score(paths, methods, delta=0.0, toi=False, repeats=1, batch=10000):
     (name, callable)."""
     if isinstance(paths, (str, bytes)) or not hasattr(paths, "__iter__"):
         paths = [paths]
-    with _Registered(methods, int(batch)) as specs:
+    with _Registered(methods, batch) as specs:
         return _ccdbench.score_queries([str(p) for p in paths], specs, float(delta), bool(toi), int(repeats))
 
 

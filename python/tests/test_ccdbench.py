@@ -2,6 +2,9 @@
 run as strategies exactly as ccdbench's own, and the callable treated as untrusted code."""
 
 import ctypes
+import itertools
+import locale
+import os
 from fractions import Fraction
 import json
 import pathlib
@@ -258,3 +261,104 @@ def test_installed_it_imports_as_the_readme_says(build_dir, tmp_path):
     assert printed.returncode == 0, printed.stderr
     version, where = printed.stdout.split()
     assert version == ccdbench.__version__ and where.startswith(str(tmp_path))
+
+
+# What an adversarial review found (each failed before its fix): a callable's change of the process is its error and
+# is put back, TOIs cannot be left out where they would be late, names given are kept or refused, answers of other
+# types are errors, nondeterminism is counted, and a user's interrupt ends the call.
+
+
+def changes_directory(kind, q, delta):
+    os.chdir("/")
+    return np.zeros(len(q), dtype=bool)
+
+
+def changes_locale(kind, q, delta):
+    locale.setlocale(locale.LC_ALL, "C.UTF-8")
+    return np.zeros(len(q), dtype=bool)
+
+
+@pytest.mark.parametrize("method", [changes_directory, changes_locale])
+def test_a_change_of_the_process_is_put_back_and_is_the_calls_error(extremes, method):
+    cwd, before = os.getcwd(), locale.setlocale(locale.LC_ALL)
+    if method is changes_locale and before == "C.UTF-8":
+        locale.setlocale(locale.LC_ALL, "C")
+        before = locale.setlocale(locale.LC_ALL)
+    clean = [s for s in ccdbench.score(extremes, ["conservative"]) if s["file"] == "(all)"][0]
+    scores = [s for s in ccdbench.score(extremes, [method, "conservative"]) if s["file"] == "(all)"]
+    assert scores[0]["errors"] == scores[0]["queries"]
+    assert scores[1]["false_negatives"] == clean["false_negatives"] and scores[1]["reported"] == clean["reported"]
+    assert os.getcwd() == cwd and locale.setlocale(locale.LC_ALL) == before
+
+
+def hides_late_tois(kind, q, delta):
+    """TOIs one ulp late, left out of every batch that has a hit: its late TOIs would go uncounted."""
+    hits, tois = late(kind, q, delta)
+    return hits if hits.any() else (hits, tois)
+
+
+def test_tois_left_out_where_they_would_be_late_are_errors(extremes):
+    (total,) = [s for s in ccdbench.score(extremes, [hides_late_tois], toi=True, batch=1) if s["file"] == "(all)"]
+    # Its first answer decides: with TOIs (no hit), every hit after it, without, is an error; without (a hit),
+    # every answer after it that comes with TOIs is.
+    assert total["errors"] > 0 and total["errors"] in (total["positives"], total["queries"] - total["positives"])
+
+
+def test_names_given_are_kept_or_refused(tmp_path):
+    def x(kind, q, delta):
+        return np.zeros(len(q), dtype=bool)
+
+    def y(kind, q, delta):
+        return np.zeros(len(q), dtype=bool)
+
+    y.__name__ = "x"
+    scene = ccdbench.generate_scene("fold")
+    results = ccdbench.run(scene, [x, y, ("x-2", x)], max_steps=1, out=tmp_path / "out")
+    assert [r["spec"] for r in results] == ["full+callable:x", "full+callable:x-3", "full+callable:x-2"]
+    for bad in [[("a:b", x)], [("same", x), ("same", y)], [(3, x)]]:
+        with pytest.raises(ValueError):
+            ccdbench.score([], bad)
+    with pytest.raises(ValueError):
+        ccdbench.score([], [x], batch=-1)
+
+
+def complex_hits(kind, q, delta):
+    return np.zeros(len(q)) + 0j
+
+
+def string_hits(kind, q, delta):
+    return np.array(["0"] * len(q))
+
+
+def masked_hits(kind, q, delta):
+    return np.ma.masked_all(len(q), dtype=bool)
+
+
+@pytest.mark.parametrize("method", [complex_hits, string_hits, masked_hits])
+def test_answers_of_other_types_are_errors(extremes, method):
+    (total,) = [s for s in ccdbench.score(extremes, [method]) if s["file"] == "(all)"]
+    assert total["errors"] == total["queries"]
+
+
+def test_answers_that_change_between_passes_are_counted(extremes):
+    calls = itertools.count()
+
+    def flips(kind, q, delta):
+        return np.full(len(q), next(calls) % 2 == 0)
+
+    (total,) = [s for s in ccdbench.score(extremes, [flips], repeats=2) if s["file"] == "(all)"]
+    assert total["changed_between_passes"] == total["queries"]
+
+
+@pytest.mark.parametrize("interrupt", [KeyboardInterrupt, SystemExit])
+def test_a_users_interrupt_ends_the_call(extremes, interrupt, tmp_path):
+    def stops(kind, q, delta):
+        raise interrupt()
+
+    with pytest.raises(interrupt):
+        ccdbench.score(extremes, ["conservative", stops])
+    with pytest.raises(interrupt):
+        ccdbench.run(ccdbench.generate_scene("fold"), ["full", stops], max_steps=2, out=tmp_path / "out")
+    # Nothing is left registered: the same name is free again.
+    (total,) = [s for s in ccdbench.score(extremes, [("stops", never)]) if s["file"] == "(all)"]
+    assert total["errors"] == 0

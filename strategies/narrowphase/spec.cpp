@@ -1,5 +1,7 @@
 #include "strategies/narrowphase/spec.hpp"
 
+#include "core/number_text.hpp"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -114,15 +116,9 @@ std::string format_spec_number(double value) {
 }
 
 double parse_spec_number(const std::string& owner, const std::string& key, const std::string& value, SpecRange range) {
-  std::size_t used = 0;
-  double number = 0;
-  try {
-    number = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != value.size() || !std::isfinite(number) || number < range.minimum || number > range.maximum ||
-      (range.integer && number != std::floor(number))) {
+  const std::optional<double> parsed = parse_double(value);
+  const double number = parsed.value_or(0.0);
+  if (!parsed || !std::isfinite(number) || number < range.minimum || number > range.maximum || (range.integer && number != std::floor(number))) {
     std::ostringstream message;
     message << owner << ": " << key << "=" << value << " must be " << (range.integer ? "an integer" : "a number") << " in ["
             << format_spec_number(range.minimum) << ", " << format_spec_number(range.maximum) << "]";

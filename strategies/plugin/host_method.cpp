@@ -5,8 +5,11 @@
 #include "strategies/plugin/plugin_narrow_phase.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <clocale>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
@@ -19,7 +22,49 @@ namespace {
 struct RegisteredMethod {
   HostMethod method;
   HostMethodSettings settings;
-  narrowphase::NarrowPhaseEntry entry;
+  /// Whether its answers carry TOIs, as its first answered batch said (-1: not yet): a method reports TOIs for every
+  /// answer or for none, as a plugin declares once, so that it cannot leave them out where they would be late.
+  mutable std::atomic<int> reports_toi{-1};
+
+  std::string tois_as_before(bool with_tois) const {
+    int expected = -1;
+    if (reports_toi.compare_exchange_strong(expected, with_tois ? 1 : 0) || expected == (with_tois ? 1 : 0)) return {};
+    return with_tois ? "it answered with TOIs after answering without" : "it answered without TOIs after answering with them";
+  }
+};
+
+/// The process state a method of the calling program can change and must not: the floating-point environment, the
+/// working directory, the C locale.
+struct CallerState {
+  FpEnvironment environment;
+  std::string directory, locale;
+
+  static CallerState current() {
+    CallerState state{FpEnvironment::current(), working_directory(), {}};
+    if (const char* locale = std::setlocale(LC_ALL, nullptr)) state.locale = locale;
+    return state;
+  }
+  static std::string working_directory() {
+    std::error_code error;
+    return std::filesystem::current_path(error).string();
+  }
+  void restore() const {
+    environment.install();
+    std::error_code error;
+    if (working_directory() != directory) std::filesystem::current_path(directory, error);
+    if (const char* now = std::setlocale(LC_ALL, nullptr); now == nullptr || now != locale) std::setlocale(LC_ALL, locale.c_str());
+  }
+  /// What changed since this state was taken, in words ("" when nothing did), each change put back.
+  std::string changes_undone() const {
+    const CallerState after = current();
+    std::string changed;
+    if (after.environment != environment) changed = "it changed the floating-point environment: " + describe_change(environment, after.environment);
+    if (after.directory != directory)
+      changed += (changed.empty() ? "" : "; ") + std::string("it changed the working directory to ") + after.directory;
+    if (after.locale != locale) changed += (changed.empty() ? "" : "; ") + std::string("it changed the C locale to ") + after.locale;
+    if (!changed.empty()) restore();
+    return changed;
+  }
 };
 
 std::mutex& host_methods_mutex() {
@@ -27,8 +72,16 @@ std::mutex& host_methods_mutex() {
   return mutex;
 }
 
-std::map<std::string, std::shared_ptr<const RegisteredMethod>>& host_methods() {
-  static std::map<std::string, std::shared_ptr<const RegisteredMethod>> methods;
+/// A registered method, and its registry entry. Entries are never freed: a spec parsed while the method was
+/// registered keeps pointing at it (making it after unregister_host_method says the method is gone); the method itself
+/// (the caller's code, a Python callable) is freed when unregistered and no strategy made from it still runs.
+struct Registration {
+  std::shared_ptr<const RegisteredMethod> method;
+  const narrowphase::NarrowPhaseEntry* entry;
+};
+
+std::map<std::string, Registration>& host_methods() {
+  static std::map<std::string, Registration> methods;
   return methods;
 }
 
@@ -88,22 +141,26 @@ class HostNarrowPhase final : public narrowphase::NarrowPhase {
     }
     const HostBatch batch{pairs.front().vertex_face, rows.data(), pairs.size(), pairs.front().thickness};
     HostAnswers answers;
-    const FpEnvironment before = FpEnvironment::current();
+    const CallerState before = CallerState::current();
     std::string failure;
     try {
       method_->method(batch, answers);
     } catch (const std::exception& error) {
       failure = error.what();
+    } catch (const HostMethodInterrupted&) {
+      before.restore();
+      throw;  // the user's interrupt: it ends the call that runs the method, never an answer
     } catch (...) {
       failure = "an exception that is not a std::exception";
     }
-    const FpEnvironment after = FpEnvironment::current();
-    if (after != before) {
-      before.install();
-      failure = "it changed the floating-point environment: " + describe_change(before, after);
+    // What it changed of the process is put back and is its error: arithmetic, where relative paths lead, how
+    // numbers are read and printed.
+    if (const std::string changed = before.changes_undone(); !changed.empty()) {
+      failure = changed;
     } else if (failure.empty()) {
       failure = wrong_size(answers, pairs.size());
     }
+    if (failure.empty()) failure = method_->tois_as_before(!answers.tois.empty());
     if (!failure.empty() && pairs.size() > 1) {
       // Asked again one pair at a time: the error lands on the pair that causes it.
       for (std::size_t i = 0; i < pairs.size(); ++i) ask(pairs.subspan(i, 1), results.subspan(i, 1));
@@ -151,7 +208,8 @@ void register_host_method(const std::string& name, HostMethod method, HostMethod
   auto registered = std::make_shared<RegisteredMethod>();
   registered->method = std::move(method);
   registered->settings = std::move(settings);
-  narrowphase::NarrowPhaseEntry& entry = registered->entry;
+  auto entry_made = std::make_unique<narrowphase::NarrowPhaseEntry>();
+  narrowphase::NarrowPhaseEntry& entry = *entry_made;
   entry.name = head(name);
   entry.help = registered->settings.help;
   entry.keys = {narrowphase::KeySpec::choice("errors", {"miss", "hit"}, "miss",
@@ -163,13 +221,20 @@ void register_host_method(const std::string& name, HostMethod method, HostMethod
     return std::make_unique<HostNarrowPhase>(full, std::move(alive), keys.choice("errors") == "hit");
   };
   entry.resolve = [full = head(name)](const narrowphase::SpecReader& keys) { return full + ":errors=" + keys.choice("errors"); };
+  static std::vector<std::unique_ptr<const narrowphase::NarrowPhaseEntry>> entries;  // never freed (Registration)
   std::lock_guard lock(host_methods_mutex());
-  if (!host_methods().emplace(name, std::move(registered)).second) throw std::invalid_argument("a method named '" + name + "' is registered already");
+  if (host_methods().count(name) != 0) throw std::invalid_argument("a method named '" + name + "' is registered already");
+  entries.push_back(std::move(entry_made));
+  host_methods().emplace(name, Registration{std::move(registered), entries.back().get()});
 }
 
 void unregister_host_method(const std::string& name) {
+  std::shared_ptr<const RegisteredMethod> last;  // freed outside the lock (a Python callable's release may run Python)
   std::lock_guard lock(host_methods_mutex());
-  host_methods().erase(name);
+  const auto it = host_methods().find(name);
+  if (it == host_methods().end()) return;
+  last = std::move(it->second.method);
+  host_methods().erase(it);
 }
 
 bool names_host_method(const std::string& name) { return name.rfind(std::string(kCallableHead) + ":", 0) == 0; }
@@ -179,7 +244,7 @@ const narrowphase::NarrowPhaseEntry& host_method_entry(const std::string& name) 
   std::lock_guard lock(host_methods_mutex());
   const auto it = host_methods().find(short_name);
   if (it == host_methods().end()) throw std::invalid_argument("no method named '" + short_name + "' is registered (" + name + ")");
-  return it->second->entry;
+  return *it->second.entry;
 }
 
 }  // namespace ccd::plugin

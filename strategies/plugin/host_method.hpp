@@ -6,7 +6,9 @@
 /// in batches from one thread, it gets a copy of the pairs' rows, and an exception, an answer of the wrong size, a
 /// TOI that is not a number in [0, 1] or a change of the floating-point environment is an error of the pairs it
 /// concerns, counted apart (a batch that throws is asked again one pair at a time, so the error lands on its pair).
-/// It runs in the caller's process: a crash or a hang inside it is the caller's, as with `isolate=off`.
+/// What it changes of the process (the floating-point environment, the working directory, the C locale) is put back
+/// and is the call's error. It runs in the caller's process: a crash or a hang inside it is the caller's, as with
+/// `isolate=off`; its answers can change between passes, which the cell's audit pass reports as a plugin's.
 
 #include "strategies/narrowphase/entry.hpp"
 #include "strategies/narrowphase/spec.hpp"
@@ -37,8 +39,14 @@ struct HostAnswers {
   std::vector<std::string> errors;
 };
 
-/// Throws to say the whole batch got no answer (the message says why).
+/// Throws a std::exception to say the whole batch got no answer (the message says why), or HostMethodInterrupted.
 using HostMethod = std::function<void(const HostBatch&, HostAnswers&)>;
+
+/// Thrown by a method to end the call that runs it (the user's interrupt: Python's KeyboardInterrupt, SystemExit):
+/// not a std::exception, so no one counts it as the pairs' error; the C++ API turns it into its MethodInterrupted.
+struct HostMethodInterrupted {
+  std::string message;
+};
 
 struct HostMethodSettings {
   /// Pairs asked at a time; 0: every pair of a step (of one kind) or of a file in one call.
