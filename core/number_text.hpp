@@ -14,7 +14,7 @@ namespace ccd {
 /// The whole of `text` as a double (decimal or scientific, an optional leading '+' or '-', "inf" and "nan" as
 /// std::from_chars reads them), or nullopt when it is not one or is out of the range of double.
 inline std::optional<double> parse_double(std::string_view text) {
-  if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+  if (text.size() > 1 && text.front() == '+' && text[1] != '-' && text[1] != '+') text.remove_prefix(1);
   double value = 0;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value, std::chars_format::general);
   if (error != std::errc() || end != text.data() + text.size() || text.empty()) return std::nullopt;

@@ -160,7 +160,10 @@ class HostNarrowPhase final : public narrowphase::NarrowPhase {
     } else if (failure.empty()) {
       failure = wrong_size(answers, pairs.size());
     }
-    if (failure.empty()) failure = method_->tois_as_before(!answers.tois.empty());
+    // Only a batch with an answer in it says whether the method gives TOIs (one whose every pair is its error does not).
+    const bool answered =
+        answers.errors.empty() || std::any_of(answers.errors.begin(), answers.errors.end(), [](const std::string& e) { return e.empty(); });
+    if (failure.empty() && answered) failure = method_->tois_as_before(!answers.tois.empty());
     if (!failure.empty() && pairs.size() > 1) {
       // Asked again one pair at a time: the error lands on the pair that causes it.
       for (std::size_t i = 0; i < pairs.size(); ++i) ask(pairs.subspan(i, 1), results.subspan(i, 1));

@@ -220,6 +220,10 @@ strategies::StrategyEntry whole_step_entry(const std::string& name) {
   entry.resolve = [&description](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase&) {
     return resolved_name(description, plugin_values(keys, description), read_host_settings(keys, description));
   };
+  // Its digest and ccdbench's own keys, checked without loading it (a stale digest= is refused before any work).
+  entry.check = [&description](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase&) {
+    read_host_settings(keys, description);
+  };
   entry.check_scene = [name](const narrowphase::SpecReader&, const Scene& scene) { refuse_plugin_shapes(name, scene); };
   return entry;
 }

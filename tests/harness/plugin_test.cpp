@@ -142,6 +142,19 @@ TEST_F(Plugins, BothFormsJudgedAlikeWithTheirCellsResumedAndGated) {
   }
 }
 
+// A spec whose digest= names other code is refused before any work, in both forms (the spec is checked without
+// loading the plugin: its digest comes from the description).
+TEST_F(Plugins, AStaleDigestIsRefusedBeforeAnyWork) {
+  for (const std::string prefix : {"", "full+"}) {
+    const std::string spec = prefix + "plugin:" + plugin("my_ccd") + ":digest=00000000000000000000000000000000";
+    const auto refused = run_ccdbench("run --scene " + quoted(fold()) + " --strategy '" + spec + "' --out " + quoted(dir_ / "stale"));
+    EXPECT_EQ(refused.exit_code, 2) << refused.output;
+    EXPECT_NE(refused.output.find("--strategy " + spec + ": plugin"), std::string::npos) << refused.output;
+    EXPECT_NE(refused.output.find("its code changed"), std::string::npos) << refused.output;
+    EXPECT_EQ(refused.output.find("truth of step"), std::string::npos) << refused.output;
+  }
+}
+
 TEST_F(Plugins, AtZeroThicknessTheTemplateMissesAndTheGateFails) {
   const std::string p = "plugin:" + plugin("my_ccd");
   const auto [run, summaries] = with_json("run --scene " + quoted(fold()) + " --thickness 0 --strategy " + p + " --out " + quoted(dir_ / "out"));
