@@ -196,30 +196,52 @@ Score score_of(const ccd::harness::QueryScore& s) {
 
 Version version() { return {CCDBENCH_API_VERSION_MAJOR, CCDBENCH_API_VERSION_MINOR, CCDBENCH_API_VERSION_PATCH}; }
 
-ExactAnswer exact_oracle(PairKind kind, const Rows& rows, double thickness, bool want_toi) {
+namespace {
+
+/// The reference on a pair of doubles (each the rational it is), in the caller's guarded environment.
+ExactAnswer decide_doubles(PairKind kind, const Rows& rows, double thickness, bool want_toi) {
+  std::array<ccd::Vec3, 8> points;
+  for (std::size_t r = 0; r < 8; ++r) points[r] = ccd::Vec3(rows[r][0], rows[r][1], rows[r][2]);
+  return answer_of(ccd::reference::decide(reference_kind(kind), points, thickness, decision_request(want_toi)));
+}
+
+/// A pair's rationals read; a malformed one is refused naming `where` ("PATH: query Q ") and its row and coordinate.
+ccd::reference::ExactPair exact_pair(PairKind kind, const RationalRows& rows, const std::string& where) {
+  ccd::reference::ExactPair pair;
+  pair.kind = reference_kind(kind);
+  for (std::size_t r = 0; r < 8; ++r) {
+    for (std::size_t k = 0; k < 3; ++k)
+      pair.rows[r][k] = rational(rows[r][k], where + "row " + std::to_string(r) + " coordinate " + std::to_string(k));
+  }
+  return pair;
+}
+
+mpq_class rational_thickness(const std::string& thickness) {
+  const mpq_class delta = rational(thickness, "thickness");
+  if (delta < 0) throw std::invalid_argument("thickness must be >= 0");
+  return delta;
+}
+
+void require_thickness(double thickness) {
   if (!std::isfinite(thickness) || thickness < 0) throw std::invalid_argument("thickness must be a finite number >= 0");
-  return guarded([&] {
-    std::array<ccd::Vec3, 8> points;
-    for (std::size_t r = 0; r < 8; ++r) points[r] = ccd::Vec3(rows[r][0], rows[r][1], rows[r][2]);
-    return answer_of(ccd::reference::decide(reference_kind(kind), points, thickness, decision_request(want_toi)));
-  });
+}
+
+}  // namespace
+
+ExactAnswer exact_oracle(PairKind kind, const Rows& rows, double thickness, bool want_toi) {
+  require_thickness(thickness);
+  return guarded([&] { return decide_doubles(kind, rows, thickness, want_toi); });
 }
 
 ExactAnswer exact_oracle(PairKind kind, const RationalRows& rows, const std::string& thickness, bool want_toi) {
   return guarded([&] {
-    ccd::reference::ExactPair pair;
-    pair.kind = reference_kind(kind);
-    for (std::size_t r = 0; r < 8; ++r) {
-      for (std::size_t k = 0; k < 3; ++k) pair.rows[r][k] = rational(rows[r][k], "row " + std::to_string(r) + " coordinate " + std::to_string(k));
-    }
-    const mpq_class delta = rational(thickness, "thickness");
-    if (delta < 0) throw std::invalid_argument("thickness must be >= 0");
-    return answer_of(ccd::reference::decide(pair, delta, decision_request(want_toi)));
+    const ccd::reference::ExactPair pair = exact_pair(kind, rows, "");
+    return answer_of(ccd::reference::decide(pair, rational_thickness(thickness), decision_request(want_toi)));
   });
 }
 
 std::vector<ExactAnswer> exact_oracle(PairKind kind, const Rows* rows, std::size_t count, double thickness, bool want_toi) {
-  if (!std::isfinite(thickness) || thickness < 0) throw std::invalid_argument("thickness must be a finite number >= 0");
+  require_thickness(thickness);
   for (std::size_t i = 0; i < count; ++i) {
     for (const Point& point : rows[i]) {
       for (double coordinate : point) {
@@ -229,29 +251,19 @@ std::vector<ExactAnswer> exact_oracle(PairKind kind, const Rows* rows, std::size
   }
   return guarded([&] {
     std::vector<ExactAnswer> answers(count);
-    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
-      std::array<ccd::Vec3, 8> points;
-      for (std::size_t r = 0; r < 8; ++r) points[r] = ccd::Vec3(rows[i][r][0], rows[i][r][1], rows[i][r][2]);
-      answers[i] = answer_of(ccd::reference::decide(reference_kind(kind), points, thickness, decision_request(want_toi)));
-    });
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) { answers[i] = decide_doubles(kind, rows[i], thickness, want_toi); });
     return answers;
   });
 }
 
 std::vector<ExactAnswer> exact_oracle(const QueryFile& file, const std::string& thickness, bool want_toi) {
   return guarded([&] {
-    const mpq_class delta = rational(thickness, "thickness");
-    if (delta < 0) throw std::invalid_argument("thickness must be >= 0");
+    const mpq_class delta = rational_thickness(thickness);
     // Every rational read first (a malformed one is refused before any work), then decided on every core.
-    std::vector<ccd::reference::ExactPair> pairs(file.exact.size());
-    for (std::size_t q = 0; q < pairs.size(); ++q) {
-      pairs[q].kind = reference_kind(file.kind);
-      for (std::size_t r = 0; r < 8; ++r) {
-        for (std::size_t k = 0; k < 3; ++k) {
-          pairs[q].rows[r][k] = rational(file.exact[q][r][k], file.path + ": query " + std::to_string(q) + " row " + std::to_string(r));
-        }
-      }
-    }
+    std::vector<ccd::reference::ExactPair> pairs;
+    pairs.reserve(file.exact.size());
+    for (std::size_t q = 0; q < file.exact.size(); ++q)
+      pairs.push_back(exact_pair(file.kind, file.exact[q], file.path + ": query " + std::to_string(q) + " "));
     std::vector<ExactAnswer> answers(pairs.size());
     tbb::parallel_for(std::size_t{0}, pairs.size(),
                       [&](std::size_t q) { answers[q] = answer_of(ccd::reference::decide(pairs[q], delta, decision_request(want_toi))); });
@@ -327,7 +339,7 @@ void write_query_file(const std::string& path, const QueryFile& file) {
 
 std::vector<Score> score_queries(const std::vector<std::string>& paths, const std::vector<std::string>& methods, double thickness, bool toi,
                                  int repeats) {
-  if (!std::isfinite(thickness) || thickness < 0) throw std::invalid_argument("thickness must be a finite number >= 0");
+  require_thickness(thickness);
   if (repeats < 1) throw std::invalid_argument("repeats must be at least 1");
   return guarded([&] {
     for (const std::string& method : methods) {

@@ -139,25 +139,31 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
       }
     });
   };
+  // Every candidate's elementary pairs from every thread, less those the separation filter (when `filter`) proves apart.
+  auto gather = [&](bool filter) {
+    visit_candidates([&](Local& local, const auto& pair) {
+      constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
+      if (filter && provably_apart(pair_rows(topology, x0, x1, pair), vertex_face, thickness)) {
+        ++local.filtered;
+      } else {
+        list_of<vertex_face>(local.kept).push_back(pair);
+      }
+    });
+    TestedPairs kept;
+    for (Local& local : locals) {
+      kept.vertex_face.insert(kept.vertex_face.end(), local.kept.vertex_face.begin(), local.kept.vertex_face.end());
+      kept.edge_edge.insert(kept.edge_edge.end(), local.kept.edge_edge.begin(), local.kept.edge_edge.end());
+      local.kept = {};
+    }
+    return kept;
+  };
   if (narrow_phase.prefers_batches()) {
     // A narrow phase that answers batches far cheaper than single pairs (an isolated plugin: one round trip to its
     // process per batch): every pair gathered (and filtered), then asked in batches from this thread, in order.
     TestedPairs kept;
     {
       ScopedStageTimer timer(stages, separation_filter ? "distance heuristic" : "gather pairs");
-      visit_candidates([&](Local& local, const auto& pair) {
-        constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
-        if (separation_filter && provably_apart(pair_rows(topology, x0, x1, pair), vertex_face, thickness)) {
-          ++local.filtered;
-        } else {
-          list_of<vertex_face>(local.kept).push_back(pair);
-        }
-      });
-      for (Local& local : locals) {
-        kept.vertex_face.insert(kept.vertex_face.end(), local.kept.vertex_face.begin(), local.kept.vertex_face.end());
-        kept.edge_edge.insert(kept.edge_edge.end(), local.kept.edge_edge.begin(), local.kept.edge_edge.end());
-        local.kept = {};
-      }
+      kept = gather(separation_filter);
       // In pair order, whatever thread found each: the plugin is asked the same questions in the same order on every
       // run and thread count (a plugin that counts its calls answers alike).
       tbb::parallel_sort(kept.vertex_face.begin(), kept.vertex_face.end());
@@ -195,19 +201,7 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     TestedPairs kept;
     {
       ScopedStageTimer timer(stages, "distance heuristic");
-      visit_candidates([&](Local& local, const auto& pair) {
-        constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
-        if (provably_apart(pair_rows(topology, x0, x1, pair), vertex_face, thickness)) {
-          ++local.filtered;
-        } else {
-          list_of<vertex_face>(local.kept).push_back(pair);
-        }
-      });
-      for (Local& local : locals) {
-        kept.vertex_face.insert(kept.vertex_face.end(), local.kept.vertex_face.begin(), local.kept.vertex_face.end());
-        kept.edge_edge.insert(kept.edge_edge.end(), local.kept.edge_edge.begin(), local.kept.edge_edge.end());
-        local.kept = {};
-      }
+      kept = gather(true);
     }
     ScopedStageTimer timer(stages, narrow_stage);
     auto test_all = [&](const auto& pairs) {

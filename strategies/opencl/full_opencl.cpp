@@ -109,21 +109,13 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
 std::string opencl_device_name(const std::string& strategy, const BackendChoice& backend, const narrowphase::ResolvedNarrowPhase& narrow,
                                bool int64_atomics) {
   if (!narrow.on_device) opencl::refuse_host_narrow_phase(strategy, narrow.name);
-  const opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), backend.device);
-  opencl::require_double_precision(device);
-  if (int64_atomics && !device.int64_atomics) {
-    throw std::invalid_argument(strategy + ":backend=opencl: device " + std::to_string(device.index) + " (" + device.name +
-                                ") has no 64-bit atomics (cl_khr_int64_base_atomics), which apccd's pending list needs; "
-                                "full:backend=opencl runs there");
-  }
-  return device.name;
+  return opencl::choose_checked_device(strategy, backend.device, int64_atomics).name;
 }
 
 std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase, const BackendChoice& backend,
                                            bool separation_filter) {
   opencl::NarrowPhaseChoice narrow = opencl::choose_narrow_phase("full", std::move(narrow_phase));
-  opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), backend.device);
-  opencl::require_double_precision(device);
+  opencl::DeviceInfo device = opencl::choose_checked_device("full", backend.device, false);
   return std::make_unique<FullOpenCl>(std::move(narrow), std::move(device), backend, separation_filter);
 }
 
@@ -135,17 +127,19 @@ std::vector<OpenClDeviceSummary> opencl_devices() {
       "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }
 
-std::string opencl_device_name(const std::string&, const BackendChoice&, const narrowphase::ResolvedNarrowPhase&, bool) {
+namespace {
+
+[[noreturn]] void refuse_without_opencl() {
   throw std::invalid_argument(
       "backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
       "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
 }
 
-std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const BackendChoice&, bool) {
-  throw std::invalid_argument(
-      "backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
-      "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
-}
+}  // namespace
+
+std::string opencl_device_name(const std::string&, const BackendChoice&, const narrowphase::ResolvedNarrowPhase&, bool) { refuse_without_opencl(); }
+
+std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const BackendChoice&, bool) { refuse_without_opencl(); }
 
 #endif
 

@@ -54,6 +54,17 @@ EdgeEdgePair edge_pair(const cl_uint4& p) { return {Edge{p.s[0], p.s[1]}, Edge{p
 
 }  // namespace
 
+DeviceInfo choose_checked_device(const std::string& strategy, const std::string& selector, bool int64_atomics) {
+  DeviceInfo device = choose_device(list_devices(), selector);
+  require_double_precision(device);
+  if (int64_atomics && !device.int64_atomics) {
+    throw std::invalid_argument(strategy + ":backend=opencl: device " + std::to_string(device.index) + " (" + device.name +
+                                ") has no 64-bit atomics (cl_khr_int64_base_atomics), which apccd's pending list needs; "
+                                "full:backend=opencl runs there");
+  }
+  return device;
+}
+
 void refuse_host_narrow_phase(const std::string& strategy, const std::string& name) {
   std::string runs;
   for (const narrowphase::NarrowPhaseEntry& entry : narrowphase::narrow_phases()) {

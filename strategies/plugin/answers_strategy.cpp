@@ -131,12 +131,7 @@ CollisionSet read_step_file(const std::filesystem::path& path, const std::string
   return set;
 }
 
-void refuse_answer_shapes(const std::string& name, const Scene& scene) {
-  if (!scene.shape_objects().empty()) {
-    throw std::invalid_argument(name + ": answer files name no analytic shapes; scene object '" + scene.object(scene.shape_objects().front()).name +
-                                "' is one");
-  }
-}
+void refuse_answer_shapes(const std::string& name, const Scene& scene) { refuse_shapes(name, scene, "answer files name no analytic shapes"); }
 
 void refuse_other_digest(const std::filesystem::path& folder, const std::string& given, const std::string& digest) {
   if (!given.empty() && given != digest) {

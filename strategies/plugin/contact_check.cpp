@@ -6,6 +6,12 @@
 
 namespace ccd::plugin {
 
+void refuse_shapes(const std::string& name, const Scene& scene, const std::string& why) {
+  if (!scene.shape_objects().empty()) {
+    throw std::invalid_argument(name + ": " + why + "; scene object '" + scene.object(scene.shape_objects().front()).name + "' is one");
+  }
+}
+
 void ContactCheck::reset() {
   vertex_face_.clear();
   edge_edge_.clear();

@@ -15,6 +15,10 @@
 
 namespace ccd::plugin {
 
+/// Contacts made outside ccdbench name mesh primitives only: `name` cannot run a scene with analytic shapes.
+/// @throws std::invalid_argument "NAME: WHY; scene object 'X' is one" when `scene` has one.
+void refuse_shapes(const std::string& name, const Scene& scene, const std::string& why);
+
 class ContactCheck {
  public:
   /// What a contact's TOI may be: required (a plugin that reports TOIs), optional (an answer file: NaN is "none"),

@@ -47,12 +47,7 @@ struct Reported {
   std::vector<EdgeEdge> edge_edge;
 };
 
-void refuse_plugin_shapes(const std::string& name, const Scene& scene) {
-  if (!scene.shape_objects().empty()) {
-    throw std::invalid_argument(name + ": the plugin ABI has no analytic shapes; scene object '" + scene.object(scene.shape_objects().front()).name +
-                                "' is one");
-  }
-}
+void refuse_plugin_shapes(const std::string& name, const Scene& scene) { refuse_shapes(name, scene, "the plugin ABI has no analytic shapes"); }
 
 class WholeStepPlugin final : public strategies::Strategy {
  public:

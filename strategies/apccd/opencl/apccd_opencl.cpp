@@ -382,13 +382,7 @@ class ApccdOpenCl final : public Strategy {
 std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings& settings, std::unique_ptr<narrowphase::NarrowPhase> narrow_phase,
                                             const BackendChoice& backend) {
   opencl::NarrowPhaseChoice narrow = opencl::choose_narrow_phase("apccd", std::move(narrow_phase));
-  opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), backend.device);
-  opencl::require_double_precision(device);
-  if (!device.int64_atomics) {
-    throw std::invalid_argument("apccd:backend=opencl: device " + std::to_string(device.index) + " (" + device.name +
-                                ") has no 64-bit atomics (cl_khr_int64_base_atomics), which apccd's pending list needs; "
-                                "full:backend=opencl runs there");
-  }
+  opencl::DeviceInfo device = opencl::choose_checked_device("apccd", backend.device, true);
   return std::make_unique<ApccdOpenCl>(settings, std::move(narrow), std::move(device), backend);
 }
 
