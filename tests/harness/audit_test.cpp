@@ -18,6 +18,7 @@
 namespace ccd {
 namespace {
 
+using testing::cell_of;
 using testing::quoted;
 using testing::read_json;
 using testing::run_ccdbench;
@@ -34,16 +35,7 @@ class Audit : public ::testing::Test {
   void SetUp() override { ::setenv("CCDBENCH_CACHE_DIR", (dir_ / "cache").c_str(), 1); }
   void TearDown() override { ::unsetenv("CCDBENCH_CACHE_DIR"); }
 
-  std::filesystem::path fold() {
-    const std::filesystem::path folder = dir_ / "fold8";
-    if (!std::filesystem::exists(folder)) {
-      datasets::SceneParameters parameters;
-      parameters["resolution"] = 8;
-      parameters["frames"] = 8;
-      datasets::generate_procedural_scene({"fold", parameters, folder, {}, {}});
-    }
-    return folder;
-  }
+  std::filesystem::path fold() { return testing::small_fold(dir_ / "fold8"); }
 
   /// The extremes suite's zero-motion family as query files (labelled), written by ccdbench into `folder`.
   std::filesystem::path queries(const std::string& folder) {
@@ -55,18 +47,7 @@ class Audit : public ::testing::Test {
   }
 
   std::pair<testing::CommandResult, nlohmann::json> with_json(const std::string& arguments) {
-    const std::filesystem::path json = dir_ / "out.json";
-    std::filesystem::remove(json);
-    testing::CommandResult result = run_ccdbench(arguments + " --json " + quoted(json));
-    return {result, std::filesystem::exists(json) ? read_json(json) : nlohmann::json()};
-  }
-
-  static nlohmann::json cell_of(const nlohmann::json& summaries, const std::string& spec) {
-    for (const nlohmann::json& s : summaries) {
-      if (s.value("spec", "") == spec) return s;
-    }
-    ADD_FAILURE() << "no cell for " << spec;
-    return {};
+    return testing::run_ccdbench_with_json(arguments, dir_ / "out.json");
   }
 
   testing::TempDir dir_;

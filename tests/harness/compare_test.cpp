@@ -330,10 +330,7 @@ class GateRoundTrip : public ::testing::Test {
 };
 
 TEST_F(GateRoundTrip, WrittenBaselinePassesAndARebuildMissingOneMorePairFailsIt) {
-  datasets::SceneParameters parameters;
-  parameters["resolution"] = 8;
-  parameters["frames"] = 8;
-  datasets::generate_procedural_scene({"fold", parameters, dir_ / "fold8", {}, {}});
+  testing::small_fold(dir_ / "fold8");
   const auto base = run("my_ccd", "base");
   ASSERT_EQ(base.exit_code, 0) << base.output;
   const std::uint64_t base_missed = cell("base")["missed"];
@@ -398,10 +395,7 @@ TEST_F(GateRoundTrip, WrittenBaselinePassesAndARebuildMissingOneMorePairFailsIt)
 // examples/ci/regression.sh as a user's CI runs it, its builds given (the template, and the rebuild that drops one
 // query in 50 as the head): the baseline written, then the gate failing the head and the comparison naming it.
 TEST_F(GateRoundTrip, TheCiExampleScriptGatesTheHeadAndComparesItWithTheBase) {
-  datasets::SceneParameters parameters;
-  parameters["resolution"] = 8;
-  parameters["frames"] = 8;
-  datasets::generate_procedural_scene({"fold", parameters, dir_ / "fold8", {}, {}});
+  testing::small_fold(dir_ / "fold8");
   const std::filesystem::path plugins(CCDBENCH_PLUGIN_DIR);
   std::filesystem::create_directories(dir_ / "head-build");
   std::filesystem::copy_file(plugins / "libregressed_ccd.so", dir_ / "head-build" / "libmy_ccd.so");

@@ -15,6 +15,7 @@
 namespace ccd {
 namespace {
 
+using testing::cell_of;
 using testing::quoted;
 using testing::read_json;
 using testing::run_ccdbench;
@@ -28,16 +29,7 @@ class Plugins : public ::testing::Test {
   void TearDown() override { ::unsetenv("CCDBENCH_CACHE_DIR"); }
 
   /// The kinematic fold (106 triangles), generated into FOLDER with its frames: the plugin tests' scene.
-  std::filesystem::path fold(std::size_t frames = 8) {
-    const std::filesystem::path folder = dir_ / ("fold" + std::to_string(frames));
-    if (!std::filesystem::exists(folder)) {
-      datasets::SceneParameters parameters;
-      parameters["resolution"] = 8;
-      parameters["frames"] = static_cast<double>(frames);
-      datasets::generate_procedural_scene({"fold", parameters, folder, {}, {}});
-    }
-    return folder;
-  }
+  std::filesystem::path fold(std::size_t frames = 8) { return testing::small_fold(dir_ / ("fold" + std::to_string(frames)), frames); }
 
   /// The first `count` queries of a public edge-edge file, with their labels.
   std::filesystem::path query_file(const std::filesystem::path& data, std::size_t count) {
@@ -50,10 +42,7 @@ class Plugins : public ::testing::Test {
 
   /// `ccdbench ARGUMENTS --json FILE`: exit status, output and the JSON it wrote.
   std::pair<testing::CommandResult, nlohmann::json> with_json(const std::string& arguments) {
-    const std::filesystem::path json = dir_ / "out.json";
-    std::filesystem::remove(json);
-    testing::CommandResult result = run_ccdbench(arguments + " --json " + quoted(json));
-    return {result, std::filesystem::exists(json) ? read_json(json) : nlohmann::json()};
+    return testing::run_ccdbench_with_json(arguments, dir_ / "out.json");
   }
 
   /// The score of `method_head` (its resolved name's start) on file "(all)".
@@ -62,15 +51,6 @@ class Plugins : public ::testing::Test {
       if (s["file"] == "(all)" && s["method"].get<std::string>().rfind(method_head, 0) == 0) return s;
     }
     ADD_FAILURE() << "no total for " << method_head << " in " << scores.dump();
-    return {};
-  }
-
-  /// The summary whose spec (as given) is `spec`.
-  static nlohmann::json cell_of(const nlohmann::json& summaries, const std::string& spec) {
-    for (const nlohmann::json& s : summaries) {
-      if (s.value("spec", "") == spec) return s;
-    }
-    ADD_FAILURE() << "no cell for " << spec;
     return {};
   }
 

@@ -28,6 +28,7 @@ extern char** environ;
 namespace ccd {
 namespace {
 
+using testing::cell_of;
 using testing::quoted;
 using testing::read_json;
 using testing::run_ccdbench;
@@ -72,16 +73,7 @@ class Boundary : public ::testing::Test {
   void SetUp() override { cache_.emplace("CCDBENCH_CACHE_DIR", (dir_ / "cache").string()); }
 
   /// The kinematic fold at resolution 8 (106 triangles, contact at both δ), generated once per test.
-  std::filesystem::path fold() {
-    const std::filesystem::path folder = dir_ / "fold8";
-    if (!std::filesystem::exists(folder)) {
-      datasets::SceneParameters parameters;
-      parameters["resolution"] = 8;
-      parameters["frames"] = 8;
-      datasets::generate_procedural_scene({"fold", parameters, folder, {}, {}});
-    }
-    return folder;
-  }
+  std::filesystem::path fold() { return testing::small_fold(dir_ / "fold8"); }
 
   /// The extremes suite as query files with the reference's labels (subnormal, tiny and huge coordinates: where the
   /// floating-point environment matters), written by a process that loaded no plugin.
@@ -138,15 +130,6 @@ class Boundary : public ::testing::Test {
       answers[key.str()] = record["answers"].get<std::string>() + " colliding " + record["colliding"].dump();
     }
     return answers;
-  }
-
-  /// The summary whose spec (as given) is `spec`, at the scene's δ unless `thickness_from` says otherwise.
-  static nlohmann::json cell_of(const nlohmann::json& summaries, const std::string& spec) {
-    for (const nlohmann::json& s : summaries) {
-      if (s.value("spec", "") == spec) return s;
-    }
-    ADD_FAILURE() << "no cell for " << spec << " in " << summaries.dump().substr(0, 2000);
-    return {};
   }
 
   /// The lines of an answer file (--write-answers) of methods whose name starts with one of `heads`.

@@ -2,6 +2,7 @@
 /// @file
 /// Running the ccdbench executable from tests, as a user types it: exit status and everything it printed.
 
+#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <sys/wait.h>
@@ -10,6 +11,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace ccd::testing {
 
@@ -54,6 +57,22 @@ inline std::string quoted(const std::filesystem::path& path) {
   std::string text(1, '\'');
   text.append(path.string()).push_back('\'');
   return text;
+}
+
+/// `ccdbench ARGUMENTS --json JSON`: exit status, output and the JSON it wrote (null when it wrote none).
+inline std::pair<CommandResult, nlohmann::json> run_ccdbench_with_json(const std::string& arguments, const std::filesystem::path& json) {
+  std::filesystem::remove(json);
+  CommandResult result = run_ccdbench(arguments + " --json " + quoted(json));
+  return {result, std::filesystem::exists(json) ? read_json(json) : nlohmann::json()};
+}
+
+/// The summary whose spec (as given) is `spec`; a test failure, and null, when there is none.
+inline nlohmann::json cell_of(const nlohmann::json& summaries, const std::string& spec) {
+  for (const nlohmann::json& s : summaries) {
+    if (s.value("spec", "") == spec) return s;
+  }
+  ADD_FAILURE() << "no cell for " << spec << " in " << summaries.dump().substr(0, 2000);
+  return {};
 }
 
 }  // namespace ccd::testing

@@ -1,5 +1,7 @@
 #include "tests/support/test_support.hpp"
 
+#include "datasets/procedural_scenes.hpp"
+
 #include <cstdlib>
 #include <fstream>
 #include <stdexcept>
@@ -22,6 +24,16 @@ void write_text(const std::filesystem::path& path, const std::string& text) {
   std::filesystem::create_directories(path.parent_path());
   std::ofstream out(path, std::ios::binary);
   out << text;
+}
+
+std::filesystem::path small_fold(const std::filesystem::path& folder, std::size_t frames) {
+  if (!std::filesystem::exists(folder)) {
+    datasets::SceneParameters parameters;
+    parameters["resolution"] = 8;
+    parameters["frames"] = static_cast<double>(frames);
+    datasets::generate_procedural_scene({"fold", parameters, folder, {}, {}});
+  }
+  return folder;
 }
 
 std::vector<Face> grid_faces(std::size_t n) {

@@ -60,6 +60,10 @@ class TempDir {
 /// Writes `text` to `path` as it is (no newline added).
 void write_text(const std::filesystem::path& path, const std::string& text);
 
+/// The kinematic fold at resolution 8 (106 triangles, contact at both δ) with `frames` frames, generated into
+/// `folder` unless it is there already: the scene the plugin, audit and regression tests run.
+std::filesystem::path small_fold(const std::filesystem::path& folder, std::size_t frames = 8);
+
 /// An n x n vertex grid in the z = 0 plane, spacing 1, two triangles per cell: 2(n-1)^2 faces.
 std::vector<Face> grid_faces(std::size_t n);
 std::vector<Vec3> grid_positions(std::size_t n, double z = 0.0);
