@@ -416,7 +416,10 @@ std::vector<CellSummary> run(const RunRequest& request) {
       options.scenes.push_back({scene.label(), [file] { return ccd::datasets::load_scene_file(file); }});
     }
     if (options.scenes.empty()) throw std::invalid_argument("a run needs at least one scene");
-    for (const std::string& spec : request.strategies) options.strategies.push_back(ccd::strategies::parse_strategy_spec(spec));
+    for (const std::string& spec : request.strategies) {
+      options.strategies.push_back(ccd::strategies::parse_strategy_spec(spec));
+      ccd::strategies::validate(options.strategies.back());
+    }
     options.thicknesses = request.thicknesses;
     options.verify = request.verify;
     options.toi = request.toi;

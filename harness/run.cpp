@@ -390,10 +390,9 @@ void check_run_outputs(const RunOptions& options) {
 }
 
 std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
-  // Every output is checked before any work (a run must not compute for an hour and then fail to write), and before
-  // any plugin is loaded; then unknown names fail.
+  // Every output is checked before any work (a run must not compute for an hour and then fail to write). The specs
+  // were validated where they were parsed (the command line, the C++ API).
   check_run_outputs(options);
-  for (const strategies::StrategySpec& spec : options.strategies) strategies::validate(spec);
   Benchmark benchmark(options);
   if (rank_info().rank != 0) {
     distribute({}, benchmark.work(), {});

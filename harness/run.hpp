@@ -29,7 +29,8 @@ std::string scene_file_label(const std::filesystem::path& path);
 /// that cannot.
 void check_run_outputs(const RunOptions& options);
 
-/// Runs the cells, prints the table and writes the results. Returns the summaries (docs/DESIGN.md §5 fields).
+/// Runs the cells, prints the table and writes the results. Returns the summaries (docs/DESIGN.md §5 fields). Its
+/// strategies are validated specs (strategies::validate).
 std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostream& out);
 
 /// The CI gate (`ccdbench check`). The baseline is a JSON array of {scene, strategy, thickness, max_missed}

@@ -150,9 +150,7 @@ void validate(const StrategySpec& spec) {
 std::string resolved_name(const StrategySpec& spec) {
   const StrategyEntry& entry = available(spec);
   const narrowphase::SpecReader keys(entry.name, entry.keys, spec.own);
-  const narrowphase::ResolvedNarrowPhase narrow = narrow_of(spec);
-  if (entry.check) entry.check(keys, narrow);
-  return entry.resolve(keys, narrow);
+  return entry.resolve(keys, narrow_of(spec));
 }
 
 void check_scene(const StrategySpec& spec, const Scene& scene) {

@@ -55,7 +55,7 @@ StrategySpec parse_strategy_spec(const std::string& text);
 void validate(const StrategySpec& spec);
 
 /// The name a strategy made from `spec` would have (Strategy::name(), every default filled in): what a run plans,
-/// keys and keeps its cells by, without making the strategy. @throws std::invalid_argument as validate does.
+/// keys and keeps its cells by, without making the strategy. For a validated spec (its entry's check is not run again).
 std::string resolved_name(const StrategySpec& spec);
 
 /// Throws std::invalid_argument when the strategy cannot run `scene` (fcl at δ > 0), without making it.
