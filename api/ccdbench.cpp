@@ -11,6 +11,7 @@
 #include "datasets/scene_file.hpp"
 #include "harness/query_scoring.hpp"
 #include "harness/run.hpp"
+#include "harness/run/records.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/plugin/fp_environment.hpp"
 #include "strategies/plugin/host_method.hpp"
@@ -131,31 +132,32 @@ ccd::reference::DecisionRequest decision_request(bool want_toi) {
   return request;
 }
 
-std::optional<std::size_t> count_field(const json& s, const char* field) {
-  if (!s.contains(field) || !s[field].is_number_unsigned()) return std::nullopt;
-  return s[field].get<std::size_t>();
-}
-
-CellSummary cell_summary(const json& s) {
+/// The API's summary from the record's one reader (harness/run/records.hpp).
+CellSummary cell_summary(const json& record) {
+  const auto s = record.get<ccd::harness::CellSummary>();
   CellSummary cell;
-  cell.scene = s.at("scene").get<std::string>();
-  cell.strategy = s.at("strategy").get<std::string>();
-  cell.spec = s.value("spec", cell.strategy);
-  cell.thickness = s.at("thickness").get<double>();
-  cell.thickness_from_scene = s.value("thickness_from", "scene") == "scene";
-  cell.steps = s.value("steps", std::size_t{0});
-  cell.reported = s.value("reported", std::size_t{0});
-  cell.errors = s.value("errors", std::size_t{0});
-  cell.ms_per_step = s.value("ms_per_step", 0.0);
-  cell.colliding = count_field(s, "colliding");
-  cell.missed = count_field(s, "missed");
-  cell.missed_culled = count_field(s, "missed_culled");
-  cell.missed_tested = count_field(s, "missed_tested");
-  cell.false_alarms = count_field(s, "false_alarms");
-  cell.toi_late = count_field(s, "toi_late");
-  if (s.contains("toi_error_max") && s["toi_error_max"].is_number()) cell.toi_error_max = s["toi_error_max"].get<double>();
-  cell.nondeterministic = s.contains("nondeterministic_at_step");
-  cell.json = s.dump();
+  cell.scene = s.scene;
+  cell.strategy = s.strategy;
+  cell.spec = s.spec;
+  cell.thickness = s.thickness;
+  cell.thickness_from_scene = s.thickness_from == "scene";
+  cell.steps = s.steps;
+  cell.reported = s.reported;
+  cell.errors = s.errors;
+  cell.ms_per_step = s.ms_per_step;
+  if (s.verdict) {
+    cell.colliding = s.verdict->colliding;
+    cell.missed = s.verdict->missed;
+    cell.missed_culled = s.verdict->missed_culled;
+    cell.missed_tested = s.verdict->missed_tested;
+    cell.false_alarms = s.verdict->false_alarms;
+    if (s.verdict->toi) {
+      cell.toi_late = s.verdict->toi->late;
+      cell.toi_error_max = s.verdict->toi->error_max;
+    }
+  }
+  cell.nondeterministic = s.nondeterministic_at_step.has_value();
+  cell.json = record.dump();
   return cell;
 }
 

@@ -202,7 +202,9 @@ std::string Benchmark::work_on(const std::string& payload) {
     }
   }
   const CellProgress moved = [this](int pass, std::size_t step, const std::string& strategy) { cell_moved(pass, step, strategy); };
-  return run_cell(data, spec_named(task.at("spec")), options_, data.steps, task.at("file"), planner_ ? moved : CellProgress{}, task.at("strategy"))
+  // Sent to rank 0 as the cell file holds it (the records' one serializer, run/records.hpp).
+  return json(run_cell(data, spec_named(task.at("spec")), options_, data.steps, task.at("file"), planner_ ? moved : CellProgress{},
+                       task.at("strategy")))
       .dump();
 }
 
@@ -311,8 +313,9 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
     }
     return;
   }
-  result["key"] = item.key.to_json();
-  result["summary"]["key"] = result["key"];
+  CellRecord cell = result.get<CellRecord>();
+  cell.summary.key = item.key.to_json();
+  result = cell;
   write_cell(item.file, result);
   rebuild_results_log(options_.out, std::cerr);
   ++cells_done_;

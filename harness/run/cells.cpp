@@ -69,7 +69,7 @@ struct Passes {
   double unattributed_sum = 0;
   std::size_t unattributed_count = 0;
   std::string resolved;
-  json environment;
+  RecordEnvironment environment;
   std::optional<std::size_t> nondeterministic_step;
   double host_peak = 0;
   bool peak_of_cell = false;
@@ -94,7 +94,7 @@ void time_pass(const CellContext& cell, Passes& passes, int repeat, const CellPr
     throw std::runtime_error(cell.data.label + " / " + cell.spec.label + ": it was planned as " + planned_name + " and would run as " +
                              passes.resolved + ": its code or answers changed during the run; the cells finished before are kept");
   }
-  for (const auto& [name, value] : strategy->provenance()) passes.environment["provenance"][name] = value;
+  for (const auto& [name, value] : strategy->provenance()) passes.environment.provenance[name] = value;
   strategy->name_scene(cell.data.label);
   strategy->init(scene, cell.data.frames[0]);
   for (std::size_t k = 0; k < cell.steps; ++k) {
@@ -131,7 +131,7 @@ void time_pass(const CellContext& cell, Passes& passes, int repeat, const CellPr
 Passes time_passes(const CellContext& cell, const CellProgress& progress, const std::string& planned_name) {
   Passes passes;
   passes.step_ms.resize(cell.steps);
-  passes.environment = environment();
+  passes.environment = environment().get<RecordEnvironment>();
   // The host's peak over the cell's timed passes: the strategy's memory and the frames it is given (the truth and
   // verification come after).
   passes.peak_of_cell = reset_peak_resident();
@@ -223,73 +223,66 @@ struct Totals {
   std::vector<std::pair<std::string, std::pair<double, double>>> counters;
 };
 
-/// The verdict fields of step `k`'s record (with --verify exact), added to the totals.
-void add_step_verdict(const CellContext& cell, const Passes& passes, const Verdict& verdict, std::size_t k, json& record, Totals& totals) {
+/// Step `k`'s verdict (with --verify exact), added to the totals.
+StepVerdict step_verdict(const CellContext& cell, const Passes& passes, const Verdict& verdict, std::size_t k, Totals& totals) {
   const Scene& scene = cell.data.sequence.scene();
   const CollisionSet& truth = cell.data.truth[k];
-  record["colliding"] = truth.size();
+  StepVerdict v;
+  v.colliding = truth.size();
+  v.missed = verdict.missed;
+  v.missed_culled = verdict.culled;
+  v.missed_tested = verdict.tested;
+  v.false_alarms = verdict.false_alarms;
   if (!scene.shape_objects().empty()) {
-    record["colliding_face_shape"] = truth.face_shape().size();
-    record["missed_face_shape"] = verdict.missed_face_shape;
+    v.colliding_face_shape = truth.face_shape().size();
+    v.missed_face_shape = verdict.missed_face_shape;
   }
-  record["missed"] = verdict.missed;
   if (verdict.missed > 0 && cell.entry.judging == strategies::Judging::elementary_pairs) {
-    record["missed_pairs"] =
-        missed_pair_records(scene, cell.data.frames[k], cell.data.frames[k + 1], truth, passes.first[k].collisions, kKeptMissedPairs);
+    v.missed_pairs = missed_pair_records(scene, cell.data.frames[k], cell.data.frames[k + 1], truth, passes.first[k].collisions, kKeptMissedPairs);
   }
-  record["missed_culled"] = verdict.culled;
-  record["missed_tested"] = verdict.tested;
-  record["false_alarms"] = verdict.false_alarms;
-  if (cell.options.toi) {
-    record["toi_checked"] = verdict.toi.checked;
-    record["toi_late"] = verdict.toi.late;
-    record["toi_error_max"] = verdict.toi.error_max;
-  }
+  if (cell.options.toi) v.toi = StepVerdict::Toi{verdict.toi.checked, verdict.toi.late, verdict.toi.error_max};
   totals.colliding += truth.size();
   totals.colliding_face_shape += truth.face_shape().size();
   totals.missed_face_shape += verdict.missed_face_shape;
   totals.toi.add(verdict.toi);
+  return v;
 }
 
 /// Step `k`'s record (docs/DESIGN.md §5), its counts added to the totals.
-json step_record(const CellContext& cell, const Passes& passes, const Verdict& verdict, std::size_t k, Totals& totals) {
+StepRecord step_record(const CellContext& cell, const Passes& passes, const Verdict& verdict, std::size_t k, Totals& totals) {
   const strategies::StepResult& r = passes.first[k];
   const strategies::Judging judging = cell.entry.judging;
-  const double ms = median(passes.step_ms[k]);
-  totals.medians.push_back(ms);
-  json stages = json::object();
-  for (const auto& [stage, value] : r.stages.entries()) stages[stage] = value;
-  json record = {{"record", "step"},
-                 {"schema", kRecordSchema},
-                 {"scene", cell.data.label},
-                 {"thickness", cell.data.sequence.scene().thickness()},
-                 {"strategy", passes.resolved},
-                 {"step", k},
-                 {"ms", ms},
-                 {"ms_repeats", passes.step_ms[k]},
-                 {"stages", stages},
-                 {"candidate_pairs", r.counters.candidate_triangle_pairs},
-                 {"elementary_tests", r.counters.elementary_tests},
-                 {"kept_bytes", r.counters.kept_bytes},
-                 {"history_bytes", r.counters.history_bytes},
-                 {"device_bytes", r.counters.device_bytes},
-                 {"reported", reported_count(r, judging)}};
+  StepRecord record;
+  record.scene = cell.data.label;
+  record.thickness = cell.data.sequence.scene().thickness();
+  record.strategy = passes.resolved;
+  record.step = k;
+  record.ms = median(passes.step_ms[k]);
+  record.ms_repeats = passes.step_ms[k];
+  for (const auto& [stage, value] : r.stages.entries()) record.stages[stage] = value;
+  record.candidate_pairs = r.counters.candidate_triangle_pairs;
+  record.elementary_tests = r.counters.elementary_tests;
+  record.kept_bytes = r.counters.kept_bytes;
+  record.history_bytes = r.counters.history_bytes;
+  record.device_bytes = r.counters.device_bytes;
+  record.reported = reported_count(r, judging);
+  totals.medians.push_back(record.ms);
   // The digest of the answers (pairs and TOI bits), to compare two runs step by step; fcl's cells are judged by
   // triangle pairs and carry none.
-  if (judging == strategies::Judging::elementary_pairs) record["answers"] = passes.digests[k];
+  if (judging == strategies::Judging::elementary_pairs) record.answers = passes.digests[k];
   if (r.fault_count > 0) {
-    record["errors"] = r.fault_count;
-    record["error_first"] = r.faults.front().message;
+    record.errors = r.fault_count;
+    record.error_first = r.faults.front().message;
   }
+  record.counters = r.counters.extra;
   for (const auto& [name, value] : r.counters.extra) {
-    record[name] = value;
     auto it = std::find_if(totals.counters.begin(), totals.counters.end(), [&](const auto& total) { return total.first == name; });
     if (it == totals.counters.end()) it = totals.counters.insert(totals.counters.end(), {name, {0.0, value}});
     it->second.first += value;
     it->second.second = std::max(it->second.second, value);
   }
-  if (cell.options.verify) add_step_verdict(cell, passes, verdict, k, record, totals);
-  totals.reported += reported_count(r, judging);
+  if (cell.options.verify) record.verdict = step_verdict(cell, passes, verdict, k, totals);
+  totals.reported += record.reported;
   totals.missed += verdict.missed;
   totals.culled += verdict.culled;
   totals.tested += verdict.tested;
@@ -299,102 +292,105 @@ json step_record(const CellContext& cell, const Passes& passes, const Verdict& v
   totals.kept = std::max(totals.kept, static_cast<double>(r.counters.kept_bytes));
   totals.history = std::max(totals.history, static_cast<double>(r.counters.history_bytes));
   totals.device = std::max(totals.device, static_cast<double>(r.counters.device_bytes));
-  record.update(passes.environment);
+  record.environment = passes.environment;
   return record;
 }
 
 /// The summary's times: per step (median and mean), per stage, per pass, and the unattributed remainder.
-json time_fields(const CellContext& cell, const Passes& passes, const Totals& totals) {
+void add_times(const CellContext& cell, const Passes& passes, const Totals& totals, CellSummary& summary) {
   const double steps = static_cast<double>(std::max<std::size_t>(cell.steps, 1));
-  json stage_summary = json::object();
   // Mean per step too (a step without the stage adds 0): they add up to ms_per_step_mean, so a session's cheap
   // frames and its expensive start are both in them (apccd's medians show one or the other).
-  json stage_mean = json::object();
   const double timed_steps = steps * static_cast<double>(std::max(1, cell.options.repeats));
   for (const auto& [stage, values] : passes.stage_ms) {
-    stage_summary[stage] = median(values);
-    stage_mean[stage] = std::accumulate(values.begin(), values.end(), 0.0) / timed_steps;
+    summary.stage_ms[stage] = median(values);
+    summary.stage_ms_mean[stage] = std::accumulate(values.begin(), values.end(), 0.0) / timed_steps;
   }
   // Each timed pass's time over every step: what compare tests two runs' times with (a rank test over repeats).
-  std::vector<double> pass_ms(static_cast<std::size_t>(std::max(1, cell.options.repeats)), 0.0);
+  summary.ms_per_repeat.assign(static_cast<std::size_t>(std::max(1, cell.options.repeats)), 0.0);
   for (const std::vector<double>& repeats : passes.step_ms) {
-    for (std::size_t r = 0; r < repeats.size() && r < pass_ms.size(); ++r) pass_ms[r] += repeats[r];
+    for (std::size_t r = 0; r < repeats.size() && r < summary.ms_per_repeat.size(); ++r) summary.ms_per_repeat[r] += repeats[r];
   }
-  return {{"ms_per_step", median(totals.medians)},
-          {"ms_per_step_mean", std::accumulate(totals.medians.begin(), totals.medians.end(), 0.0) / steps},
-          {"ms_per_repeat", pass_ms},
-          {"stage_ms", stage_summary},
-          {"stage_ms_mean", stage_mean},
-          {"unattributed_ms_mean", passes.unattributed_count ? passes.unattributed_sum / static_cast<double>(passes.unattributed_count) : 0.0}};
+  summary.ms_per_step = median(totals.medians);
+  summary.ms_per_step_mean = std::accumulate(totals.medians.begin(), totals.medians.end(), 0.0) / steps;
+  summary.unattributed_ms_mean = passes.unattributed_count ? passes.unattributed_sum / static_cast<double>(passes.unattributed_count) : 0.0;
 }
 
 /// The summary's verdicts (with --verify exact): colliding, missed and why, false alarms, contact by objects, TOIs.
-json verdict_fields(const CellContext& cell, const Judgement& judgement, const Totals& totals) {
+CellVerdict cell_verdict(const CellContext& cell, const Judgement& judgement, const Totals& totals) {
   const Scene& scene = cell.data.sequence.scene();
-  json fields = {{"colliding", totals.colliding},       {"missed", totals.missed},
-                 {"missed_culled", totals.culled},      {"missed_tested", totals.tested},
-                 {"false_alarms", totals.false_alarms}, {"miss_causes", judgement.miss_causes}};
-  fields.update(contact_by_objects(scene, cell.data.truth, cell.steps));
-  if (!scene.shape_objects().empty())
-    fields.update(json{{"colliding_face_shape", totals.colliding_face_shape}, {"missed_face_shape", totals.missed_face_shape}});
+  CellVerdict v;
+  v.colliding = totals.colliding;
+  v.missed = totals.missed;
+  v.missed_culled = totals.culled;
+  v.missed_tested = totals.tested;
+  v.false_alarms = totals.false_alarms;
+  v.miss_causes = judgement.miss_causes;
+  const json contact = contact_by_objects(scene, cell.data.truth, cell.steps);
+  v.colliding_by_objects = contact.at("colliding_by_objects");
+  v.faces_in_contact_by_objects = contact.at("faces_in_contact_by_objects");
+  if (!scene.shape_objects().empty()) {
+    v.colliding_face_shape = totals.colliding_face_shape;
+    v.missed_face_shape = totals.missed_face_shape;
+  }
   if (cell.options.toi) {
     const ToiVerdict& toi = totals.toi;
-    fields.update(json{{"toi_checked", toi.checked},
-                       {"toi_late", toi.late},
-                       {"toi_missing", toi.missing},
-                       {"toi_error_max", toi.error_max},
-                       {"toi_error_mean", toi.checked ? toi.error_sum / static_cast<double>(toi.checked) : 0.0},
-                       {"toi_error_median", toi.errors.empty() ? json() : json(percentile(toi.errors, 50))},
-                       {"toi_error_p99", toi.errors.empty() ? json() : json(percentile(toi.errors, 99))}});
+    v.toi.emplace();
+    v.toi->checked = toi.checked;
+    v.toi->late = toi.late;
+    v.toi->missing = toi.missing;
+    v.toi->error_max = toi.error_max;
+    v.toi->error_mean = toi.checked ? toi.error_sum / static_cast<double>(toi.checked) : 0.0;
+    if (!toi.errors.empty()) {
+      v.toi->error_median = percentile(toi.errors, 50);
+      v.toi->error_p99 = percentile(toi.errors, 99);
+    }
   }
-  return fields;
+  return v;
 }
 
 /// The cell's summary (docs/DESIGN.md §5).
-json cell_summary(const CellContext& cell, const Passes& passes, const Judgement& judgement, const Totals& totals, const json& faults) {
+CellSummary cell_summary(const CellContext& cell, const Passes& passes, const Judgement& judgement, const Totals& totals, const json& faults) {
   const Scene& scene = cell.data.sequence.scene();
   const double steps = static_cast<double>(std::max<std::size_t>(cell.steps, 1));
-  json counter_summary = json::object();
-  for (const auto& [name, total] : totals.counters) counter_summary[name] = {{"mean", total.first / steps}, {"max", total.second}};
-  json summary = {{"record", "summary"},
-                  {"schema", kRecordSchema},
-                  {"scene", cell.data.label},
-                  {"strategy", passes.resolved},
-                  // The strategy as --strategy gave it, when the cell ran (run --json sets it to this run's): what
-                  // check and compare match a plugin's cell by, its resolved name holding absolute paths and digests.
-                  {"spec", cell.spec.text},
-                  {"triangles", scene.topology().num_faces()},
-                  {"vertices", scene.topology().num_vertices()},
-                  {"steps", cell.steps},
-                  {"thickness", scene.thickness()}};
-  summary.update(time_fields(cell, passes, totals));
-  summary.update(json{{"counters", counter_summary},
-                      {"candidate_pairs", totals.candidates / steps},
-                      {"elementary_tests", totals.tests / steps},
-                      {"kept_bytes", totals.kept},
-                      {"history_bytes", totals.history},
-                      {"device_bytes", totals.device},
-                      {"host_peak_bytes", passes.host_peak},
-                      {"host_peak_of", passes.peak_of_cell ? "cell" : "process"},
-                      {"reported", totals.reported},
-                      {"judged_by", cell.entry.judging == strategies::Judging::triangle_pairs ? "triangle pairs" : "elementary pairs"},
-                      {"thickness_from", cell.data.thickness_from},
-                      {"verified", cell.options.verify},
-                      {"repeats", cell.options.repeats},
-                      {"cell", std::filesystem::path(cell.cell_name).stem().string()},
-                      {"errors", faults.at("errors")},
-                      {"finished_at", utc_now()}});
-  if (cell.options.verify) summary.update(verdict_fields(cell, judgement, totals));
-  if (faults.contains("errors_written")) summary["errors_written"] = faults.at("errors_written");
-  if (passes.nondeterministic_step) summary["nondeterministic_at_step"] = *passes.nondeterministic_step;
-  summary.update(passes.environment);
+  CellSummary summary;
+  summary.scene = cell.data.label;
+  summary.strategy = passes.resolved;
+  // The strategy as --strategy gave it, when the cell ran (run --json sets it to this run's): what check and
+  // compare match a plugin's cell by, its resolved name holding absolute paths and digests.
+  summary.spec = cell.spec.text;
+  summary.triangles = scene.topology().num_faces();
+  summary.vertices = scene.topology().num_vertices();
+  summary.steps = cell.steps;
+  summary.thickness = scene.thickness();
+  add_times(cell, passes, totals, summary);
+  for (const auto& [name, total] : totals.counters) summary.counters[name] = {total.first / steps, total.second};
+  summary.candidate_pairs = totals.candidates / steps;
+  summary.elementary_tests = totals.tests / steps;
+  summary.kept_bytes = totals.kept;
+  summary.history_bytes = totals.history;
+  summary.device_bytes = totals.device;
+  summary.host_peak_bytes = passes.host_peak;
+  summary.host_peak_of = passes.peak_of_cell ? "cell" : "process";
+  summary.reported = totals.reported;
+  summary.judged_by = cell.entry.judging == strategies::Judging::triangle_pairs ? "triangle pairs" : "elementary pairs";
+  summary.thickness_from = cell.data.thickness_from;
+  summary.verified = cell.options.verify;
+  summary.repeats = cell.options.repeats;
+  summary.cell = std::filesystem::path(cell.cell_name).stem().string();
+  summary.errors = faults.at("errors").get<std::size_t>();
+  summary.finished_at = utc_now();
+  if (cell.options.verify) summary.verdict = cell_verdict(cell, judgement, totals);
+  if (faults.contains("errors_written")) summary.errors_written = faults.at("errors_written").get<std::string>();
+  summary.nondeterministic_at_step = passes.nondeterministic_step;
+  summary.environment = passes.environment;
   return summary;
 }
 
 }  // namespace
 
-json run_cell(const SceneData& data, const strategies::StrategySpec& spec, const RunOptions& options, std::size_t steps, const std::string& cell_name,
-              const CellProgress& progress, const std::string& planned_name) {
+CellRecord run_cell(const SceneData& data, const strategies::StrategySpec& spec, const RunOptions& options, std::size_t steps,
+                    const std::string& cell_name, const CellProgress& progress, const std::string& planned_name) {
   const CellContext cell{data, spec, options, steps, cell_name, *spec.entry, spec.from_outside};
   Passes passes = time_passes(cell, progress, planned_name);
   const Judgement judgement = judge_passes(cell, passes);
@@ -402,10 +398,11 @@ json run_cell(const SceneData& data, const strategies::StrategySpec& spec, const
   const json faults = record_faults(data.sequence.scene(), data.frames, passes.first,
                                     fault_root / safe_path_component(data.label) / std::filesystem::path(cell_name).stem());
   if (options.write_answers) write_cell_answers(cell, passes);
-  json step_records = json::array();
+  CellRecord record;
   Totals totals;
-  for (std::size_t k = 0; k < steps; ++k) step_records.push_back(step_record(cell, passes, judgement.verdicts[k], k, totals));
-  return {{"summary", cell_summary(cell, passes, judgement, totals, faults)}, {"steps", step_records}};
+  for (std::size_t k = 0; k < steps; ++k) record.steps.push_back(step_record(cell, passes, judgement.verdicts[k], k, totals));
+  record.summary = cell_summary(cell, passes, judgement, totals, faults);
+  return record;
 }
 
 }  // namespace ccd::harness

@@ -4,8 +4,7 @@
 
 #include "core/collision_set.hpp"
 #include "harness/run/options.hpp"
-
-#include <nlohmann/json.hpp>
+#include "harness/run/records.hpp"
 
 #include <functional>
 #include <string>
@@ -28,22 +27,11 @@ struct SceneData {
 /// cell shows that it moves (outside the timed region).
 using CellProgress = std::function<void(int pass, std::size_t step, const std::string& strategy)>;
 
-/// The version of the records `run` writes (step records and summaries, in --out, --json and --report), in each
-/// record's "schema". 2 added each step's time per repeat (ms_repeats), the summary's per-repeat totals
-/// (ms_per_repeat), the TOI error's median and 99th percentile, and each step's first missed pairs (missed_pairs):
-/// what `compare` needs. Records without it are of version 1.
-inline constexpr int kRecordSchema = 2;
-
-/// At most this many missed pairs of a step are kept in its record, each with its 24 coordinates (about 550 bytes):
-/// compare lists and writes to replay the pairs a change newly misses from them. Enough for the few misses a gated
-/// method has; a step that misses more is compared by counts (compare says so), and its record stays under 60 KB.
-inline constexpr std::size_t kKeptMissedPairs = 100;
-
 /// Runs one cell: repeats timed passes, judges the first against the truth, audits only when something is missed.
-/// Returns {"summary": ..., "steps": [...]} (docs/DESIGN.md §5 fields).
+/// Returns its summary and step records (docs/DESIGN.md §5 fields).
 /// `planned_name`: the resolved name the cell was planned (and its key made) with; a strategy that runs under another
 /// (code from outside ccdbench that changed during the run) ends the run instead of being kept under that key.
-nlohmann::json run_cell(const SceneData& data, const strategies::StrategySpec& spec, const RunOptions& options, std::size_t steps,
-                        const std::string& cell_name, const CellProgress& progress = {}, const std::string& planned_name = {});
+CellRecord run_cell(const SceneData& data, const strategies::StrategySpec& spec, const RunOptions& options, std::size_t steps,
+                    const std::string& cell_name, const CellProgress& progress = {}, const std::string& planned_name = {});
 
 }  // namespace ccd::harness

@@ -4,6 +4,7 @@
 #include "ccd/config.hpp"
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/query_file.hpp"
+#include "harness/run/records.hpp"
 #include "tests/support/cli.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -405,6 +406,108 @@ TEST_F(Plugins, TheTemplateBuiltAgainstAnInstalledCcdbenchRunsEverywhere) {
   const auto resumed = installed(run_arguments);
   ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
   for (const nlohmann::json& s : read_json(dir_ / "r.json")) EXPECT_TRUE(s.value("resumed", false)) << s["spec"];
+}
+
+// A run's records are types with one serializer and one reader (harness/run/records.hpp), which the cell files, the
+// MPI exchange, --json and results.jsonl share: every record a run writes reads back into the same JSON, whatever
+// it holds (a strategy's counters, errors, misses with their pairs, TOIs, analytic shapes, resumed cells, speed-ups).
+TEST_F(Plugins, EveryRecordARunWritesReadsBackAsItWasWritten) {
+  const std::string naive = "full+plugin:" + plugin("naive_float"), crash = "full+plugin:" + plugin("broken_crash_on_17");
+  const std::filesystem::path shapes = dir_ / "shapes";
+  ASSERT_EQ(run_ccdbench("generate fold --resolution 4 --frames 4 --set obstacles=shape --out " + quoted(shapes)).exit_code, 0);
+  const std::vector<std::string> runs = {
+      "run --scene " + quoted(fold(5)) + " --thickness 0 --toi --repeat 2 --strategy full,apccd," + naive + "," + crash,
+      "run --scene " + quoted(shapes) + " --toi --strategy full,apccd",
+      // Again: every cell is kept from the first run (resumed).
+      "run --scene " + quoted(shapes) + " --toi --strategy full,apccd"};
+  std::size_t steps = 0, summaries = 0, with_misses = 0, with_errors = 0, with_shapes = 0, with_counters = 0, resumed = 0;
+  nlohmann::json a_step;
+  // Every field each record must hold in these runs (each verified, with TOIs): a field the serializer or the
+  // reader drops is missing from every file, since each cell passes through both on its way to one.
+  const auto holds = [](const nlohmann::json& record, std::vector<std::string> fields) {
+    for (const std::string& field : fields) EXPECT_TRUE(record.contains(field)) << field << " missing from " << record.dump().substr(0, 300);
+  };
+  const std::vector<std::string> environment = {"machine", "build_type", "git_revision", "executable", "provenance", "threads", "rank"};
+  const auto reads_back = [&](const nlohmann::json& record) {
+    holds(record, environment);
+    holds(record,
+          {"record", "schema", "scene", "strategy", "thickness", "reported", "colliding", "missed", "missed_culled", "missed_tested", "false_alarms",
+           "toi_checked", "toi_late", "toi_error_max", "candidate_pairs", "elementary_tests", "kept_bytes", "history_bytes", "device_bytes"});
+    if (record.at("scene") == "shapes") holds(record, {"colliding_face_shape", "missed_face_shape"});
+    if (record.value("record", "") == "step") {
+      holds(record, {"step", "ms", "ms_repeats", "stages", "answers"});
+      if (record.value("errors", 0) > 0) holds(record, {"error_first"});
+      if (record.at("missed").get<std::size_t>() > 0) holds(record, {"missed_pairs"});
+      a_step = record;
+      const harness::StepRecord typed = record.get<harness::StepRecord>();
+      EXPECT_EQ(nlohmann::json(typed), record);
+      ++steps;
+      with_misses += record.contains("missed_pairs");
+      with_counters += !typed.counters.empty();
+    } else {
+      holds(record, {"spec",
+                     "triangles",
+                     "vertices",
+                     "steps",
+                     "thickness_from",
+                     "ms_per_step",
+                     "ms_per_step_mean",
+                     "ms_per_repeat",
+                     "stage_ms",
+                     "stage_ms_mean",
+                     "unattributed_ms_mean",
+                     "counters",
+                     "host_peak_bytes",
+                     "host_peak_of",
+                     "judged_by",
+                     "verified",
+                     "repeats",
+                     "cell",
+                     "errors",
+                     "finished_at",
+                     "miss_causes",
+                     "colliding_by_objects",
+                     "faces_in_contact_by_objects",
+                     "toi_missing",
+                     "toi_error_mean",
+                     "toi_error_median",
+                     "toi_error_p99",
+                     "key"});
+      if (record.at("errors").get<std::size_t>() > 0) holds(record, {"errors_written"});
+      const harness::CellSummary typed = record.get<harness::CellSummary>();
+      EXPECT_EQ(nlohmann::json(typed), record);
+      ++summaries;
+      with_errors += typed.errors > 0;
+      with_shapes += typed.verdict && typed.verdict->colliding_face_shape > 0u;
+      resumed += typed.resumed;
+    }
+  };
+  for (const std::string& arguments : runs) {
+    const auto [run, written] = with_json(arguments + " --out " + quoted(dir_ / "out"));
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    for (const nlohmann::json& summary : written) reads_back(summary);
+  }
+  for (const auto& entry : std::filesystem::directory_iterator(dir_ / "out" / "cells")) {
+    nlohmann::json cell = read_json(entry.path());
+    cell.erase("checksum");  // the cell store's, over the record
+    const harness::CellRecord typed = cell.get<harness::CellRecord>();
+    EXPECT_EQ(nlohmann::json(typed), cell) << entry.path();
+    reads_back(cell.at("summary"));
+    for (const nlohmann::json& step : cell.at("steps")) reads_back(step);
+  }
+  for (const nlohmann::json& line : testing::read_json_lines(dir_ / "out" / "results.jsonl")) reads_back(line);
+  // What the records held, so that each kind of field was read back at least once.
+  EXPECT_GT(steps, 0u);
+  EXPECT_GT(summaries, 0u);
+  EXPECT_GT(with_misses, 0u) << "naive_float misses at δ = 0";
+  EXPECT_GT(with_errors, 0u) << "the 17th query of each child crashes it";
+  EXPECT_GT(with_shapes, 0u);
+  EXPECT_GT(with_counters, 0u) << "apccd counts its sessions";
+  EXPECT_GT(resumed, 0u);
+  // A field that is neither the record's nor a counter is refused, not dropped.
+  nlohmann::json odd = a_step;
+  odd["unknown"] = "text";
+  EXPECT_THROW((void)odd.get<harness::StepRecord>(), std::invalid_argument);
 }
 
 }  // namespace

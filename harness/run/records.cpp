@@ -1,0 +1,329 @@
+#include "harness/run/records.hpp"
+
+#include <algorithm>
+#include <array>
+#include <stdexcept>
+#include <string_view>
+
+namespace ccd::harness {
+
+using nlohmann::json;
+
+namespace {
+
+/// The environment's fields, written beside a record's own (a record is flat).
+constexpr std::array<std::string_view, 7> kEnvironmentFields = {"machine",    "build_type", "git_revision", "executable",
+                                                                "provenance", "threads",    "rank"};
+
+/// A step record's own fields: every other number in it is a counter of its strategy.
+constexpr std::array<std::string_view, 29> kStepFields = {"record",
+                                                          "schema",
+                                                          "scene",
+                                                          "thickness",
+                                                          "strategy",
+                                                          "step",
+                                                          "ms",
+                                                          "ms_repeats",
+                                                          "stages",
+                                                          "candidate_pairs",
+                                                          "elementary_tests",
+                                                          "kept_bytes",
+                                                          "history_bytes",
+                                                          "device_bytes",
+                                                          "reported",
+                                                          "answers",
+                                                          "errors",
+                                                          "error_first",
+                                                          "colliding",
+                                                          "colliding_face_shape",
+                                                          "missed_face_shape",
+                                                          "missed",
+                                                          "missed_pairs",
+                                                          "missed_culled",
+                                                          "missed_tested",
+                                                          "false_alarms",
+                                                          "toi_checked",
+                                                          "toi_late",
+                                                          "toi_error_max"};
+
+bool listed(std::string_view name, const auto& fields) { return std::find(fields.begin(), fields.end(), name) != fields.end(); }
+
+template <class T>
+std::optional<T> optional_field(const json& j, const char* name) {
+  if (!j.contains(name) || j.at(name).is_null()) return std::nullopt;
+  return j.at(name).get<T>();
+}
+
+template <class T>
+void put_optional(json& j, const char* name, const std::optional<T>& value) {
+  if (value) j[name] = *value;
+}
+
+/// The record's "record" field must say what it is.
+void expect_kind(const json& j, const char* kind) {
+  if (!j.is_object() || j.value("record", std::string()) != kind) {
+    throw std::invalid_argument(std::string("not a ") + kind + " record: its \"record\" is not \"" + kind + "\"");
+  }
+}
+
+}  // namespace
+
+void to_json(json& j, const RecordEnvironment& e) {
+  j = {{"machine", e.machine},
+       {"build_type", e.build_type},
+       {"git_revision", e.git_revision},
+       {"executable", e.executable},
+       {"provenance", e.provenance},
+       {"threads", e.threads},
+       {"rank", e.rank}};
+}
+
+void from_json(const json& j, RecordEnvironment& e) {
+  e.machine = j.value("machine", std::string());
+  e.build_type = j.value("build_type", std::string());
+  e.git_revision = j.value("git_revision", std::string());
+  e.executable = j.value("executable", std::string());
+  e.provenance = j.value("provenance", json::object());
+  e.threads = j.value("threads", std::size_t{0});
+  e.rank = j.value("rank", 0);
+}
+
+void to_json(json& j, const StepRecord& r) {
+  j = {{"record", "step"},
+       {"schema", r.schema},
+       {"scene", r.scene},
+       {"thickness", r.thickness},
+       {"strategy", r.strategy},
+       {"step", r.step},
+       {"ms", r.ms},
+       {"ms_repeats", r.ms_repeats},
+       {"stages", r.stages},
+       {"candidate_pairs", r.candidate_pairs},
+       {"elementary_tests", r.elementary_tests},
+       {"kept_bytes", r.kept_bytes},
+       {"history_bytes", r.history_bytes},
+       {"device_bytes", r.device_bytes},
+       {"reported", r.reported}};
+  put_optional(j, "answers", r.answers);
+  if (r.errors > 0) {
+    j["errors"] = r.errors;
+    j["error_first"] = r.error_first;
+  }
+  for (const auto& [name, value] : r.counters) j[name] = value;
+  if (const std::optional<StepVerdict>& v = r.verdict) {
+    j["colliding"] = v->colliding;
+    put_optional(j, "colliding_face_shape", v->colliding_face_shape);
+    put_optional(j, "missed_face_shape", v->missed_face_shape);
+    j["missed"] = v->missed;
+    put_optional(j, "missed_pairs", v->missed_pairs);
+    j["missed_culled"] = v->missed_culled;
+    j["missed_tested"] = v->missed_tested;
+    j["false_alarms"] = v->false_alarms;
+    if (v->toi) {
+      j["toi_checked"] = v->toi->checked;
+      j["toi_late"] = v->toi->late;
+      j["toi_error_max"] = v->toi->error_max;
+    }
+  }
+  j.update(json(r.environment));
+}
+
+void from_json(const json& j, StepRecord& r) {
+  expect_kind(j, "step");
+  r.schema = j.value("schema", 1);
+  r.scene = j.at("scene").get<std::string>();
+  r.thickness = j.at("thickness").get<double>();
+  r.strategy = j.at("strategy").get<std::string>();
+  r.step = j.at("step").get<std::size_t>();
+  r.ms = j.at("ms").get<double>();
+  r.ms_repeats = j.value("ms_repeats", std::vector<double>{});
+  r.stages = j.value("stages", std::map<std::string, double>{});
+  r.candidate_pairs = j.at("candidate_pairs").get<std::size_t>();
+  r.elementary_tests = j.at("elementary_tests").get<std::size_t>();
+  r.kept_bytes = j.value("kept_bytes", std::size_t{0});
+  r.history_bytes = j.value("history_bytes", std::size_t{0});
+  r.device_bytes = j.value("device_bytes", std::size_t{0});
+  r.reported = j.at("reported").get<std::size_t>();
+  r.answers = optional_field<std::string>(j, "answers");
+  r.errors = j.value("errors", std::size_t{0});
+  r.error_first = j.value("error_first", std::string());
+  r.counters.clear();
+  for (const auto& [name, value] : j.items()) {
+    if (listed(name, kStepFields) || listed(name, kEnvironmentFields)) continue;
+    if (!value.is_number()) throw std::invalid_argument("step record: field \"" + name + "\" is neither a known field nor a counter (a number)");
+    r.counters.emplace_back(name, value.get<double>());
+  }
+  r.verdict.reset();
+  if (j.contains("colliding")) {
+    StepVerdict v;
+    v.colliding = j.at("colliding").get<std::size_t>();
+    v.missed = j.at("missed").get<std::size_t>();
+    v.missed_culled = j.at("missed_culled").get<std::size_t>();
+    v.missed_tested = j.at("missed_tested").get<std::size_t>();
+    v.false_alarms = j.at("false_alarms").get<std::size_t>();
+    v.colliding_face_shape = optional_field<std::size_t>(j, "colliding_face_shape");
+    v.missed_face_shape = optional_field<std::size_t>(j, "missed_face_shape");
+    if (j.contains("missed_pairs")) v.missed_pairs = j.at("missed_pairs");
+    if (j.contains("toi_checked")) {
+      v.toi.emplace();
+      v.toi->checked = j.at("toi_checked").get<std::size_t>();
+      v.toi->late = j.at("toi_late").get<std::size_t>();
+      v.toi->error_max = j.at("toi_error_max").get<double>();
+    }
+    r.verdict = std::move(v);
+  }
+  r.environment = j.get<RecordEnvironment>();
+}
+
+void to_json(json& j, const CellSummary& s) {
+  json counters = json::object();
+  for (const auto& [name, counter] : s.counters) counters[name] = {{"mean", counter.mean}, {"max", counter.max}};
+  j = {{"record", "summary"},
+       {"schema", s.schema},
+       {"scene", s.scene},
+       {"strategy", s.strategy},
+       {"spec", s.spec},
+       {"triangles", s.triangles},
+       {"vertices", s.vertices},
+       {"steps", s.steps},
+       {"thickness", s.thickness},
+       {"ms_per_step", s.ms_per_step},
+       {"ms_per_step_mean", s.ms_per_step_mean},
+       {"ms_per_repeat", s.ms_per_repeat},
+       {"stage_ms", s.stage_ms},
+       {"stage_ms_mean", s.stage_ms_mean},
+       {"unattributed_ms_mean", s.unattributed_ms_mean},
+       {"counters", counters},
+       {"candidate_pairs", s.candidate_pairs},
+       {"elementary_tests", s.elementary_tests},
+       {"kept_bytes", s.kept_bytes},
+       {"history_bytes", s.history_bytes},
+       {"device_bytes", s.device_bytes},
+       {"host_peak_bytes", s.host_peak_bytes},
+       {"host_peak_of", s.host_peak_of},
+       {"reported", s.reported},
+       {"judged_by", s.judged_by},
+       {"thickness_from", s.thickness_from},
+       {"verified", s.verified},
+       {"repeats", s.repeats},
+       {"cell", s.cell},
+       {"errors", s.errors},
+       {"finished_at", s.finished_at}};
+  if (const std::optional<CellVerdict>& v = s.verdict) {
+    j.update(json{{"colliding", v->colliding},
+                  {"missed", v->missed},
+                  {"missed_culled", v->missed_culled},
+                  {"missed_tested", v->missed_tested},
+                  {"false_alarms", v->false_alarms},
+                  {"miss_causes", v->miss_causes},
+                  {"colliding_by_objects", v->colliding_by_objects},
+                  {"faces_in_contact_by_objects", v->faces_in_contact_by_objects}});
+    put_optional(j, "colliding_face_shape", v->colliding_face_shape);
+    put_optional(j, "missed_face_shape", v->missed_face_shape);
+    if (const std::optional<CellVerdict::Toi>& toi = v->toi) {
+      j.update(json{{"toi_checked", toi->checked},
+                    {"toi_late", toi->late},
+                    {"toi_missing", toi->missing},
+                    {"toi_error_max", toi->error_max},
+                    {"toi_error_mean", toi->error_mean},
+                    {"toi_error_median", toi->error_median ? json(*toi->error_median) : json()},
+                    {"toi_error_p99", toi->error_p99 ? json(*toi->error_p99) : json()}});
+    }
+  }
+  put_optional(j, "errors_written", s.errors_written);
+  put_optional(j, "nondeterministic_at_step", s.nondeterministic_at_step);
+  j.update(json(s.environment));
+  put_optional(j, "key", s.key);
+  if (s.resumed) j["resumed"] = true;
+  if (s.speedup) {
+    j["speedup"] = s.speedup->ratio ? json(*s.speedup->ratio) : json();
+    j["speedup_over"] = s.speedup->over ? json(*s.speedup->over) : json();
+  }
+}
+
+void from_json(const json& j, CellSummary& s) {
+  expect_kind(j, "summary");
+  s.schema = j.value("schema", 1);
+  s.scene = j.at("scene").get<std::string>();
+  s.strategy = j.at("strategy").get<std::string>();
+  s.spec = j.value("spec", s.strategy);
+  s.triangles = j.at("triangles").get<std::size_t>();
+  s.vertices = j.at("vertices").get<std::size_t>();
+  s.steps = j.at("steps").get<std::size_t>();
+  s.thickness = j.at("thickness").get<double>();
+  s.thickness_from = j.value("thickness_from", std::string("scene"));
+  s.ms_per_step = j.at("ms_per_step").get<double>();
+  s.ms_per_step_mean = j.value("ms_per_step_mean", s.ms_per_step);
+  s.unattributed_ms_mean = j.value("unattributed_ms_mean", 0.0);
+  s.ms_per_repeat = j.value("ms_per_repeat", std::vector<double>{});
+  s.stage_ms = j.value("stage_ms", std::map<std::string, double>{});
+  s.stage_ms_mean = j.value("stage_ms_mean", std::map<std::string, double>{});
+  s.counters.clear();
+  const json counters = j.value("counters", json::object());
+  for (const auto& [name, counter] : counters.items()) {
+    s.counters[name] = {counter.at("mean").get<double>(), counter.at("max").get<double>()};
+  }
+  s.candidate_pairs = j.at("candidate_pairs").get<double>();
+  s.elementary_tests = j.at("elementary_tests").get<double>();
+  s.kept_bytes = j.value("kept_bytes", 0.0);
+  s.history_bytes = j.value("history_bytes", 0.0);
+  s.device_bytes = j.value("device_bytes", 0.0);
+  s.host_peak_bytes = j.value("host_peak_bytes", 0.0);
+  s.host_peak_of = j.value("host_peak_of", std::string("process"));
+  s.reported = j.at("reported").get<std::size_t>();
+  s.judged_by = j.value("judged_by", std::string("elementary pairs"));
+  s.verified = j.value("verified", false);
+  s.repeats = j.value("repeats", 1);
+  s.cell = j.value("cell", std::string());
+  s.errors = j.value("errors", std::size_t{0});
+  s.errors_written = optional_field<std::string>(j, "errors_written");
+  s.nondeterministic_at_step = optional_field<std::size_t>(j, "nondeterministic_at_step");
+  s.finished_at = j.value("finished_at", std::string());
+  s.verdict.reset();
+  if (j.contains("colliding")) {
+    CellVerdict v;
+    v.colliding = j.at("colliding").get<std::size_t>();
+    v.missed = j.at("missed").get<std::size_t>();
+    v.missed_culled = j.at("missed_culled").get<std::size_t>();
+    v.missed_tested = j.at("missed_tested").get<std::size_t>();
+    v.false_alarms = j.at("false_alarms").get<std::size_t>();
+    v.miss_causes = j.value("miss_causes", json::object());
+    v.colliding_by_objects = j.value("colliding_by_objects", std::map<std::string, std::size_t>{});
+    v.faces_in_contact_by_objects = j.value("faces_in_contact_by_objects", std::map<std::string, std::size_t>{});
+    v.colliding_face_shape = optional_field<std::size_t>(j, "colliding_face_shape");
+    v.missed_face_shape = optional_field<std::size_t>(j, "missed_face_shape");
+    if (j.contains("toi_checked")) {
+      v.toi.emplace();
+      v.toi->checked = j.at("toi_checked").get<std::size_t>();
+      v.toi->late = j.at("toi_late").get<std::size_t>();
+      v.toi->missing = j.value("toi_missing", std::size_t{0});
+      v.toi->error_max = j.at("toi_error_max").get<double>();
+      v.toi->error_mean = j.value("toi_error_mean", 0.0);
+      v.toi->error_median = optional_field<double>(j, "toi_error_median");
+      v.toi->error_p99 = optional_field<double>(j, "toi_error_p99");
+    }
+    s.verdict = std::move(v);
+  }
+  s.environment = j.get<RecordEnvironment>();
+  if (j.contains("key")) s.key = j.at("key");
+  s.resumed = j.value("resumed", false);
+  s.speedup.reset();
+  if (j.contains("speedup")) {
+    s.speedup.emplace();
+    s.speedup->ratio = optional_field<double>(j, "speedup");
+    s.speedup->over = optional_field<std::string>(j, "speedup_over");
+  }
+}
+
+void to_json(json& j, const CellRecord& c) {
+  j = {{"summary", c.summary}, {"steps", c.steps}};
+  // A kept cell is found by its key (read_cell): the summary's, written at the top as well.
+  put_optional(j, "key", c.summary.key);
+}
+
+void from_json(const json& j, CellRecord& c) {
+  c.summary = j.at("summary").get<CellSummary>();
+  c.steps = j.at("steps").get<std::vector<StepRecord>>();
+}
+
+}  // namespace ccd::harness
