@@ -1,5 +1,8 @@
 #include "strategies/backend.hpp"
 
+#include "core/number_text.hpp"
+
+#include <cmath>
 #include <stdexcept>
 
 namespace ccd::strategies {
@@ -15,6 +18,40 @@ constexpr narrowphase::SpecRange kSubBoxRange{4.0, 1024.0};
 
 }  // namespace
 
+MemoryBudget parse_memory_budget(const std::string& text) {
+  const auto refuse = [&](const std::string& why) {
+    return std::invalid_argument("memory=" + text + ": " + why + " (a share of the device, e.g. 75%, or bytes, e.g. 2G, 512M, 1048576)");
+  };
+  MemoryBudget budget;
+  if (text.empty()) throw refuse("empty");
+  if (text.back() == '%') {
+    const std::optional<double> percent = parse_double(std::string_view(text).substr(0, text.size() - 1));
+    if (!percent || !(*percent > 0 && *percent <= 100)) throw refuse("a share must be above 0% and at most 100%");
+    budget.percent = *percent;
+    return budget;
+  }
+  static const std::string kSuffixes = "KMGT";
+  const std::size_t suffix = kSuffixes.find(text.back());
+  const std::string digits = suffix == std::string::npos ? text : text.substr(0, text.size() - 1);
+  const std::optional<double> count = parse_double(digits);
+  if (!count || !(*count >= 1)) throw refuse("not a share or a number of bytes of at least 1");
+  const double bytes = std::ldexp(*count, suffix == std::string::npos ? 0 : 10 * static_cast<int>(suffix + 1));
+  // 2^62 bytes: far past any device, and exact in both double and uint64.
+  if (!(bytes <= 0x1p62) || bytes != std::floor(bytes)) throw refuse("not a whole number of bytes up to 2^62");
+  budget.bytes = static_cast<std::uint64_t>(bytes);
+  return budget;
+}
+
+std::uint64_t MemoryBudget::on_device(std::uint64_t device_memory) const {
+  if (bytes != 0) return bytes;
+  return static_cast<std::uint64_t>(std::floor(static_cast<double>(device_memory) * percent / 100));
+}
+
+std::string MemoryBudget::text() const {
+  if (bytes != 0) return std::to_string(bytes);
+  return narrowphase::format_spec_number(percent) + "%";
+}
+
 std::vector<narrowphase::KeySpec> backend_keys() {
   using narrowphase::KeySpec;
   const BackendChoice defaults;
@@ -25,13 +62,16 @@ std::vector<narrowphase::KeySpec> backend_keys() {
           KeySpec::integer("list_start", static_cast<long>(defaults.list_start), kListStartRange,
                            "backend=opencl: entries each device list starts with (0: sized from the scene); lists grow"),
           KeySpec::integer("sub_boxes", defaults.sub_boxes, kSubBoxRange,
-                           "backend=opencl: sub-boxes a work item holds for a conservative query; more are handed on")};
+                           "backend=opencl: sub-boxes a work item holds for a conservative query; more are handed on"),
+          KeySpec::text("memory",
+                        "backend=opencl: device memory a step may use: a share (default 75%) or bytes (2G, 512M); full runs a step "
+                        "that does not fit in chunks, apccd refuses it")};
 }
 
 BackendChoice read_backend(const narrowphase::SpecReader& keys) {
   BackendChoice choice;
   choice.backend = keys.choice("backend");
-  for (const char* key : {"device", "device_iterations", "list_start", "sub_boxes"}) {
+  for (const char* key : {"device", "device_iterations", "list_start", "sub_boxes", "memory"}) {
     if (keys.given(key) && !choice.opencl()) {
       throw std::invalid_argument(std::string(key) + " is a key of the OpenCL backend: it needs backend=opencl");
     }
@@ -40,6 +80,7 @@ BackendChoice read_backend(const narrowphase::SpecReader& keys) {
   choice.device_iterations = keys.integer("device_iterations");
   choice.list_start = static_cast<std::size_t>(keys.integer("list_start"));
   choice.sub_boxes = keys.integer("sub_boxes");
+  if (keys.given("memory")) choice.memory = parse_memory_budget(keys.text("memory"));
   return choice;
 }
 
@@ -49,6 +90,7 @@ std::string BackendChoice::resolved(const std::string& device_name, bool conserv
   if (conservative) text += ":device_iterations=" + std::to_string(device_iterations);
   if (list_start != 0) text += ":list_start=" + std::to_string(list_start);
   if (sub_boxes != kDefaultDeviceSubBoxes) text += ":sub_boxes=" + std::to_string(sub_boxes);
+  if (!memory.is_default()) text += ":memory=" + memory.text();
   return text;
 }
 

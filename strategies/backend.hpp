@@ -5,6 +5,7 @@
 #include "strategies/narrowphase/spec.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,22 @@ namespace ccd::strategies {
 /// Sub-boxes a work item holds for one conservative query by default (private memory, 56 bytes each); a query that
 /// needs more is handed on to a second pass that decides it from the start with the same code.
 inline constexpr long kDefaultDeviceSubBoxes = 48;
+
+/// The device memory a step may use (memory=): a share of the device's global memory ("75%", the default) or bytes
+/// ("2G", "512M", binary suffixes K, M, G, T, or a plain count). A step whose lists would not fit runs in chunks
+/// (full) or is refused naming the limit (apccd); the answers are the same under any budget.
+struct MemoryBudget {
+  double percent = 75;  // of the device's global memory, when bytes is 0
+  std::uint64_t bytes = 0;
+  /// The budget on a device with `device_memory` bytes of global memory.
+  std::uint64_t on_device(std::uint64_t device_memory) const;
+  /// As the key reads back ("75%", "2147483648").
+  std::string text() const;
+  bool is_default() const { return bytes == 0 && percent == 75; }
+};
+
+/// Reads memory=TEXT. @throws std::invalid_argument naming what is wrong.
+MemoryBudget parse_memory_budget(const std::string& text);
 
 struct BackendChoice {
   std::string backend = "cpu";
@@ -25,6 +42,7 @@ struct BackendChoice {
   std::size_t list_start = 0;
   /// Sub-boxes a work item holds for one conservative query.
   long sub_boxes = kDefaultDeviceSubBoxes;
+  MemoryBudget memory;
 
   bool opencl() const { return backend == "opencl"; }
   /// The backend's part of a resolved name: "" on the CPU; ":backend=opencl:device=NAME[:...]" otherwise, the
@@ -32,7 +50,7 @@ struct BackendChoice {
   std::string resolved(const std::string& device_name, bool conservative) const;
 };
 
-/// backend, device, device_iterations, list_start, sub_boxes.
+/// backend, device, device_iterations, list_start, sub_boxes, memory.
 std::vector<narrowphase::KeySpec> backend_keys();
 
 /// The backend keys of a strategy's reader. @throws std::invalid_argument for a device key without backend=opencl.

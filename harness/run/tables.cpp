@@ -140,6 +140,18 @@ const std::vector<RunColumn>& run_columns() {
       {"steps", Align::right, always, [](const json& s) { return std::to_string(s["steps"].get<std::size_t>()); }},
       {"MiB kept/device/host peak", Align::right, always,
        [](const json& s) { return mib(s, "kept_bytes") + "/" + mib(s, "device_bytes") + "/" + mib(s, "host_peak_bytes"); }},
+      // A step of the OpenCL backend runs within its memory budget (memory=), in as many chunks as that takes.
+      {"device budget MiB (chunks/step max)", Align::right,
+       [](const std::vector<json>& summaries) {
+         return std::any_of(summaries.begin(), summaries.end(), [](const json& s) { return s["counters"].contains("device_budget_bytes"); });
+       },
+       [](const json& s) {
+         const json& counters = s["counters"];
+         if (!counters.contains("device_budget_bytes")) return std::string("-");
+         const std::string chunks =
+             counters.contains("device_chunks") ? fixed(counters["device_chunks"]["max"].get<double>(), 0) : std::string("whole");
+         return fixed(counters["device_budget_bytes"]["max"].get<double>() / (1024.0 * 1024.0), 0) + " (" + chunks + ")";
+       }},
       {"stages (ms)", Align::left, always,
        [](const json& s) {
          std::string stages;

@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdlib>
+#include <optional>
 #include <stdexcept>
 
 namespace ccd::strategies {
@@ -43,6 +45,11 @@ class FullOpenCl final : public Strategy {
     positions_.reset(context, first_frame);
     pipeline_.refit(pipeline_.all_nodes(), positions_.x0(), positions_.x1(), scene.thickness() / 2, nullptr, node_boxes_, nullptr);
     context.finish();
+    // What every step keeps (the swept vertex boxes included, made by the first step), then the lists' room.
+    const std::uint64_t vertex_boxes = std::max<std::size_t>(scene.topology().num_vertices(), 1) * 6 * sizeof(double);
+    room_ = pipeline_.plan_room(pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() + vertex_boxes);
+    candidates_.limit = room_.candidates;
+    elementary_.limit = kept_.limit = room_.elementary;
   }
 
   StepResult step(const StepView& step, bool audit) override {
@@ -55,25 +62,26 @@ class FullOpenCl final : public Strategy {
     const Buffer& x1 = positions_.x1();
     pipeline_.vertex_boxes(x0, x1, events);
     pipeline_.refit(pipeline_.moving_nodes(), x0, x1, pipeline_.scene().thickness() / 2, nullptr, node_boxes_, &events);
-    const std::size_t candidates = pipeline_.traverse(queries_, node_boxes_, nullptr, candidates_, events, "traversal");
-    const std::size_t elementary = pipeline_.expand(candidates_.buffer, candidates, elementary_, events);
-    const opencl::DeviceList* tested = &elementary_;
-    if (separation_filter_) {
-      pipeline_.filter(elementary_.buffer, elementary, x0, x1, kept_, events);
-      tested = &kept_;
-    }
-    const std::size_t tests = separation_filter_ ? kept_.count : elementary;
-    pipeline_.back_end(tested->buffer, tests, step, x0, x1, result, events);
+    Chunks chunks;
+    if (audit) chunks.tested.emplace();
+    run_chunks(step, x0, x1, result, events, chunks);
+    pipeline_.collect(chunks.decided, result);
     for (const auto& [stage, milliseconds] : events.collect()) result.stages.add(stage, milliseconds);
     result.counters.extra.emplace_back("device_span_ms", events.span_milliseconds());
     result.counters.extra.emplace_back("device_idle_ms", events.idle_milliseconds());
-    if (audit) result.tested = pipeline_.tested_pairs(tested->buffer, tests);
-    if (separation_filter_) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(elementary - tests));
+    if (audit) {
+      opencl::DevicePipeline::sort_tested(*chunks.tested);
+      result.tested = std::move(chunks.tested);
+    }
+    if (separation_filter_) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(chunks.elementary - chunks.tests));
+    result.counters.extra.emplace_back("device_chunks", static_cast<double>(chunks.count));
+    result.counters.extra.emplace_back("device_budget_bytes", static_cast<double>(room_.budget));
+    result.counters.extra.emplace_back("device_fixed_bytes", static_cast<double>(room_.fixed));
     positions_.finish(step);
     // Face-shape pairs on the host, with the host's narrow phase (face_shape.hpp), as the CPU backend does.
     run_face_shape_stage(result, pipeline_.scene(), step, *pipeline_.narrow_phase().host, audit);
-    result.counters.candidate_triangle_pairs = candidates;
-    result.counters.elementary_tests = tests;
+    result.counters.candidate_triangle_pairs = chunks.candidates;
+    result.counters.elementary_tests = chunks.tests;
     result.counters.device_bytes = pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() + candidates_.buffer.bytes() +
                                    elementary_.buffer.bytes() + kept_.buffer.bytes();
     opencl::add_launch_and_wait(result, started);
@@ -81,7 +89,74 @@ class FullOpenCl final : public Strategy {
   }
 
  private:
+  /// What the chunks of a step add up to.
+  struct Chunks {
+    opencl::Decided decided;
+    std::optional<TestedPairs> tested;
+    std::size_t candidates = 0, elementary = 0, tests = 0, count = 0;
+  };
+
+  /// A range of `span` items whose list needed `found` entries (kListOverflow: past 2^32) where `limit` fit: the
+  /// span to try instead, smaller by the overshoot with a fifth to spare.
+  static std::size_t smaller_span(std::size_t span, std::size_t found, std::size_t limit) {
+    const double fit = found == opencl::kListOverflow ? 0.5 : 0.8 * static_cast<double>(limit) / static_cast<double>(found);
+    return std::clamp<std::size_t>(static_cast<std::size_t>(static_cast<double>(span) * fit), 1, span - 1);
+  }
+
+  /// The step in chunks that fit the memory budget (one, where the whole step does): ranges of queries whose
+  /// candidate pairs fit their list, each in ranges of candidates whose elementary pairs fit theirs, each range
+  /// filtered and decided. A range that does not fit is tried again smaller; one that fits easily lets the next grow
+  /// twice as large. Every answer is the same as in one piece: the pairs a range finds are those its queries or
+  /// candidates find in the whole step, each decided by the same code, and the set is put in order at the end.
+  void run_chunks(const StepView& step, const Buffer& x0, const Buffer& x1, StepResult& result, opencl::StageEvents& events, Chunks& chunks) {
+    std::size_t span = queries_.count;
+    for (std::size_t q = 0; q < queries_.count;) {
+      span = std::min(span, queries_.count - q);
+      const std::size_t found = pipeline_.traverse(queries_, node_boxes_, nullptr, candidates_, events, "traversal", q, span);
+      if (found > candidates_.limit) {
+        if (span == 1) {
+          throw std::runtime_error(pipeline_.label() + ": one query (face " + std::to_string(q) +
+                                   "'s) found more candidate pairs than memory=" + pipeline_.backend().memory.text() + " leaves room for (" +
+                                   std::to_string(candidates_.limit) + "): give a larger memory=");
+        }
+        span = smaller_span(span, found, candidates_.limit);
+        continue;
+      }
+      chunks.candidates += found;
+      run_candidate_chunks(found, step, x0, x1, result, events, chunks);
+      q += span;
+      if (found < candidates_.limit / 2) span *= 2;
+    }
+  }
+
+  void run_candidate_chunks(std::size_t found, const StepView& step, const Buffer& x0, const Buffer& x1, StepResult& result,
+                            opencl::StageEvents& events, Chunks& chunks) {
+    std::size_t span = found;
+    for (std::size_t c = 0; c < found;) {
+      span = std::min(span, found - c);
+      const std::size_t elementary = pipeline_.expand(candidates_.buffer, span, elementary_, events, c);
+      if (elementary > elementary_.limit) {
+        span = smaller_span(span, elementary, elementary_.limit);  // one candidate's 15 always fit (kMinimumChunkElementary)
+        continue;
+      }
+      const opencl::DeviceList* tested = &elementary_;
+      if (separation_filter_) {
+        pipeline_.filter(elementary_.buffer, elementary, x0, x1, kept_, events);
+        tested = &kept_;
+      }
+      const std::size_t tests = separation_filter_ ? kept_.count : elementary;
+      pipeline_.decide(tested->buffer, tests, step, x0, x1, result, events, chunks.decided);
+      if (chunks.tested) pipeline_.add_tested_pairs(tested->buffer, tests, *chunks.tested);
+      chunks.elementary += elementary;
+      chunks.tests += tests;
+      ++chunks.count;
+      c += span;
+      if (elementary < elementary_.limit / 2) span *= 2;
+    }
+  }
+
   opencl::DevicePipeline pipeline_;
+  opencl::ChunkRoom room_;
   bool separation_filter_ = false;
   opencl::Queries queries_;
   opencl::DevicePositions positions_;

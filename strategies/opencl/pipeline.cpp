@@ -302,16 +302,18 @@ void DevicePipeline::refit_levels(const RefitPlan& plan, const Buffer& node_boxe
 }
 
 std::size_t DevicePipeline::traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out, StageEvents& events,
-                                     const char* stage) {
+                                     const char* stage, std::size_t first, std::size_t count) {
   if (out.capacity == 0) out.capacity = list_start(std::max<std::size_t>(4 * scene_->topology().num_faces(), 1024));
   const cl_mem offset_memory = offsets != nullptr ? offsets->get() : nullptr;
-  const std::size_t candidates =
-      fill_list("traverse", queries.count, out, sizeof(cl_uint2), events, stage, [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
-        set_arguments(kernel, static_cast<cl_uint>(queries.count), queries.leaf.get(), queries.face.get(), queries.root.get(), queries.mode.get(),
+  const std::size_t end = first + std::min(count, queries.count - first);
+  return fill_list(
+      "traverse", end - first, out, sizeof(cl_uint2), events, stage,
+      [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+        set_arguments(kernel, static_cast<cl_uint>(end), queries.leaf.get(), queries.face.get(), queries.root.get(), queries.mode.get(),
                       queries.offset_index.get(), offset_memory, node_boxes.get(), children_.get(), node_face_.get(), max_face_.get(), capacity,
                       counter.get(), out.buffer.get());
-      });
-  return candidates;
+      },
+      first);
 }
 
 void DevicePipeline::vertex_boxes(const Buffer& x0, const Buffer& x1, StageEvents& events) {
@@ -322,22 +324,26 @@ void DevicePipeline::vertex_boxes(const Buffer& x0, const Buffer& x1, StageEvent
   launch(*context_, kernel, vertices, group_, events.add("boxes"));
 }
 
-std::size_t DevicePipeline::expand(const Buffer& candidates, std::size_t count, DeviceList& out, StageEvents& events) {
-  if (count > kMaxCandidatesPerStep) {
+std::size_t DevicePipeline::expand(const Buffer& candidates, std::size_t count, DeviceList& out, StageEvents& events, std::size_t first) {
+  // A budgeted list is filled by ranges of candidates, each with 32-bit counts; a whole step's must keep its own.
+  if (out.limit == 0 && count > kMaxCandidatesPerStep) {
     throw std::runtime_error(label_ + ": " + std::to_string(count) + " candidate triangle pairs in one step; at most " +
                              std::to_string(kMaxCandidatesPerStep) + " keep the elementary count within 32-bit indices");
   }
   if (out.capacity == 0) out.capacity = initial_elementary_capacity_;
-  return fill_list("expand", count, out, sizeof(cl_uint4), events, "expansion", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
-    set_arguments(kernel, static_cast<cl_uint>(count), candidates.get(), masks_.get(), faces_.get(), face_edges_.get(), edges_.get(),
-                  vertex_boxes_.get(), capacity, counter.get(), out.buffer.get());
-  });
+  return fill_list(
+      "expand", count, out, sizeof(cl_uint4), events, "expansion",
+      [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
+        set_arguments(kernel, static_cast<cl_uint>(first + count), candidates.get(), masks_.get(), faces_.get(), face_edges_.get(), edges_.get(),
+                      vertex_boxes_.get(), capacity, counter.get(), out.buffer.get());
+      },
+      first);
 }
 
 std::size_t DevicePipeline::filter(const Buffer& elementary, std::size_t count, const Buffer& x0, const Buffer& x1, DeviceList& out,
                                    StageEvents& events) {
   Context& context = *context_;
-  keep_.reserve(context, std::max<std::size_t>(count, 1));
+  reserve_pairs(keep_, count, 1);
   cl_kernel kernel = context.kernel("separation");
   set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), keep_.get());
   launch(context, kernel, count, narrow_group(kernel), events.add("distance heuristic"));
@@ -373,9 +379,10 @@ void DevicePipeline::device_pass(StageEvents& events, const std::vector<std::siz
   Context& context = *context_;
   std::vector<cl_uint4> retry(which.size());
   for (std::size_t j = 0; j < which.size(); ++j) retry[j] = pairs[which[j]];
+  reserve_pairs(retry_pairs_, retry.size(), sizeof(cl_uint4));
   upload(context, retry_pairs_, retry.data(), retry.size(), events.add("narrow phase"));
-  retry_status_.reserve(context, retry.size());
-  retry_toi_.reserve(context, retry.size() * sizeof(double));
+  reserve_pairs(retry_status_, retry.size(), 1);
+  reserve_pairs(retry_toi_, retry.size(), sizeof(double));
   launch_conservative(retry_pairs_, retry.size(), limit, retry_status_, retry_toi_, x0, x1, events);
   std::vector<cl_uchar> retry_status(retry.size());
   std::vector<double> retry_toi(retry.size());
@@ -389,9 +396,16 @@ void DevicePipeline::device_pass(StageEvents& events, const std::vector<std::siz
 
 void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const StepView& step, const Buffer& x0, const Buffer& x1,
                               strategies::StepResult& result, StageEvents& events) {
+  Decided decided;
+  decide(elementary, count, step, x0, x1, result, events, decided);
+  collect(decided, result);
+}
+
+void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const StepView& step, const Buffer& x0, const Buffer& x1,
+                            strategies::StepResult& result, StageEvents& events, Decided& into) {
   Context& context = *context_;
-  status_.reserve(context, std::max<std::size_t>(count, 1));
-  toi_.reserve(context, std::max<std::size_t>(count, 1) * sizeof(double));
+  reserve_pairs(status_, count, 1);
+  reserve_pairs(toi_, count, sizeof(double));
   const bool conservative = narrow_phase_.conservative();
   if (conservative) {
     launch_conservative(elementary, count, backend_.device_iterations, status_, toi_, x0, x1, events);
@@ -405,8 +419,8 @@ void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const
   // The compaction of what collides (or needs another pass).
   const std::size_t kept =
       fill_list("compact", count, out_, sizeof(cl_uint4), events, "narrow phase", [&](cl_kernel kernel, cl_uint capacity, const Buffer& counter) {
-        out_status_.reserve(context, std::max<std::size_t>(out_.capacity, 1));
-        out_toi_.reserve(context, std::max<std::size_t>(out_.capacity, 1) * sizeof(double));
+        reserve_pairs(out_status_, out_.capacity, 1);
+        reserve_pairs(out_toi_, out_.capacity, sizeof(double));
         set_arguments(kernel, static_cast<cl_uint>(count), elementary.get(), status_.get(), toi_.get(), capacity, counter.get(), out_.buffer.get(),
                       out_status_.get(), out_toi_.get());
       });
@@ -461,20 +475,37 @@ void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const
     });
   }
   {
+    // What collides, kept for the collision set (collect): the strategy's own work, in its "output" stage.
+    ScopedStageTimer timer(result.stages, "output");
+    for (std::size_t i = 0; i < kept; ++i) {
+      if (status[i] != 1) continue;
+      into.pairs.push_back(pairs[i]);
+      into.toi.push_back(toi[i]);
+    }
+  }
+  into.given_up += given_up.size();
+  into.second_pass += second_pass;
+  into.third_pass += third_pass;
+  into.on_host += on_host.size();
+}
+
+void DevicePipeline::collect(const Decided& decided, strategies::StepResult& result) const {
+  {
     // The collision set from what the device kept, in chunks put in order in parallel and merged: the strategy's
     // own work, timed as its "output" stage (it was in no stage).
     ScopedStageTimer timer(result.stages, "output");
+    const std::size_t kept = decided.pairs.size();
+    const std::size_t host_threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
     // Chunks of at least kOutputChunk pairs: sorted side by side and merged in a tree (normalize_in_parallel).
     const std::size_t chunks = std::max<std::size_t>(1, std::min(host_threads, kept / kOutputChunk));
     std::vector<CollisionSet> parts(chunks);
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
       for (std::size_t i = c * kept / chunks; i < (c + 1) * kept / chunks; ++i) {
-        if (status[i] != 1) continue;
-        const cl_uint4& p = pairs[i];
+        const cl_uint4& p = decided.pairs[i];
         if (p.s[2] == kVertexFace) {
-          parts[c].add(VertexFacePair{p.s[0], p.s[1]}, toi[i]);
+          parts[c].add(VertexFacePair{p.s[0], p.s[1]}, decided.toi[i]);
         } else {
-          parts[c].add(edge_pair(p), toi[i]);
+          parts[c].add(edge_pair(p), decided.toi[i]);
         }
       }
     });
@@ -482,16 +513,22 @@ void DevicePipeline::back_end(const Buffer& elementary, std::size_t count, const
     for (CollisionSet& part : parts) sets.push_back(&part);
     result.collisions = strategies::normalize_in_parallel(std::move(sets));
   }
-  result.counters.extra.emplace_back("device_given_up_pairs", static_cast<double>(given_up.size()));
-  result.counters.extra.emplace_back("device_second_pass_pairs", static_cast<double>(second_pass));
-  result.counters.extra.emplace_back("device_third_pass_pairs", static_cast<double>(third_pass));
-  result.counters.extra.emplace_back("host_decided_pairs", static_cast<double>(on_host.size()));
+  result.counters.extra.emplace_back("device_given_up_pairs", static_cast<double>(decided.given_up));
+  result.counters.extra.emplace_back("device_second_pass_pairs", static_cast<double>(decided.second_pass));
+  result.counters.extra.emplace_back("device_third_pass_pairs", static_cast<double>(decided.third_pass));
+  result.counters.extra.emplace_back("host_decided_pairs", static_cast<double>(decided.on_host));
 }
 
 strategies::TestedPairs DevicePipeline::tested_pairs(const Buffer& elementary, std::size_t count) {
+  strategies::TestedPairs tested;
+  add_tested_pairs(elementary, count, tested);
+  sort_tested(tested);
+  return tested;
+}
+
+void DevicePipeline::add_tested_pairs(const Buffer& elementary, std::size_t count, strategies::TestedPairs& tested) {
   std::vector<cl_uint4> all(count);
   download(*context_, elementary, all.data(), count);
-  strategies::TestedPairs tested;
   for (const cl_uint4& p : all) {
     if (p.s[2] == kVertexFace) {
       tested.vertex_face.push_back({p.s[0], p.s[1]});
@@ -499,9 +536,11 @@ strategies::TestedPairs DevicePipeline::tested_pairs(const Buffer& elementary, s
       tested.edge_edge.push_back(edge_pair(p));
     }
   }
+}
+
+void DevicePipeline::sort_tested(strategies::TestedPairs& tested) {
   tbb::parallel_sort(tested.vertex_face.begin(), tested.vertex_face.end());
   tbb::parallel_sort(tested.edge_edge.begin(), tested.edge_edge.end());
-  return tested;
 }
 
 std::size_t DevicePipeline::bytes() const {

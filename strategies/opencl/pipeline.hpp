@@ -17,6 +17,7 @@
 #include "strategies/strategy.hpp"
 
 #include <chrono>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -49,11 +50,41 @@ inline constexpr cl_ulong kEmptyPendingKey = ~cl_ulong{0};
 /// the host (the kernel files refuse to build without them), and the sizes chosen for this device and run.
 std::string kernel_defines(std::size_t group_size, long sub_boxes);
 
-/// A list the device fills: its buffer, its room (entries) and, after a fill, its length.
+/// A list the device fills: its buffer, its room (entries) and, after a fill, its length. With a limit (entries,
+/// from the memory budget) it never grows past it: a fill that would need more returns its total without filling,
+/// and the caller fills a smaller range.
 struct DeviceList {
   Buffer buffer;
   std::size_t capacity = 0;
   std::size_t count = 0;
+  std::size_t limit = 0;  // 0: none
+};
+
+/// What a fill returns when its count passed 2^32 entries in one range (a budgeted list: fill a smaller range).
+inline constexpr std::size_t kListOverflow = static_cast<std::size_t>(-1);
+
+/// Device bytes a chunk of a step holds per elementary pair: the expansion's list (16), the filter's flag and kept
+/// list (1 + 16), the narrow phase's status and TOI (1 + 8), what it keeps (16 + 1 + 8) and the retries of the
+/// queries it gives up (16 + 1 + 8); and per candidate triangle pair (its two faces).
+inline constexpr std::size_t kBytesPerElementary = 92;
+inline constexpr std::size_t kBytesPerCandidate = 2 * sizeof(cl_uint);
+/// A chunk has room for at least one query's candidate pairs (a face against its neighbours and what it sweeps
+/// through: a few dozen in the densest public step) and one candidate's elementary pairs (15).
+inline constexpr std::size_t kMinimumChunkCandidates = 256;
+inline constexpr std::size_t kMinimumChunkElementary = 15;
+
+/// The room the memory budget leaves a step's lists, once the fixed buffers (topology, hierarchies, positions,
+/// queries) are counted.
+struct ChunkRoom {
+  std::uint64_t budget = 0, fixed = 0;
+  std::size_t candidates = 0, elementary = 0;
+};
+
+/// What the narrow phase decided over the chunks of a step: the colliding pairs with their TOIs, and its counts.
+struct Decided {
+  std::vector<cl_uint4> pairs;
+  std::vector<double> toi;
+  std::size_t given_up = 0, second_pass = 0, third_pass = 0, on_host = 0;
 };
 
 /// Traversal queries: face q_face[i] (its leaf q_leaf[i], whose box is the query) against the tree rooted at
@@ -154,24 +185,42 @@ class DevicePipeline {
   /// when the list did not fit, grows it to the total and runs again. Returns the total (also in list.count).
   template <class SetArguments>
   std::size_t fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes, StageEvents& events, const char* stage,
-                        SetArguments set);
+                        SetArguments set, std::size_t first = 0);
 
-  /// Candidate triangle pairs of `queries` against `node_boxes` (offsets: 6 doubles per collidable pair, or none).
+  /// Candidate triangle pairs of `queries` against `node_boxes` (offsets: 6 doubles per collidable pair, or none);
+  /// of queries [first, first + count) only, when given.
   std::size_t traverse(const Queries& queries, const Buffer& node_boxes, const Buffer* offsets, DeviceList& out, StageEvents& events,
-                       const char* stage);
+                       const char* stage, std::size_t first = 0, std::size_t count = static_cast<std::size_t>(-1));
   /// Swept vertex boxes x0 ∪ x1 widened by δ/2 (the expansion's primitive-level box test).
   void vertex_boxes(const Buffer& x0, const Buffer& x1, StageEvents& events);
-  /// Elementary pairs of `count` candidates in `candidates` that pass the primitive-level box test.
-  std::size_t expand(const Buffer& candidates, std::size_t count, DeviceList& out, StageEvents& events);
+  /// Elementary pairs of `count` candidates in `candidates` that pass the primitive-level box test; of candidates
+  /// [first, first + count) with a budgeted list (a step in chunks), whose count may be any.
+  std::size_t expand(const Buffer& candidates, std::size_t count, DeviceList& out, StageEvents& events, std::size_t first = 0);
   /// The separation filter (narrowphase/shared/separation.h) over `count` elementary pairs: those it cannot prove
   /// apart go to `out` (in any order). Returns their count.
   std::size_t filter(const Buffer& elementary, std::size_t count, const Buffer& x0, const Buffer& x1, DeviceList& out, StageEvents& events);
   /// The narrow phase over `count` elementary pairs, then the tiers for given-up queries, into result.collisions
-  /// (normalised) and the device_* / host_decided_pairs counters.
+  /// (normalised) and the device_* / host_decided_pairs counters: decide() then collect().
   void back_end(const Buffer& elementary, std::size_t count, const StepView& step, const Buffer& x0, const Buffer& x1, strategies::StepResult& result,
                 StageEvents& events);
+  /// The narrow phase and its tiers over one chunk's `count` elementary pairs: their colliding pairs added to `into`.
+  void decide(const Buffer& elementary, std::size_t count, const StepView& step, const Buffer& x0, const Buffer& x1, strategies::StepResult& result,
+              StageEvents& events, Decided& into);
+  /// The collision set (normalised) and counters of what every chunk decided.
+  void collect(const Decided& decided, strategies::StepResult& result) const;
   /// The first `count` elementary pairs of `elementary`, sorted (audit mode).
   strategies::TestedPairs tested_pairs(const Buffer& elementary, std::size_t count);
+  /// The same, added to `tested` unsorted (a chunk's); sort_tested() once every chunk's is in.
+  void add_tested_pairs(const Buffer& elementary, std::size_t count, strategies::TestedPairs& tested);
+  static void sort_tested(strategies::TestedPairs& tested);
+
+  /// The room the memory budget (memory=) leaves a step's lists over `fixed` bytes of buffers every step keeps;
+  /// every later reserve of the narrow phase's per-pair buffers stays within it.
+  /// @throws std::invalid_argument when the budget is below the fixed buffers and the least room a chunk needs
+  /// (naming that minimum), or more than the device has.
+  ChunkRoom plan_room(std::uint64_t fixed);
+  /// The memory budget on this device, in bytes. @throws std::invalid_argument when it is more than the device has.
+  std::uint64_t budget_bytes() const;
 
   /// Bytes of the pipeline's own buffers.
   std::size_t bytes() const;
@@ -200,6 +249,10 @@ class DevicePipeline {
   std::vector<cl_int> roots_;
   RefitPlan all_, moving_;
   std::size_t initial_elementary_capacity_ = 0;
+  /// Entries each per-pair buffer of the narrow phase may hold (0: no budget planned).
+  std::size_t pair_limit_ = 0;
+  /// Reserves `entries` of `entry_bytes` in `buffer`, within pair_limit_.
+  void reserve_pairs(Buffer& buffer, std::size_t entries, std::size_t entry_bytes);
   DeviceList out_;
   Buffer keep_;
   Buffer faces_, face_edges_, edges_, masks_, children_, node_face_, max_face_, leaf_node_buffer_, vertex_boxes_, counter_, status_, toi_,
@@ -208,23 +261,30 @@ class DevicePipeline {
 
 template <class SetArguments>
 std::size_t DevicePipeline::fill_list(const char* kernel_name, std::size_t items, DeviceList& list, std::size_t entry_bytes, StageEvents& events,
-                                      const char* stage, SetArguments set) {
+                                      const char* stage, SetArguments set, std::size_t first) {
   Context& context = *context_;
   cl_kernel kernel = context.kernel(kernel_name);
+  const std::size_t room = list.limit != 0 ? list.limit * entry_bytes : static_cast<std::size_t>(-1);
+  if (list.limit != 0) list.capacity = std::min(list.capacity, list.limit);
   while (true) {
-    list.buffer.reserve(context, std::max<std::size_t>(list.capacity, 1) * entry_bytes);
+    list.buffer.reserve(context, std::max<std::size_t>(list.capacity, 1) * entry_bytes, room);
     const cl_uint zero[2] = {0, 0};
     check(clEnqueueWriteBuffer(context.queue(), counter_.get(), CL_FALSE, 0, sizeof(zero), zero, 0, nullptr, nullptr), "clEnqueueWriteBuffer");
     set(kernel, static_cast<cl_uint>(std::min<std::size_t>(list.capacity, 0xFFFFFFFFu)), counter_);
-    launch(context, kernel, items, group_, events.add(stage));
+    launch_range(context, kernel, first, items, group_, events.add(stage));
     cl_uint total[2] = {0, 0};
     download(context, counter_, total, 2);
-    if (total[1] != 0) throw std::runtime_error(label_ + ": the " + stage + " list of one step passed 2^32 entries");
+    if (total[1] != 0) {
+      if (list.limit != 0) return kListOverflow;
+      throw std::runtime_error(label_ + ": the " + stage + " list of one step passed 2^32 entries");
+    }
     if (total[0] <= list.capacity) {
       list.count = total[0];
       return total[0];
     }
+    if (list.limit != 0 && total[0] > list.limit) return total[0];  // the caller fills a smaller range
     list.capacity = total[0] + total[0] / 4;
+    if (list.limit != 0) list.capacity = std::min(list.capacity, list.limit);
   }
 }
 

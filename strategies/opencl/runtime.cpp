@@ -251,9 +251,9 @@ void Buffer::reserve_keeping(Context& context, std::size_t bytes, std::size_t ke
   }
 }
 
-void Buffer::reserve(Context& context, std::size_t bytes) {
+void Buffer::reserve(Context& context, std::size_t bytes, std::size_t limit) {
   if (bytes <= bytes_ && memory_ != nullptr) return;
-  const std::size_t grown = std::max<std::size_t>({bytes, bytes_ + bytes_ / 2, 64});
+  const std::size_t grown = std::max(bytes, std::min(limit, std::max<std::size_t>(bytes_ + bytes_ / 2, 64)));
   if (grown > context.device().max_allocation) {
     throw OpenClError("OpenCL: a buffer of " + std::to_string(grown) + " bytes is more than device " + std::to_string(context.device().index) + " (" +
                       context.device().name + ") allocates at once (" + std::to_string(context.device().max_allocation) + ")");
@@ -309,11 +309,15 @@ std::vector<std::pair<std::string, double>> StageEvents::collect() {
 }
 
 void launch(Context& context, cl_kernel kernel, std::size_t items, std::size_t group, cl_event* event) {
+  launch_range(context, kernel, 0, items, group, event);
+}
+
+void launch_range(Context& context, cl_kernel kernel, std::size_t first, std::size_t items, std::size_t group, cl_event* event) {
   if (items == 0) return;
   // Without a group size the implementation chooses one (it must divide the global size: a multiple of 64).
   const std::size_t step = group == 0 ? 64 : group;
   const std::size_t global = (items + step - 1) / step * step;
-  check(clEnqueueNDRangeKernel(context.queue(), kernel, 1, nullptr, &global, group == 0 ? nullptr : &group, 0, nullptr, event),
+  check(clEnqueueNDRangeKernel(context.queue(), kernel, 1, first == 0 ? nullptr : &first, &global, group == 0 ? nullptr : &group, 0, nullptr, event),
         "clEnqueueNDRangeKernel");
 }
 

@@ -93,8 +93,9 @@ class Buffer {
   ~Buffer();
   Buffer(const Buffer&) = delete;
   Buffer& operator=(const Buffer&) = delete;
-  /// Ensures room for `bytes` (contents are lost when it grows: by half again, to spare later steps a reallocation).
-  void reserve(Context& context, std::size_t bytes);
+  /// Ensures room for `bytes` (contents are lost when it grows: by half again, to spare later steps a reallocation,
+  /// but never past `limit` bytes unless `bytes` itself is: a budgeted list stays within its room).
+  void reserve(Context& context, std::size_t bytes, std::size_t limit = static_cast<std::size_t>(-1));
   /// The same, but a grown buffer keeps its first `keep` bytes (copied on the device, queue-ordered).
   void reserve_keeping(Context& context, std::size_t bytes, std::size_t keep);
   cl_mem get() const { return memory_; }
@@ -153,5 +154,8 @@ void download(Context& context, const Buffer& buffer, T* data, std::size_t count
 /// Enqueues `kernel` over `items` work items (rounded up to whole groups of `group`; group 0 lets the implementation
 /// choose); nothing for 0 items.
 void launch(Context& context, cl_kernel kernel, std::size_t items, std::size_t group, cl_event* event);
+/// The same over work items [first, first + items) (a global offset: get_global_id(0) starts at `first`), for a
+/// kernel that is given first + items as its count.
+void launch_range(Context& context, cl_kernel kernel, std::size_t first, std::size_t items, std::size_t group, cl_event* event);
 
 }  // namespace ccd::opencl

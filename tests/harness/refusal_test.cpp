@@ -65,9 +65,10 @@ TEST_F(Refusal, OutOfRangeKeysAndFlagsNameTheirRange) {
   expect_refused("queries " + quoted(dir_.path()) + " --method 'conservative:max_iterations=1e300'", "max_iterations=1e300");
   // apccd's own key misspelt: blamed on apccd, with both lists.
   expect_refused(run + "'apccd:foo=1'", "apccd+conservative has no parameter 'foo' (apccd's: skip,");
-  expect_refused(run + "'full:nf_max=3'",
-                 "full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, filter; narrow "
-                 "phase conservative's: tolerance, toi_tolerance, max_iterations)");
+  expect_refused(
+      run + "'full:nf_max=3'",
+      "full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, memory, filter; narrow "
+      "phase conservative's: tolerance, toi_tolerance, max_iterations)");
   // --threads 4294967297 used to wrap to 1, --threads 1e8 to allocate gigabytes.
   expect_refused("--threads 4294967297 scenes", "--threads");
   expect_refused("--threads 100000000 scenes", "--threads");

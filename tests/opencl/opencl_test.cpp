@@ -6,6 +6,7 @@
 #include "datasets/scene_file.hpp"
 #include "harness/run.hpp"
 #include "strategies/opencl/full_opencl.hpp"
+#include "strategies/opencl/pipeline.hpp"
 #include "strategies/opencl/runtime.hpp"
 #include "strategies/registry.hpp"
 #include "tests/support/cli.hpp"
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -45,7 +47,8 @@ double extra_counter(const strategies::StepResult& result, const std::string& na
 /// for apccd, whose session counters differ). Returns the number of colliding pairs over all steps (the caller
 /// asserts it is not 0) and adds up the device's counters.
 std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& device_spec, const Scene& scene,
-                                const std::vector<std::vector<Vec3>>& frames, std::map<std::string, double>* counters = nullptr) {
+                                const std::vector<std::vector<Vec3>>& frames, std::map<std::string, double>* counters = nullptr,
+                                const std::function<void(const strategies::StepResult&)>& each_device_step = {}) {
   auto cpu = strategies::make_strategy(cpu_spec);
   auto device = strategies::make_strategy(device_spec);
   cpu->init(scene, frames[0]);
@@ -56,6 +59,7 @@ std::size_t expect_same_answers(const std::string& cpu_spec, const std::string& 
     // Audit mode: both return the elementary pairs they tested, which must be the same pairs, not only as many.
     const strategies::StepResult a = cpu->step({&scene, k, frames[k], frames[k + 1]}, true);
     const strategies::StepResult b = device->step({&scene, k, frames[k], frames[k + 1]}, true);
+    if (each_device_step) each_device_step(b);
     EXPECT_TRUE(a.tested.has_value() && b.tested.has_value() && a.tested->vertex_face == b.tested->vertex_face &&
                 a.tested->edge_edge == b.tested->edge_edge)
         << "the tested elementary pairs differ";
@@ -329,6 +333,76 @@ TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
       expect_same_answers("full", std::string("full:backend=opencl") + kSmallestDeviceMemory, loaded.scene(), testing::all_frames(loaded), &counters);
   EXPECT_GT(colliding, 0u);
   EXPECT_GT(counters["host_decided_pairs"], 0.0) << "no query overflowed its sub-boxes: the host's part was not exercised";
+}
+
+// A memory budget (memory=) small enough that every step runs in at least 8 chunks gives the answers of the whole
+// step: the CPU's collision sets, TOI bits, tested pairs and counts, within the budget.
+TEST_F(OpenClParity, ABudgetThatSplitsEveryStepIntoChunksGivesTheSameAnswers) {
+  const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
+  const Scene& scene = loaded.scene();
+  const auto frames = testing::all_frames(loaded);
+  // The scene's fixed device bytes (topology, hierarchies, positions, queries), from a step under the default budget.
+  auto probe = strategies::make_strategy("full:backend=opencl");
+  probe->init(scene, frames[0]);
+  const strategies::StepResult whole = probe->step({&scene, 0, frames[0], frames[1]}, false);
+  EXPECT_EQ(extra_counter(whole, "device_chunks"), 1.0) << "the whole step fits the default budget: one chunk";
+  const double fixed = extra_counter(whole, "device_fixed_bytes");
+  ASSERT_GT(fixed, 0.0);
+  // Room for 24 elementary pairs a chunk (and the least room for candidate pairs).
+  constexpr std::size_t kChunkRoom = 24;
+  const std::size_t budget =
+      static_cast<std::size_t>(fixed) + opencl::kMinimumChunkCandidates * opencl::kBytesPerCandidate + kChunkRoom * opencl::kBytesPerElementary;
+  for (const std::string filter : {"", ":filter=on"}) {
+    SCOPED_TRACE("full" + filter + ", memory=" + std::to_string(budget));
+    std::size_t steps = 0, split = 0;
+    const auto each_step = [&](const strategies::StepResult& r) {
+      const double chunks = extra_counter(r, "device_chunks");
+      // A chunk holds at most kChunkRoom of the pairs tested (the filter's kept ones are fewer still).
+      EXPECT_GE(chunks * kChunkRoom, static_cast<double>(r.counters.elementary_tests));
+      if (r.counters.elementary_tests >= 8 * kChunkRoom) {
+        EXPECT_GE(chunks, 8.0) << r.counters.elementary_tests << " elementary tests";
+      }
+      split += chunks >= 8.0;
+      EXPECT_EQ(extra_counter(r, "device_budget_bytes"), static_cast<double>(budget));
+      EXPECT_LE(r.counters.device_bytes, budget) << "the step's buffers passed its budget";
+      ++steps;
+    };
+    const std::size_t colliding =
+        expect_same_answers("full" + filter, "full" + filter + ":backend=opencl:memory=" + std::to_string(budget), scene, frames, nullptr, each_step);
+    EXPECT_GT(colliding, 0u);
+    EXPECT_EQ(steps + 1, frames.size());
+    EXPECT_GE(split + 1, steps) << "every step but the first (no elementary pair) runs in at least 8 chunks";
+  }
+}
+
+// A budget below the fixed buffers and one chunk's least room is refused naming that minimum; memory= is read
+// without a device (as a share or bytes) and named in the resolved spec.
+TEST_F(OpenClParity, ABudgetBelowThePipelinesMinimumIsRefusedNamingIt) {
+  const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
+  auto small = strategies::make_strategy("full:backend=opencl:memory=1K");
+  try {
+    small->init(loaded.scene(), testing::all_frames(loaded)[0]);
+    ADD_FAILURE() << "1 KiB was taken";
+  } catch (const std::invalid_argument& refusal) {
+    EXPECT_NE(std::string(refusal.what()).find("is below what this scene needs at least"), std::string::npos) << refusal.what();
+    EXPECT_NE(std::string(refusal.what()).find("give memory="), std::string::npos) << refusal.what();
+  }
+  // apccd holds a step's lists whole: a step past its budget is refused, naming it.
+  const auto frames = testing::all_frames(loaded);
+  auto apccd = strategies::make_strategy("apccd:backend=opencl:memory=1K");
+  apccd->init(loaded.scene(), frames[0]);
+  try {
+    (void)apccd->step({&loaded.scene(), 0, frames[0], frames[1]}, false);
+    ADD_FAILURE() << "apccd ran a step in 1 KiB";
+  } catch (const std::runtime_error& refusal) {
+    EXPECT_NE(std::string(refusal.what()).find("more than memory=1024 allows (1024 bytes)"), std::string::npos) << refusal.what();
+  }
+  EXPECT_NE(strategies::make_strategy("full:backend=opencl:memory=50%")->name().find(":memory=50%"), std::string::npos);
+  EXPECT_EQ(strategies::make_strategy("full:backend=opencl")->name().find(":memory="), std::string::npos) << "the default is not named";
+  for (const char* wrong : {"memory=0%", "memory=101%", "memory=0", "memory=1.5", "memory=2X", "memory="}) {
+    EXPECT_THROW(strategies::validate(strategies::parse_strategy_spec(std::string("full:backend=opencl:") + wrong)), std::invalid_argument) << wrong;
+  }
+  EXPECT_THROW(strategies::validate(strategies::parse_strategy_spec("full:memory=2G")), std::invalid_argument) << "a key of the OpenCL backend";
 }
 
 // The same for apccd: its own lists (dangling triangles, partial traversal, admissible, tested) grow and run

@@ -84,10 +84,11 @@ TEST(StrategyFactory, SpecsResolveAndErrorsAreClear) {
   EXPECT_THROW(make_strategy("full:nf_max=3"), std::invalid_argument);
   EXPECT_THROW(make_strategy("full:oops"), std::invalid_argument);
   const std::string unknown = testing::error_message<std::invalid_argument>([] { make_strategy("full:nf_max=3"); });
-  EXPECT_NE(unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, filter; "
-                         "narrow phase conservative's: "
-                         "tolerance, toi_tolerance, max_iterations)"),
-            std::string::npos)
+  EXPECT_NE(
+      unknown.find("full+conservative has no parameter 'nf_max' (full's: backend, device, device_iterations, list_start, sub_boxes, memory, filter; "
+                   "narrow phase conservative's: "
+                   "tolerance, toi_tolerance, max_iterations)"),
+      std::string::npos)
       << unknown;
 }
 

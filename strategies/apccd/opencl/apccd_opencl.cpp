@@ -44,6 +44,7 @@ class ApccdOpenCl final : public Strategy {
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
     scene_ = &scene;
     pipeline_.init(scene, first_frame);
+    memory_budget_ = pipeline_.budget_bytes();
     session_.init(settings_, scene, first_frame);
     history_ = ProximityHistory(settings_.history);
     opencl::Context& context = pipeline_.context();
@@ -178,6 +179,13 @@ class ApccdOpenCl final : public Strategy {
     result.counters.candidate_triangle_pairs = admissible;
     result.counters.elementary_tests = tests;
     const std::size_t device = device_bytes();
+    if (device > memory_budget_) {
+      // apccd's lists carry over from step to step (pending pairs, sessions): it does not run a step in pieces.
+      throw std::runtime_error(pipeline_.label() + ": step " + std::to_string(step.index + 1) + " needed " + std::to_string(device) +
+                               " bytes of device memory, more than memory=" + pipeline_.backend().memory.text() + " allows (" +
+                               std::to_string(memory_budget_) +
+                               " bytes): apccd holds a step's lists whole; full:backend=opencl runs such a step in chunks, or give a larger memory=");
+    }
     result.counters.device_bytes = device;
     result.counters.history_bytes = history_.bytes();
     result.counters.kept_bytes = history_.bytes();
@@ -191,6 +199,7 @@ class ApccdOpenCl final : public Strategy {
                                                          {"history_table_bytes", static_cast<double>(history_.bytes())},
                                                          {"distance_filtered", static_cast<double>(elementary - tests)},
                                                          {"device_bytes", static_cast<double>(device)},
+                                                         {"device_budget_bytes", static_cast<double>(memory_budget_)},
                                                          {"pending_table_builds", static_cast<double>(table_builds_)},
                                                          {"admissible_pairs", static_cast<double>(admissible)},
                                                          {"object_pair_candidates", static_cast<double>(across_count)},
@@ -357,6 +366,7 @@ class ApccdOpenCl final : public Strategy {
 
   ApccdSettings settings_;
   opencl::DevicePipeline pipeline_;
+  std::uint64_t memory_budget_ = 0;  // memory= on this device, in bytes
   ApccdSession session_;
   ProximityHistory history_;
   const Scene* scene_ = nullptr;
