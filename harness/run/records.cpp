@@ -59,6 +59,26 @@ void put_optional(json& j, const char* name, const std::optional<T>& value) {
   if (value) j[name] = *value;
 }
 
+void put_counts(json& j, const VerdictCounts& v) {
+  j["colliding"] = v.colliding;
+  j["missed"] = v.missed;
+  j["missed_culled"] = v.missed_culled;
+  j["missed_tested"] = v.missed_tested;
+  j["false_alarms"] = v.false_alarms;
+  put_optional(j, "colliding_face_shape", v.colliding_face_shape);
+  put_optional(j, "missed_face_shape", v.missed_face_shape);
+}
+
+void read_counts(const json& j, VerdictCounts& v) {
+  v.colliding = j.at("colliding").get<std::size_t>();
+  v.missed = j.at("missed").get<std::size_t>();
+  v.missed_culled = j.at("missed_culled").get<std::size_t>();
+  v.missed_tested = j.at("missed_tested").get<std::size_t>();
+  v.false_alarms = j.at("false_alarms").get<std::size_t>();
+  v.colliding_face_shape = optional_field<std::size_t>(j, "colliding_face_shape");
+  v.missed_face_shape = optional_field<std::size_t>(j, "missed_face_shape");
+}
+
 /// The record's "record" field must say what it is.
 void expect_kind(const json& j, const char* kind) {
   if (!j.is_object() || j.value("record", std::string()) != kind) {
@@ -111,14 +131,8 @@ void to_json(json& j, const StepRecord& r) {
   }
   for (const auto& [name, value] : r.counters) j[name] = value;
   if (const std::optional<StepVerdict>& v = r.verdict) {
-    j["colliding"] = v->colliding;
-    put_optional(j, "colliding_face_shape", v->colliding_face_shape);
-    put_optional(j, "missed_face_shape", v->missed_face_shape);
-    j["missed"] = v->missed;
+    put_counts(j, *v);
     put_optional(j, "missed_pairs", v->missed_pairs);
-    j["missed_culled"] = v->missed_culled;
-    j["missed_tested"] = v->missed_tested;
-    j["false_alarms"] = v->false_alarms;
     if (v->toi) {
       j["toi_checked"] = v->toi->checked;
       j["toi_late"] = v->toi->late;
@@ -156,13 +170,7 @@ void from_json(const json& j, StepRecord& r) {
   r.verdict.reset();
   if (j.contains("colliding")) {
     StepVerdict v;
-    v.colliding = j.at("colliding").get<std::size_t>();
-    v.missed = j.at("missed").get<std::size_t>();
-    v.missed_culled = j.at("missed_culled").get<std::size_t>();
-    v.missed_tested = j.at("missed_tested").get<std::size_t>();
-    v.false_alarms = j.at("false_alarms").get<std::size_t>();
-    v.colliding_face_shape = optional_field<std::size_t>(j, "colliding_face_shape");
-    v.missed_face_shape = optional_field<std::size_t>(j, "missed_face_shape");
+    read_counts(j, v);
     if (j.contains("missed_pairs")) v.missed_pairs = j.at("missed_pairs");
     if (j.contains("toi_checked")) {
       v.toi.emplace();
@@ -210,16 +218,10 @@ void to_json(json& j, const CellSummary& s) {
        {"errors", s.errors},
        {"finished_at", s.finished_at}};
   if (const std::optional<CellVerdict>& v = s.verdict) {
-    j.update(json{{"colliding", v->colliding},
-                  {"missed", v->missed},
-                  {"missed_culled", v->missed_culled},
-                  {"missed_tested", v->missed_tested},
-                  {"false_alarms", v->false_alarms},
-                  {"miss_causes", v->miss_causes},
+    put_counts(j, *v);
+    j.update(json{{"miss_causes", v->miss_causes},
                   {"colliding_by_objects", v->colliding_by_objects},
                   {"faces_in_contact_by_objects", v->faces_in_contact_by_objects}});
-    put_optional(j, "colliding_face_shape", v->colliding_face_shape);
-    put_optional(j, "missed_face_shape", v->missed_face_shape);
     if (const std::optional<CellVerdict::Toi>& toi = v->toi) {
       j.update(json{{"toi_checked", toi->checked},
                     {"toi_late", toi->late},
@@ -282,16 +284,10 @@ void from_json(const json& j, CellSummary& s) {
   s.verdict.reset();
   if (j.contains("colliding")) {
     CellVerdict v;
-    v.colliding = j.at("colliding").get<std::size_t>();
-    v.missed = j.at("missed").get<std::size_t>();
-    v.missed_culled = j.at("missed_culled").get<std::size_t>();
-    v.missed_tested = j.at("missed_tested").get<std::size_t>();
-    v.false_alarms = j.at("false_alarms").get<std::size_t>();
+    read_counts(j, v);
     v.miss_causes = j.value("miss_causes", json::object());
     v.colliding_by_objects = j.value("colliding_by_objects", std::map<std::string, std::size_t>{});
     v.faces_in_contact_by_objects = j.value("faces_in_contact_by_objects", std::map<std::string, std::size_t>{});
-    v.colliding_face_shape = optional_field<std::size_t>(j, "colliding_face_shape");
-    v.missed_face_shape = optional_field<std::size_t>(j, "missed_face_shape");
     if (j.contains("toi_checked")) {
       v.toi.emplace();
       v.toi->checked = j.at("toi_checked").get<std::size_t>();

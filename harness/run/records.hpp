@@ -35,11 +35,16 @@ struct RecordEnvironment {
   int rank = 0;
 };
 
-/// The verdict of one step against the exact truth (--verify exact).
-struct StepVerdict {
+/// What a verdict counts, of a step or of a cell over its steps: colliding truth pairs, those missed (never tested /
+/// tested wrong) and the false alarms.
+struct VerdictCounts {
   std::size_t colliding = 0, missed = 0, missed_culled = 0, missed_tested = 0, false_alarms = 0;
   /// Scenes with analytic shapes only.
   std::optional<std::size_t> colliding_face_shape, missed_face_shape;
+};
+
+/// The verdict of one step against the exact truth (--verify exact).
+struct StepVerdict : VerdictCounts {
   /// The first kKeptMissedPairs missed pairs with their coordinates (missed_pair_records), when any was missed.
   std::optional<nlohmann::json> missed_pairs;
   /// With --toi.
@@ -73,13 +78,11 @@ struct StepRecord {
 };
 
 /// The verdict of a cell over its steps (--verify exact).
-struct CellVerdict {
-  std::size_t colliding = 0, missed = 0, missed_culled = 0, missed_tested = 0, false_alarms = 0;
+struct CellVerdict : VerdictCounts {
   /// Why each miss was missed, by cause.
   nlohmann::json miss_causes = nlohmann::json::object();
   /// Truth pairs and faces in contact by pair of objects ("cloth/ball").
   std::map<std::string, std::size_t> colliding_by_objects, faces_in_contact_by_objects;
-  std::optional<std::size_t> colliding_face_shape, missed_face_shape;
   /// With --toi: the exact earliest contact against every reported TOI.
   struct Toi {
     std::size_t checked = 0, late = 0, missing = 0;

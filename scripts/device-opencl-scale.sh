@@ -1,0 +1,120 @@
+#!/usr/bin/env bash
+# Any step on one GPU (issue 50, reports/opencl/scale/): the OpenCL step under a device memory budget (memory=), on
+# the GPU machine, from what `CARRY_VARIANTS="before=PATH after=PATH" scripts/device-carry.sh` put into
+# device-carry/ (builds nothing). Registers the machine's NVIDIA OpenCL driver. Every GPU run is its own process,
+# sampled by nvidia-smi every $SAMPLE_MS ms (the driver's peak for that process), --verify none, and keeps each
+# step's answers digest. Parts (PARTS, default "context fits scale"):
+#   context: the ci suite's first 2 steps under the default budget: the driver's memory for a context and its
+#            kernels, which no buffer of ours accounts for (what a peak may pass its budget by);
+#   fits:    where a whole step fits, the chunked path (after) against the whole-step path (before), same warm
+#            machine, $REPEATS passes: the public steps rod-twist 3036 -> 3037 and cloth-funnel 227 -> 228, and
+#            steps 2-15 of the spinning ball at resolution 708 (about 1M triangles; table.py picks 2, 10 and 14);
+#   scale:   frames 26-28 of the same scene (2 steps past the old 2^32 ceiling: about 3e8 candidate pairs a step)
+#            under memory=2G, 4G and 8G, conservative and cubic64, at δ = 0 and the scene's δ, and the CPU `full` of
+#            the same steps (the answers every budget must give).
+# Resumes: a run whose JSON is in the work folder is not run again, so calls that stop at the device's command
+# limit continue each other on a warm machine. With $OUT set (the device's return folder) the work folder, less its
+# scenes and run folders, is packed into $OUT/opencl-scale.tgz after every run. Then
+#   /usr/bin/python3 reports/opencl/scale/table.py FOLDER
+# prints the table and exits non-zero on a digest that differs from the CPU's or a peak above budget + context.
+# Usage (repository root, GPU machine): PARTS="context scale" scripts/device-opencl-scale.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/device-env.sh
+out=/tmp/ccdbench-opencl-scale
+source scripts/device-builds.sh
+pack() { if [ -n "${OUT:-}" ]; then tar czf "$OUT/opencl-scale.tgz" -C "$out" --exclude='./scene-*' --exclude='./runs-*' .; fi; }
+trap pack EXIT
+PARTS=${PARTS:-context fits scale}
+REPEATS=${REPEATS:-3}
+SAMPLE_MS=${SAMPLE_MS:-20}
+BUDGETS=${BUDGETS:-2G 4G 8G}
+write_machine before after
+
+# gpu NAME VARIANT STRATEGY ARGS...: one GPU run as its own process, its driver peak sampled; kept as NAME.*.
+gpu() {
+  local name=$1 variant=$2 strategy=$3
+  shift 3
+  local stem="$out/$name" start=$SECONDS
+  if [ -s "$stem.json" ]; then return; fi
+  "$bin/ccdbench-$variant" --threads "$threads" run "$@" --strategy "$strategy" --verify none --out "$out/runs-$name" --json "$stem.json.tmp" \
+    --fresh 2> "$stem.err" > "$stem.txt" &
+  local pid=$!
+  nvidia-smi --query-compute-apps=pid,used_memory --format=csv,noheader,nounits -lms "$SAMPLE_MS" 2> /dev/null |
+    awk -F', *' -v pid="$pid" '$1 == pid && $2 + 0 > peak {peak = $2 + 0} END {print peak + 0}' > "$stem.smi" &
+  local sampler=$!
+  local status=0
+  wait "$pid" || status=$?
+  pkill -f "nvidia-smi --query-compute-apps" 2> /dev/null || true
+  wait "$sampler" 2> /dev/null || true
+  if [ "$status" != 0 ]; then
+    echo "$name failed ($status):"
+    tail -n 3 "$stem.err"
+    echo "$status" > "$stem.failed"
+    return
+  fi
+  gzip -c "$out/runs-$name/results.jsonl" > "$stem.jsonl.gz"
+  rm -rf "$out/runs-$name"
+  mv "$stem.json.tmp" "$stem.json"
+  echo "$name: $((SECONDS - start)) s, driver peak $(cat "$stem.smi") MiB"
+  pack
+}
+# cpu NAME STRATEGY ARGS...: the CPU's answers of the same steps.
+cpu() {
+  local name=$1 strategy=$2
+  shift 2
+  local stem="$out/$name" start=$SECONDS
+  if [ -s "$stem.json" ]; then return; fi
+  "$bin/ccdbench-after" --threads "$threads" run "$@" --strategy "$strategy" --verify none --out "$out/runs-$name" --json "$stem.json.tmp" \
+    --fresh 2> "$stem.err" > "$stem.txt"
+  gzip -c "$out/runs-$name/results.jsonl" > "$stem.jsonl.gz"
+  rm -rf "$out/runs-$name"
+  mv "$stem.json.tmp" "$stem.json"
+  echo "$name: $((SECONDS - start)) s"
+  pack
+}
+# scene NAME FRAMES FIRST: the spinning ball at resolution 708, frames FIRST..FRAMES-1, generated once.
+scene() {
+  local folder="$out/scene-$1"
+  if [ ! -e "$folder/scene.json" ]; then
+    local start=$SECONDS
+    "$bin/ccdbench-after" --threads "$threads" generate spinning-ball --resolution 708 --frames "$2" --first-frame "$3" --out "$folder" \
+      > "$out/generate-$1.txt"
+    echo "generated $1 in $((SECONDS - start)) s" >&2
+  fi
+  echo "$folder"
+}
+narrow_spec() { [ "$1" = conservative ] && echo "full" || echo "full+$1"; }
+
+if part context; then
+  echo "== context: the ci suite's first 2 steps"
+  gpu context after "full:backend=opencl" --suite ci --max-steps 2
+fi
+if part fits; then
+  echo "== fits: the whole-step path (before) and the chunked path (after)"
+  ball=$(scene steps-2-15 16 2)
+  for narrow in conservative cubic64; do
+    for v in before after; do
+      spec="$(narrow_spec $narrow):backend=opencl"
+      gpu "fits-rod-twist-$narrow-$v" "$v" "$spec" --frames $(frames rod-twist 3036 3037) $(frames rod-twist 3036 3037) --repeat "$REPEATS"
+      gpu "fits-cloth-funnel-$narrow-$v" "$v" "$spec" --frames $(frames cloth-funnel 227 228) $(frames cloth-funnel 227 228) --repeat "$REPEATS"
+      gpu "fits-ball-$narrow-$v" "$v" "$spec" --scene "$ball" --repeat "$REPEATS"
+    done
+  done
+fi
+if part scale; then
+  echo "== scale: frames 26-28 under budgets $BUDGETS"
+  ball=$(scene frames-26-28 29 26)
+  for thickness in 0 scene; do
+    for narrow in conservative cubic64; do
+      for budget in $BUDGETS; do
+        gpu "scale-$thickness-$narrow-$budget" after "$(narrow_spec $narrow):backend=opencl:memory=$budget" --scene "$ball" --thickness "$thickness"
+      done
+    done
+  done
+  for thickness in 0 scene; do
+    for narrow in conservative cubic64; do
+      cpu "scale-$thickness-$narrow-cpu" "$(narrow_spec $narrow)" --scene "$ball" --thickness "$thickness"
+    done
+  done
+fi
