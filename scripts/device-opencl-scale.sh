@@ -14,9 +14,9 @@
 #            the same steps (the answers every budget must give).
 # Resumes: a run whose JSON is in the work folder is not run again, so calls that stop at the device's command
 # limit continue each other on a warm machine. With $OUT set (the device's return folder) the work folder, less its
-# scenes and run folders, is packed into $OUT/opencl-scale.tgz after every run. Then
-#   /usr/bin/python3 reports/opencl/scale/table.py FOLDER
-# prints the table and exits non-zero on a digest that differs from the CPU's or a peak above budget + context.
+# scenes and run folders, is packed into $OUT/opencl-scale.tgz after every run. Last it prints the table
+# (reports/opencl/scale/table.py FOLDER, where the machine has a python3; else run it on the folder here) and exits
+# with its status: non-zero on a digest that differs from the CPU's, a failed run, or a peak above budget + context.
 # Usage (repository root, GPU machine): PARTS="context scale" scripts/device-opencl-scale.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -117,4 +117,9 @@ if part scale; then
       cpu "scale-$thickness-$narrow-cpu" "$(narrow_spec $narrow)" --scene "$ball" --thickness "$thickness"
     done
   done
+fi
+if command -v python3 > /dev/null; then
+  python3 reports/opencl/scale/table.py "$out"
+else
+  echo "no python3 here: run reports/opencl/scale/table.py on the returned folder"
 fi
