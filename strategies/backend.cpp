@@ -34,10 +34,11 @@ MemoryBudget parse_memory_budget(const std::string& text) {
   const std::size_t suffix = kSuffixes.find(text.back());
   const std::string digits = suffix == std::string::npos ? text : text.substr(0, text.size() - 1);
   const std::optional<double> count = parse_double(digits);
-  if (!count || !(*count >= 1)) throw refuse("not a share or a number of bytes of at least 1");
+  if (!count) throw refuse("not a share or a number of bytes");
+  // The suffix first (0.5K is 512 bytes), then a whole number of bytes from 1 to 2^62: far past any device, and
+  // exact in both double and uint64.
   const double bytes = std::ldexp(*count, suffix == std::string::npos ? 0 : 10 * static_cast<int>(suffix + 1));
-  // 2^62 bytes: far past any device, and exact in both double and uint64.
-  if (!(bytes <= 0x1p62) || bytes != std::floor(bytes)) throw refuse("not a whole number of bytes up to 2^62");
+  if (!(bytes >= 1 && bytes <= 0x1p62) || bytes != std::floor(bytes)) throw refuse("not a whole number of bytes from 1 to 2^62");
   budget.bytes = static_cast<std::uint64_t>(bytes);
   return budget;
 }

@@ -97,46 +97,62 @@ class FullOpenCl final : public Strategy {
   };
 
   /// A range of `span` items whose list needed `found` entries (kListOverflow: past 2^32) where `limit` fit: the
-  /// span to try instead, smaller by the overshoot with a fifth to spare.
+  /// span to try instead, smaller by the overshoot with a fifth to spare. (A span of 1 always fits where this is
+  /// called: one candidate's 15 elementary pairs fit every room, and one query's candidates widen the room.)
   static std::size_t smaller_span(std::size_t span, std::size_t found, std::size_t limit) {
+    if (span <= 1) throw std::logic_error("a range of one item did not fit its list");
     const double fit = found == opencl::kListOverflow ? 0.5 : 0.8 * static_cast<double>(limit) / static_cast<double>(found);
     return std::clamp<std::size_t>(static_cast<std::size_t>(static_cast<double>(span) * fit), 1, span - 1);
+  }
+
+  /// The room planned again for one query that found `found` candidate pairs, more than the room held; the lists
+  /// that hold more than their new room give it back.
+  void widen_candidate_room(std::size_t found) {
+    room_ = pipeline_.plan_room(room_.fixed, found);
+    candidates_.limit = room_.candidates;
+    elementary_.limit = kept_.limit = room_.elementary;
+    elementary_.buffer.release_above(room_.elementary * sizeof(cl_uint4));
+    kept_.buffer.release_above(room_.elementary * sizeof(cl_uint4));
+    elementary_.capacity = std::min(elementary_.capacity, room_.elementary);
+    kept_.capacity = std::min(kept_.capacity, room_.elementary);
   }
 
   /// The step in chunks that fit the memory budget (one, where the whole step does): ranges of queries whose
   /// candidate pairs fit their list, each in ranges of candidates whose elementary pairs fit theirs, each range
   /// filtered and decided. A range that does not fit is tried again smaller; one that fits easily lets the next grow
-  /// twice as large. Every answer is the same as in one piece: the pairs a range finds are those its queries or
-  /// candidates find in the whole step, each decided by the same code, and the set is put in order at the end.
+  /// twice as large, and the spans carry over to the next range and step (a step like the last needs no retries).
+  /// Every answer is the same as in one piece: the pairs a range finds are those its queries or candidates find in
+  /// the whole step, each decided by the same code, and the set is put in order at the end.
   void run_chunks(const StepView& step, const Buffer& x0, const Buffer& x1, StepResult& result, opencl::StageEvents& events, Chunks& chunks) {
-    std::size_t span = queries_.count;
     for (std::size_t q = 0; q < queries_.count;) {
-      span = std::min(span, queries_.count - q);
+      const std::size_t span = std::min(query_span_, queries_.count - q);
       const std::size_t found = pipeline_.traverse(queries_, node_boxes_, nullptr, candidates_, events, "traversal", q, span);
       if (found > candidates_.limit) {
         if (span == 1) {
-          throw std::runtime_error(pipeline_.label() + ": one query (face " + std::to_string(q) +
-                                   "'s) found more candidate pairs than memory=" + pipeline_.backend().memory.text() + " leaves room for (" +
-                                   std::to_string(candidates_.limit) + "): give a larger memory=");
+          // One query found more than the room held: the room is planned again for it, or the budget refused
+          // naming what this query needs.
+          if (found == opencl::kListOverflow) throw std::runtime_error(pipeline_.label() + ": one query found 2^32 candidate pairs or more");
+          widen_candidate_room(found);
+        } else {
+          query_span_ = smaller_span(span, found, candidates_.limit);
         }
-        span = smaller_span(span, found, candidates_.limit);
         continue;
       }
       chunks.candidates += found;
       run_candidate_chunks(found, step, x0, x1, result, events, chunks);
       q += span;
-      if (found < candidates_.limit / 2) span *= 2;
+      if (found < candidates_.limit / 2 && span == query_span_) query_span_ = std::min(query_span_, queries_.count) * 2;
     }
+    chunks.count = std::max<std::size_t>(chunks.count, 1);  // a step without candidate pairs is one piece
   }
 
   void run_candidate_chunks(std::size_t found, const StepView& step, const Buffer& x0, const Buffer& x1, StepResult& result,
                             opencl::StageEvents& events, Chunks& chunks) {
-    std::size_t span = found;
     for (std::size_t c = 0; c < found;) {
-      span = std::min(span, found - c);
+      const std::size_t span = std::min(candidate_span_, found - c);
       const std::size_t elementary = pipeline_.expand(candidates_.buffer, span, elementary_, events, c);
       if (elementary > elementary_.limit) {
-        span = smaller_span(span, elementary, elementary_.limit);  // one candidate's 15 always fit (kMinimumChunkElementary)
+        candidate_span_ = smaller_span(span, elementary, elementary_.limit);
         continue;
       }
       const opencl::DeviceList* tested = &elementary_;
@@ -151,12 +167,14 @@ class FullOpenCl final : public Strategy {
       chunks.tests += tests;
       ++chunks.count;
       c += span;
-      if (elementary < elementary_.limit / 2) span *= 2;
+      if (elementary < elementary_.limit / 2 && span == candidate_span_) candidate_span_ = std::min(candidate_span_, found) * 2;
     }
   }
 
   opencl::DevicePipeline pipeline_;
   opencl::ChunkRoom room_;
+  /// The ranges that fit last (queries, candidates): where the next step starts.
+  std::size_t query_span_ = static_cast<std::size_t>(-1), candidate_span_ = static_cast<std::size_t>(-1);
   bool separation_filter_ = false;
   opencl::Queries queries_;
   opencl::DevicePositions positions_;

@@ -214,11 +214,14 @@ class DevicePipeline {
   void add_tested_pairs(const Buffer& elementary, std::size_t count, strategies::TestedPairs& tested);
   static void sort_tested(strategies::TestedPairs& tested);
 
-  /// The room the memory budget (memory=) leaves a step's lists over `fixed` bytes of buffers every step keeps;
-  /// every later reserve of the narrow phase's per-pair buffers stays within it.
-  /// @throws std::invalid_argument when the budget is below the fixed buffers and the least room a chunk needs
-  /// (naming that minimum), or more than the device has.
-  ChunkRoom plan_room(std::uint64_t fixed);
+  /// The room the memory budget (memory=) leaves a step's lists over `fixed` bytes of buffers every step keeps,
+  /// with room for at least `candidates` candidate pairs (one query's); every later reserve of the narrow phase's
+  /// per-pair buffers stays within it, and those that hold more (planned again, for a query that found more) are
+  /// given back.
+  /// @throws std::invalid_argument when the budget is below the fixed buffers and that least room (naming the
+  /// minimum: for the scene as far as it is known, one query's candidates being unknown before it runs), or more
+  /// than the device has.
+  ChunkRoom plan_room(std::uint64_t fixed, std::size_t candidates = kMinimumChunkCandidates);
   /// The memory budget on this device, in bytes. @throws std::invalid_argument when it is more than the device has.
   std::uint64_t budget_bytes() const;
 

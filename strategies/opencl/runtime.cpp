@@ -238,6 +238,13 @@ Buffer::~Buffer() {
   if (memory_ != nullptr) clReleaseMemObject(memory_);
 }
 
+void Buffer::release_above(std::size_t bytes) {
+  if (bytes_ <= bytes || memory_ == nullptr) return;
+  clReleaseMemObject(memory_);
+  memory_ = nullptr;
+  bytes_ = 0;
+}
+
 void Buffer::reserve_keeping(Context& context, std::size_t bytes, std::size_t keep) {
   if (bytes <= bytes_ && memory_ != nullptr) return;
   Buffer old;

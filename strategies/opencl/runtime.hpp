@@ -100,6 +100,9 @@ class Buffer {
   void reserve_keeping(Context& context, std::size_t bytes, std::size_t keep);
   cl_mem get() const { return memory_; }
   std::size_t bytes() const { return bytes_; }
+  /// Gives the memory back when the buffer holds more than `bytes` (a budget that shrank its room); the next
+  /// reserve allocates again.
+  void release_above(std::size_t bytes);
 
  private:
   cl_mem memory_ = nullptr;

@@ -85,6 +85,12 @@ class ApccdOpenCl final : public Strategy {
     table_builds_ = 0;
     table_valid_ = false;
     context.finish();
+    // The buffers every step keeps, before any list: a budget below them is refused here, as full's is.
+    if (const std::size_t fixed = device_bytes(); fixed > memory_budget_) {
+      throw std::invalid_argument(pipeline_.label() + ": memory=" + pipeline_.backend().memory.text() + " (" + std::to_string(memory_budget_) +
+                                  " bytes) is below what this scene's buffers need before any step: " + std::to_string(fixed) +
+                                  " bytes; give more memory=");
+    }
   }
 
   StepResult step(const StepView& step, bool audit) override {
