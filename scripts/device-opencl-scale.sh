@@ -6,9 +6,10 @@
 # step's answers digest. Parts (PARTS, default "context fits scale"):
 #   context: the ci suite's first 2 steps under the default budget: the driver's memory for a context and its
 #            kernels, which no buffer of ours accounts for (what a peak may pass its budget by);
-#   fits:    where a whole step fits, the chunked path (after) against the whole-step path (before), same warm
-#            machine, $REPEATS passes: the public steps rod-twist 3036 -> 3037 and cloth-funnel 227 -> 228, and
-#            steps 2-15 of the spinning ball at resolution 708 (about 1M triangles; table.py picks 2, 10 and 14);
+#   fits:    where a whole step fits, each of $VARIANTS (default "before after": the whole-step path, then the
+#            chunked one; a variant between them attributes a change) on the same warm machine, $REPEATS passes:
+#            the public steps rod-twist 3036 -> 3037 and cloth-funnel 227 -> 228, and steps 2-15 of the spinning
+#            ball at resolution 708 (about 1M triangles; table.py picks 2, 10 and 14);
 #   scale:   frames 26-28 of the same scene (2 steps past the old 2^32 ceiling: about 3e8 candidate pairs a step)
 #            under memory=2G, 4G and 8G, conservative and cubic64, at δ = 0 and the scene's δ, and the CPU `full` of
 #            the same steps (the answers every budget must give).
@@ -27,9 +28,10 @@ pack() { if [ -n "${OUT:-}" ]; then tar czf "$OUT/opencl-scale.tgz" -C "$out" --
 trap pack EXIT
 PARTS=${PARTS:-context fits scale}
 REPEATS=${REPEATS:-3}
+VARIANTS=${VARIANTS:-before after}
 SAMPLE_MS=${SAMPLE_MS:-20}
 BUDGETS=${BUDGETS:-2G 4G 8G}
-write_machine before after
+write_machine $VARIANTS
 
 # gpu NAME VARIANT STRATEGY ARGS...: one GPU run as its own process, its driver peak sampled; kept as NAME.*.
 gpu() {
@@ -94,7 +96,7 @@ if part fits; then
   echo "== fits: the whole-step path (before) and the chunked path (after)"
   ball=$(scene steps-2-15 16 2)
   for narrow in conservative cubic64; do
-    for v in before after; do
+    for v in $VARIANTS; do
       spec="$(narrow_spec $narrow):backend=opencl"
       gpu "fits-rod-twist-$narrow-$v" "$v" "$spec" --frames $(frames rod-twist 3036 3037) $(frames rod-twist 3036 3037) --repeat "$REPEATS"
       gpu "fits-cloth-funnel-$narrow-$v" "$v" "$spec" --frames $(frames cloth-funnel 227 228) $(frames cloth-funnel 227 228) --repeat "$REPEATS"

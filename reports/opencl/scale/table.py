@@ -42,24 +42,27 @@ def main():
     print(f"Context: the driver's peak for the ci suite's first 2 steps under the default budget: {context_mib} MiB "
           "(a context, its kernels and a few MiB of buffers); a budget's peak may pass it by this much.\n")
 
-    print("Where the whole step fits: ms per step, whole-step path (before) and chunked path (after), same warm machine")
-    print("| step | narrow phase | before ms | after ms | after / before | after's chunks | digests equal |")
-    print("|---|---|---:|---:|---:|---:|---|")
+    variants = [v for v in ["before", "chunk", "after"] if os.path.exists(os.path.join(folder, f"fits-rod-twist-conservative-{v}.json"))]
+    print("Where the whole step fits: ms per step of each build (before: the whole-step path), same warm machine")
+    print("| step | narrow phase | " + " | ".join(f"{v} ms" for v in variants) + " | " +
+          " | ".join(f"{v} / before" for v in variants[1:]) + " | chunks | digests equal |")
+    print("|---|---|" + "---:|" * (2 * len(variants) - 1) + "---:|---|")
     for narrow in ["conservative", "cubic64"]:
         for scene in ["rod-twist", "cloth-funnel", "ball"]:
-            before, after = load(folder, f"fits-{scene}-{narrow}-before"), load(folder, f"fits-{scene}-{narrow}-after")
-            if not before or not after or "failed" in before or "failed" in after:
-                print(f"| {scene} | {narrow} | {before and before.get('failed')} | {after and after.get('failed')} | | | |")
+            runs = [load(folder, f"fits-{scene}-{narrow}-{v}") for v in variants]
+            if any(r is None or "failed" in r for r in runs):
+                print(f"| {scene} | {narrow} | " + " | ".join(str(r and r.get("failed")) for r in runs) + " |")
                 continue
             picks = BALL_STEPS.items() if scene == "ball" else [(scene + " (warm)", 2)]
             for label, k in picks:
-                b, a = before["steps"][k], after["steps"][k]
-                same = b.get("answers") == a.get("answers")
+                steps = [r["steps"][k] for r in runs]
+                same = all(step.get("answers") == steps[0].get("answers") for step in steps)
                 if not same:
                     problems.append(f"fits {scene} {narrow} step {label}: digests differ")
                 name = f"ball step {label}" if scene == "ball" else label
-                print(f"| {name} | {narrow} | {b['ms']:.1f} | {a['ms']:.1f} | {a['ms'] / b['ms']:.3f} | "
-                      f"{a.get('device_chunks', 0):.0f} | {'yes' if same else 'NO'} |")
+                print(f"| {name} | {narrow} | " + " | ".join(f"{step['ms']:.1f}" for step in steps) + " | " +
+                      " | ".join(f"{step['ms'] / steps[0]['ms']:.3f}" for step in steps[1:]) +
+                      f" | {steps[-1].get('device_chunks', 0):.0f} | {'yes' if same else 'NO'} |")
     print()
 
     print("Frames 26-28 (2 steps past the old 2^32 ceiling) under a memory budget; digests against the CPU `full`'s")
