@@ -33,6 +33,7 @@ void record(int stage, const Search* search) {
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -54,7 +55,34 @@ struct PairRun {
   bool normal_separates = false;                    // the whole step, along X × Y at t = 0 or 1 (either sign)
   bool vertex_face = false;
   double least_over_delta = 0;  // the least distance over 257 sampled times, over δ (stage 4 only)
+  double toi = 0;
+  /// For a searched pair that collides: the TOI less the earliest time a separating plane along the normal X × Y
+  /// (at t = 0, at t = 1, at the TOI) allows a contact (each n·F linear in t over the whole step), in steps; NaN
+  /// where that plane does not separate at t = 0.
+  double plane_gap[3] = {NAN, NAN, NAN};
 };
+
+/// The earliest time in [0, 1] at which a plane along `n` (either sign) no longer keeps every corner value of F,
+/// over the whole (u, v) domain, more than δ|n| from 0; NaN when it does not at t = 0. Exact arithmetic assumed:
+/// a measurement, not a certified bound.
+double plane_release(const sh::ccd_inclusion& search, sh::ccd_v3 n) {
+  const double reach = search.thickness * sh::ccd_norm(n);
+  sh::ccd_v3 at0[2 * CCD_CLIPPED_VERTICES], at1[2 * CCD_CLIPPED_VERTICES];
+  const sh::ccd_sub_box start = sh::ccd_sub_box_make(0, 0, 0, 1, 0, 1, 0), end = sh::ccd_sub_box_make(1, 1, 0, 1, 0, 1, 0);
+  const int count = sh::ccd_box_values(&search, &start, at0);
+  sh::ccd_box_values(&search, &end, at1);
+  for (double sign : {1.0, -1.0}) {
+    double release = 1;
+    bool separated = true;
+    for (int i = 0; i < count; ++i) {
+      const double g0 = sign * sh::ccd_dot(n, at0[i]) - reach, g1 = sign * sh::ccd_dot(n, at1[i]) - reach;
+      if (!(g0 > 0)) separated = false;
+      if (g1 < 0) release = std::min(release, g0 / (g0 - g1));
+    }
+    if (separated) return release;
+  }
+  return NAN;
+}
 
 /// Whether the whole step's F values are separated from the δ-ball along the normal X × Y at t = 0 or at t = 1.
 bool normal_separates(const sh::ccd_v3 rows[8], double thickness, bool vertex_face) {
@@ -93,6 +121,7 @@ PairRun run_pair(const std::array<Vec3, 8>& original, double thickness, bool ver
   run.stage = profile::ended.stage;
   run.iterations = profile::ended.iterations;
   run.collides = outcome.collides != 0;
+  run.toi = outcome.toi;
   start = std::chrono::steady_clock::now();
   volatile int cubic = sh::ccd_cubic_test(rows.data(), thickness, kCubicEta, vertex_face).collides;
   (void)cubic;
@@ -115,6 +144,22 @@ PairRun run_pair(const std::array<Vec3, 8>& original, double thickness, bool ver
       least = std::min(least, std::sqrt(sh::ccd_pair_squared_distance(at, vertex_face)));
     }
     run.least_over_delta = least / delta;
+    if (run.collides) {
+      sh::ccd_v3 scaled[8];
+      for (int i = 0; i < 8; ++i) scaled[i] = rows[static_cast<std::size_t>(i)];
+      double d = thickness;
+      int exponent = 0;
+      if (sh::ccd_scale_to_unit(scaled, &d, &exponent)) {
+        sh::ccd_inclusion search;
+        sh::ccd_inclusion_init(&search, scaled, d, vertex_face, 1e-10, 1e-6, 20000);
+        const double times[3] = {0, 1, run.toi};
+        for (int k = 0; k < 3; ++k) {
+          sh::ccd_v3 S, X, Y;
+          sh::ccd_terms_at(&search, times[k], &S, &X, &Y);
+          run.plane_gap[k] = run.toi - plane_release(search, sh::ccd_cross(X, Y));
+        }
+      }
+    }
   }
   return run;
 }
@@ -214,6 +259,29 @@ int main(int argc, char** argv) {
         std::printf("  %s least/δ [%g, %g): %6zu pairs %5.1f%% %8.1f it\n", kind == 0 ? "VF" : "EE", margins[m], margins[m + 1], count,
                     100 * ns / total, iterations / static_cast<double>(count));
     }
+  }
+  // For the searched pairs that collide: how far before the TOI a plane along the normal lets a contact happen.
+  std::printf("\nsearch (stage 4) pairs that collide: TOI less the time a plane along X × Y stops separating (steps)\n");
+  const char* at[] = {"t = 0", "t = 1", "the TOI"};
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> gaps;
+    std::size_t none = 0;
+    for (const PairRun& r : runs) {
+      if (r.stage != 4 || !r.collides) continue;
+      if (std::isnan(r.plane_gap[k])) {
+        ++none;
+      } else {
+        gaps.push_back(r.plane_gap[k]);
+      }
+    }
+    std::sort(gaps.begin(), gaps.end());
+    const auto q = [&](double f) {
+      return gaps.empty() ? std::numeric_limits<double>::quiet_NaN() : gaps[static_cast<std::size_t>(f * static_cast<double>(gaps.size() - 1))];
+    };
+    std::size_t within = 0;
+    for (double g : gaps) within += g >= 0 && g <= 1e-6;
+    std::printf("  normal at %-8s: %zu separate at t = 0 (%zu do not); gap min %.3g, p50 %.3g, p90 %.3g, max %.3g; within 1e-6: %zu\n", at[k],
+                gaps.size(), none, q(0), q(0.5), q(0.9), q(1), within);
   }
   // The search's pairs by their distance at the step's ends, over δ: resting contact is within a few δ at both.
   std::printf("\nsearch (stage 4) by distance at t = 0 and t = 1 over δ: pairs, time %%, iterations mean, collide\n");
