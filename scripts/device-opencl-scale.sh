@@ -10,6 +10,9 @@
 #            chunked one; a variant between them attributes a change) on the same warm machine, $REPEATS passes:
 #            the public steps rod-twist 3036 -> 3037 and cloth-funnel 227 -> 228, and steps 2-15 of the spinning
 #            ball at resolution 708 (about 1M triangles; table.py picks 2, 10 and 14);
+#   limits:  steps 2-15 of the same ball at the scene's δ, conservative with the first device pass giving a query
+#            up after $LIMITS iterations (device_iterations=, the answers the same under any: only where the time
+#            goes changes), beside cubic64; the last variant, $REPEATS passes;
 #   scale:   frames 26-28 of the same scene (2 steps past the old 2^32 ceiling: about 3e8 candidate pairs a step)
 #            under memory=2G, 4G and 8G, conservative and cubic64, at δ = 0 and the scene's δ, and the CPU `full` of
 #            the same steps (the answers every budget must give).
@@ -31,6 +34,7 @@ REPEATS=${REPEATS:-3}
 VARIANTS=${VARIANTS:-before after}
 SAMPLE_MS=${SAMPLE_MS:-20}
 BUDGETS=${BUDGETS:-2G 4G 8G}
+LIMITS=${LIMITS:-25 50 100 200 400 1000}
 write_machine $VARIANTS
 
 # gpu NAME VARIANT STRATEGY ARGS...: one GPU run as its own process, its driver peak sampled; kept as NAME.*.
@@ -103,6 +107,15 @@ if part fits; then
       gpu "fits-ball-$narrow-$v" "$v" "$spec" --scene "$ball" --repeat "$REPEATS"
     done
   done
+fi
+if part limits; then
+  echo "== limits: the first device pass's iterations on the ball's steps 2-15"
+  ball=$(scene steps-2-15 16 2)
+  last=${VARIANTS##* }
+  for limit in $LIMITS; do
+    gpu "limits-$limit" "$last" "full:backend=opencl:device_iterations=$limit" --scene "$ball" --repeat "$REPEATS"
+  done
+  gpu "limits-cubic64" "$last" "full+cubic64:backend=opencl" --scene "$ball" --repeat "$REPEATS"
 fi
 if part scale; then
   echo "== scale: frames 26-28 under budgets $BUDGETS"

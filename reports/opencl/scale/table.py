@@ -43,27 +43,59 @@ def main():
           "(a context, its kernels and a few MiB of buffers); a budget's peak may pass it by this much.\n")
 
     variants = [v for v in ["before", "chunk", "after"] if os.path.exists(os.path.join(folder, f"fits-rod-twist-conservative-{v}.json"))]
-    print("Where the whole step fits: ms per step of each build (before: the whole-step path), same warm machine")
-    print("| step | narrow phase | " + " | ".join(f"{v} ms" for v in variants) + " | " +
-          " | ".join(f"{v} / before" for v in variants[1:]) + " | chunks | digests equal |")
-    print("|---|---|" + "---:|" * (2 * len(variants) - 1) + "---:|---|")
-    for narrow in ["conservative", "cubic64"]:
-        for scene in ["rod-twist", "cloth-funnel", "ball"]:
-            runs = [load(folder, f"fits-{scene}-{narrow}-{v}") for v in variants]
-            if any(r is None or "failed" in r for r in runs):
-                print(f"| {scene} | {narrow} | " + " | ".join(str(r and r.get("failed")) for r in runs) + " |")
+    if variants:
+        print("Where the whole step fits: ms per step of each build (before: the whole-step path), same warm machine")
+        print("| step | narrow phase | " + " | ".join(f"{v} ms" for v in variants) + " | " +
+              " | ".join(f"{v} / before" for v in variants[1:]) + " | chunks | digests equal |")
+        print("|---|---|" + "---:|" * (2 * len(variants) - 1) + "---:|---|")
+        for narrow in ["conservative", "cubic64"]:
+            for scene in ["rod-twist", "cloth-funnel", "ball"]:
+                runs = [load(folder, f"fits-{scene}-{narrow}-{v}") for v in variants]
+                if any(r is None or "failed" in r for r in runs):
+                    print(f"| {scene} | {narrow} | " + " | ".join(str(r and r.get("failed")) for r in runs) + " |")
+                    continue
+                picks = BALL_STEPS.items() if scene == "ball" else [(scene + " (warm)", 2)]
+                for label, k in picks:
+                    steps = [r["steps"][k] for r in runs]
+                    same = all(step.get("answers") == steps[0].get("answers") for step in steps)
+                    if not same:
+                        problems.append(f"fits {scene} {narrow} step {label}: digests differ")
+                    name = f"ball step {label}" if scene == "ball" else label
+                    print(f"| {name} | {narrow} | " + " | ".join(f"{step['ms']:.1f}" for step in steps) + " | " +
+                          " | ".join(f"{step['ms'] / steps[0]['ms']:.3f}" for step in steps[1:]) +
+                          f" | {steps[-1].get('device_chunks', 0):.0f} | {'yes' if same else 'NO'} |")
+        print()
+
+    limits = sorted(int(n[len("limits-"):-len(".json")]) for n in os.listdir(folder)
+                    if n.startswith("limits-") and n.endswith(".json") and n[len("limits-"):-len(".json")].isdigit())
+    cubic = load(folder, "limits-cubic64")
+    if limits and cubic and "failed" not in cubic:
+        print("The first device pass's iterations (device_iterations=) on the ball's resting steps, conservative at the scene's δ:")
+        print("ms per step (narrow phase ms; queries given up / in the third pass / on the host), and over cubic64's")
+        print("| limit | " + " | ".join(f"step {label}" for label in BALL_STEPS) + " | " + " | ".join(f"step {label} / cubic64" for label in BALL_STEPS) +
+              " | digests equal |")
+        print("|---:|" + "---:|" * (2 * len(BALL_STEPS)) + "---|")
+        reference = None
+        for limit in limits:
+            run = load(folder, f"limits-{limit}")
+            if run is None or "failed" in run:
+                print(f"| {limit} | failed |")
                 continue
-            picks = BALL_STEPS.items() if scene == "ball" else [(scene + " (warm)", 2)]
-            for label, k in picks:
-                steps = [r["steps"][k] for r in runs]
-                same = all(step.get("answers") == steps[0].get("answers") for step in steps)
-                if not same:
-                    problems.append(f"fits {scene} {narrow} step {label}: digests differ")
-                name = f"ball step {label}" if scene == "ball" else label
-                print(f"| {name} | {narrow} | " + " | ".join(f"{step['ms']:.1f}" for step in steps) + " | " +
-                      " | ".join(f"{step['ms'] / steps[0]['ms']:.3f}" for step in steps[1:]) +
-                      f" | {steps[-1].get('device_chunks', 0):.0f} | {'yes' if same else 'NO'} |")
-    print()
+            digests = [s.get("answers") for s in run["steps"]]
+            reference = reference or digests
+            cells, ratios = [], []
+            for label, k in BALL_STEPS.items():
+                step = run["steps"][k]
+                cells.append(f"{step['ms']:.0f} ({step['stages'].get('narrow phase', 0):.0f}; {step.get('device_given_up_pairs', 0):.0f}/"
+                             f"{step.get('device_third_pass_pairs', 0):.0f}/{step.get('host_decided_pairs', 0):.0f})")
+                ratios.append(f"{step['ms'] / cubic['steps'][k]['ms']:.2f}")
+            same = digests == reference
+            if not same:
+                problems.append(f"limits {limit}: digests differ from limit {limits[0]}'s")
+            print(f"| {limit} | " + " | ".join(cells) + " | " + " | ".join(ratios) + f" | {'yes' if same else 'NO'} |")
+        print("| cubic64 | " + " | ".join(f"{cubic['steps'][k]['ms']:.0f} ({cubic['steps'][k]['stages'].get('narrow phase', 0):.0f})"
+                                          for k in BALL_STEPS.values()) + " |" + " |" * len(BALL_STEPS) + " |")
+        print()
 
     print("Frames 26-28 (2 steps past the old 2^32 ceiling) under a memory budget; digests against the CPU `full`'s")
     print("| δ | narrow phase | budget | step | ms | candidates | tests | chunks | our buffers MiB | driver peak MiB | "
