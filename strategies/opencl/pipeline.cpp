@@ -449,14 +449,21 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
   std::size_t second_pass = 0, third_pass = 0;
   if (conservative) {
     std::vector<std::size_t> left = given_up;
+    // Each later pass's wall time (it ends with a blocking download): part of the "narrow phase" stage, counted
+    // apart so that the latency of a few long queries shows (reports/narrowphase/stages.md).
+    const auto timed_pass = [&](long limit, double& milliseconds) {
+      const auto start = std::chrono::steady_clock::now();
+      device_pass(events, left, limit, pairs, status, toi, x0, x1);
+      milliseconds += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    };
     if (left.size() > kHostQueriesPerThread * host_threads) {
       second_pass = left.size();
-      device_pass(events, left, kSecondPassIterations, pairs, status, toi, x0, x1);
+      timed_pass(kSecondPassIterations, into.second_pass_ms);
       left = still_given_up();
     }
     if (left.size() > kHostQueriesPerThread * host_threads) {
       third_pass = left.size();
-      device_pass(events, left, 0, pairs, status, toi, x0, x1);
+      timed_pass(0, into.third_pass_ms);
     }
   }
   const std::vector<std::size_t> on_host = still_given_up();
@@ -516,6 +523,8 @@ void DevicePipeline::collect(const Decided& decided, strategies::StepResult& res
   result.counters.extra.emplace_back("device_given_up_pairs", static_cast<double>(decided.given_up));
   result.counters.extra.emplace_back("device_second_pass_pairs", static_cast<double>(decided.second_pass));
   result.counters.extra.emplace_back("device_third_pass_pairs", static_cast<double>(decided.third_pass));
+  result.counters.extra.emplace_back("device_second_pass_ms", decided.second_pass_ms);
+  result.counters.extra.emplace_back("device_third_pass_ms", decided.third_pass_ms);
   result.counters.extra.emplace_back("host_decided_pairs", static_cast<double>(decided.on_host));
 }
 

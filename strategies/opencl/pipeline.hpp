@@ -85,6 +85,8 @@ struct Decided {
   std::vector<cl_uint4> pairs;
   std::vector<double> toi;
   std::size_t given_up = 0, second_pass = 0, third_pass = 0, on_host = 0;
+  /// Wall time of the later device passes (within the "narrow phase" stage).
+  double second_pass_ms = 0, third_pass_ms = 0;
 };
 
 /// Traversal queries: face q_face[i] (its leaf q_leaf[i], whose box is the query) against the tree rooted at

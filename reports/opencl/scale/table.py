@@ -86,7 +86,9 @@ def main():
             cells, ratios = [], []
             for label, k in BALL_STEPS.items():
                 step = run["steps"][k]
-                cells.append(f"{step['ms']:.0f} ({step['stages'].get('narrow phase', 0):.0f}; {step.get('device_given_up_pairs', 0):.0f}/"
+                passes = (f", passes 2 and 3: {step['device_second_pass_ms']:.0f} + {step['device_third_pass_ms']:.0f} ms"
+                          if "device_third_pass_ms" in step else "")
+                cells.append(f"{step['ms']:.0f} ({step['stages'].get('narrow phase', 0):.0f}{passes}; {step.get('device_given_up_pairs', 0):.0f}/"
                              f"{step.get('device_third_pass_pairs', 0):.0f}/{step.get('host_decided_pairs', 0):.0f})")
                 ratios.append(f"{step['ms'] / cubic['steps'][k]['ms']:.2f}")
             same = digests == reference
