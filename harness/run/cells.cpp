@@ -214,8 +214,9 @@ void write_cell_answers(const CellContext& cell, const Passes& passes) {
 /// What the summary adds up over the steps.
 struct Totals {
   std::vector<double> medians;
-  std::size_t colliding = 0, reported = 0, missed = 0, culled = 0, tested = 0, false_alarms = 0;
-  std::size_t colliding_face_shape = 0, missed_face_shape = 0;
+  std::size_t reported = 0;
+  /// With --verify exact: the steps' verdicts added up.
+  VerdictCounts verdicts;
   ToiVerdict toi;
   double candidates = 0, tests = 0, kept = 0, history = 0, device = 0;
   /// Each strategy counter (apccd's session_start, nf, pending_pairs, ...) over the steps: sum and max, since the
@@ -241,9 +242,7 @@ StepVerdict step_verdict(const CellContext& cell, const Passes& passes, const Ve
     v.missed_pairs = missed_pair_records(scene, cell.data.frames[k], cell.data.frames[k + 1], truth, passes.first[k].collisions, kKeptMissedPairs);
   }
   if (cell.options.toi) v.toi = StepVerdict::Toi{verdict.toi.checked, verdict.toi.late, verdict.toi.error_max};
-  totals.colliding += truth.size();
-  totals.colliding_face_shape += truth.face_shape().size();
-  totals.missed_face_shape += verdict.missed_face_shape;
+  totals.verdicts += v;
   totals.toi.add(verdict.toi);
   return v;
 }
@@ -283,10 +282,6 @@ StepRecord step_record(const CellContext& cell, const Passes& passes, const Verd
   }
   if (cell.options.verify) record.verdict = step_verdict(cell, passes, verdict, k, totals);
   totals.reported += record.reported;
-  totals.missed += verdict.missed;
-  totals.culled += verdict.culled;
-  totals.tested += verdict.tested;
-  totals.false_alarms += verdict.false_alarms;
   totals.candidates += static_cast<double>(r.counters.candidate_triangle_pairs);
   totals.tests += static_cast<double>(r.counters.elementary_tests);
   totals.kept = std::max(totals.kept, static_cast<double>(r.counters.kept_bytes));
@@ -320,18 +315,14 @@ void add_times(const CellContext& cell, const Passes& passes, const Totals& tota
 CellVerdict cell_verdict(const CellContext& cell, const Judgement& judgement, const Totals& totals) {
   const Scene& scene = cell.data.sequence.scene();
   CellVerdict v;
-  v.colliding = totals.colliding;
-  v.missed = totals.missed;
-  v.missed_culled = totals.culled;
-  v.missed_tested = totals.tested;
-  v.false_alarms = totals.false_alarms;
+  static_cast<VerdictCounts&>(v) = totals.verdicts;
   v.miss_causes = judgement.miss_causes;
   const json contact = contact_by_objects(scene, cell.data.truth, cell.steps);
   v.colliding_by_objects = contact.at("colliding_by_objects");
   v.faces_in_contact_by_objects = contact.at("faces_in_contact_by_objects");
-  if (!scene.shape_objects().empty()) {
-    v.colliding_face_shape = totals.colliding_face_shape;
-    v.missed_face_shape = totals.missed_face_shape;
+  if (!scene.shape_objects().empty()) {  // also for a cell without steps
+    v.colliding_face_shape = v.colliding_face_shape.value_or(0);
+    v.missed_face_shape = v.missed_face_shape.value_or(0);
   }
   if (cell.options.toi) {
     const ToiVerdict& toi = totals.toi;

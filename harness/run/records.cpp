@@ -48,6 +48,18 @@ void expect_kind(const json& j, const char* kind) {
 
 }  // namespace
 
+VerdictCounts& VerdictCounts::operator+=(const VerdictCounts& other) {
+  colliding += other.colliding;
+  missed += other.missed;
+  missed_culled += other.missed_culled;
+  missed_tested += other.missed_tested;
+  false_alarms += other.false_alarms;
+  for (auto [total, add] : {std::pair{&colliding_face_shape, &other.colliding_face_shape}, std::pair{&missed_face_shape, &other.missed_face_shape}}) {
+    if (*add) *total = total->value_or(0) + **add;
+  }
+  return *this;
+}
+
 void to_json(json& j, const RecordEnvironment& e) {
   j = {{"machine", e.machine},
        {"build_type", e.build_type},

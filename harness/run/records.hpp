@@ -41,6 +41,8 @@ struct VerdictCounts {
   std::size_t colliding = 0, missed = 0, missed_culled = 0, missed_tested = 0, false_alarms = 0;
   /// Scenes with analytic shapes only.
   std::optional<std::size_t> colliding_face_shape, missed_face_shape;
+  /// Adds `other`'s counts (a step's to its cell's); the shape counts where either has them.
+  VerdictCounts& operator+=(const VerdictCounts& other);
 };
 
 /// The verdict of one step against the exact truth (--verify exact).
