@@ -47,9 +47,7 @@ class FullOpenCl final : public Strategy {
     context.finish();
     // What every step keeps (the swept vertex boxes included, made by the first step), then the lists' room.
     const std::uint64_t vertex_boxes = std::max<std::size_t>(scene.topology().num_vertices(), 1) * 6 * sizeof(double);
-    room_ = pipeline_.plan_room(pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() + vertex_boxes);
-    candidates_.limit = room_.candidates;
-    elementary_.limit = kept_.limit = room_.elementary;
+    use_room(pipeline_.plan_room(pipeline_.bytes() + positions_.bytes() + node_boxes_.bytes() + queries_.bytes() + vertex_boxes));
   }
 
   StepResult step(const StepView& step, bool audit) override {
@@ -105,16 +103,13 @@ class FullOpenCl final : public Strategy {
     return std::clamp<std::size_t>(static_cast<std::size_t>(static_cast<double>(span) * fit), 1, span - 1);
   }
 
-  /// The room planned again for one query that found `found` candidate pairs, more than the room held; the lists
-  /// that hold more than their new room give it back.
-  void widen_candidate_room(std::size_t found) {
-    room_ = pipeline_.plan_room(room_.fixed, found);
-    candidates_.limit = room_.candidates;
-    elementary_.limit = kept_.limit = room_.elementary;
-    elementary_.buffer.release_above(room_.elementary * sizeof(cl_uint4));
-    kept_.buffer.release_above(room_.elementary * sizeof(cl_uint4));
-    elementary_.capacity = std::min(elementary_.capacity, room_.elementary);
-    kept_.capacity = std::min(kept_.capacity, room_.elementary);
+  /// The lists' room (planned at init, and again for a query that found more candidate pairs than the room held):
+  /// a list that holds more than its new room gives it back.
+  void use_room(const opencl::ChunkRoom& room) {
+    room_ = room;
+    candidates_.set_limit(room.candidates, sizeof(cl_uint2));
+    elementary_.set_limit(room.elementary, sizeof(cl_uint4));
+    kept_.set_limit(room.elementary, sizeof(cl_uint4));
   }
 
   /// The step in chunks that fit the memory budget (one, where the whole step does): ranges of queries whose
@@ -132,7 +127,7 @@ class FullOpenCl final : public Strategy {
           // One query found more than the room held: the room is planned again for it, or the budget refused
           // naming what this query needs.
           if (found == opencl::kListOverflow) throw std::runtime_error(pipeline_.label() + ": one query found 2^32 candidate pairs or more");
-          widen_candidate_room(found);
+          use_room(pipeline_.plan_room(room_.fixed, found));
         } else {
           query_span_ = smaller_span(span, found, candidates_.limit);
         }

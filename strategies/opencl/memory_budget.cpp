@@ -42,12 +42,11 @@ ChunkRoom DevicePipeline::plan_room(std::uint64_t fixed, std::size_t least_candi
   room.elementary = static_cast<std::size_t>(
       std::min<std::uint64_t>({(lists - room.candidates * kBytesPerCandidate) / kBytesPerElementary, largest / sizeof(cl_uint4), 0xFFFFFFFFull}));
   pair_limit_ = room.elementary;
-  out_.limit = room.elementary;
+  out_.set_limit(room.elementary, sizeof(cl_uint4));
   // Planned again with less room for pairs: what holds more is given back, to be reserved within the new room.
   for (Buffer* buffer : {&keep_, &status_, &out_status_, &retry_status_}) buffer->release_above(room.elementary);
   for (Buffer* buffer : {&toi_, &out_toi_, &retry_toi_}) buffer->release_above(room.elementary * sizeof(double));
-  for (Buffer* buffer : {&out_.buffer, &retry_pairs_}) buffer->release_above(room.elementary * sizeof(cl_uint4));
-  out_.capacity = std::min(out_.capacity, room.elementary);
+  retry_pairs_.release_above(room.elementary * sizeof(cl_uint4));
   return room;
 }
 

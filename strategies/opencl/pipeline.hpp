@@ -58,6 +58,11 @@ struct DeviceList {
   std::size_t capacity = 0;
   std::size_t count = 0;
   std::size_t limit = 0;  // 0: none
+  /// Sets the limit; a buffer that holds more than it gives its memory back (reserved again within it when filled).
+  void set_limit(std::size_t entries, std::size_t entry_bytes) {
+    limit = entries;
+    buffer.release_above(entries * entry_bytes);
+  }
 };
 
 /// What a fill returns when its count passed 2^32 entries in one range (a budgeted list: fill a smaller range).
