@@ -84,9 +84,8 @@ std::string verified_count(const json& s, const char* field) {
 }
 
 /// Memory by kind, MiB (a cell kept from before a field existed shows "-").
-std::string mib(const json& s, const char* field) {
-  return s.contains(field) ? fixed(s[field].get<double>() / (1024.0 * 1024.0), 0) : std::string("-");
-}
+std::string mib(double bytes) { return fixed(bytes / (1024.0 * 1024.0), 0); }
+std::string mib(const json& s, const char* field) { return s.contains(field) ? mib(s[field].get<double>()) : std::string("-"); }
 
 const std::vector<RunColumn>& run_columns() {
   using Align = Table::Align;
@@ -150,7 +149,7 @@ const std::vector<RunColumn>& run_columns() {
          if (!counters.contains("device_budget_bytes")) return std::string("-");
          const std::string chunks =
              counters.contains("device_chunks") ? fixed(counters["device_chunks"]["max"].get<double>(), 0) : std::string("whole");
-         return fixed(counters["device_budget_bytes"]["max"].get<double>() / (1024.0 * 1024.0), 0) + " (" + chunks + ")";
+         return mib(counters["device_budget_bytes"]["max"].get<double>()) + " (" + chunks + ")";
        }},
       {"stages (ms)", Align::left, always,
        [](const json& s) {
