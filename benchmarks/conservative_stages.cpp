@@ -23,6 +23,7 @@ void record(int stage, const Search* search) {
 }  // namespace profile
 #define CCD_DECIDED_AT(stage, search) ::profile::record((stage), (search))
 
+#include "core/number_text.hpp"
 #include "core/step.hpp"
 #include "datasets/scene_file.hpp"
 #include "strategies/narrowphase/round_to_nearest.hpp"
@@ -33,8 +34,10 @@ void record(int stage, const Search* search) {
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -176,11 +179,20 @@ int main(int argc, char** argv) {
   double thickness = sequence.scene().thickness();
   for (int a = 2; a < argc; ++a) {
     const std::string flag = argv[a];
-    if (flag == "--thickness" && a + 1 < argc) thickness = std::stod(argv[++a]);
+    // Numbers as the project reads them (core/number_text.hpp, whatever the C locale); a bad one ends the run.
+    const auto number = [&](const char* what) {
+      const std::optional<double> value = parse_double(argv[++a]);
+      if (!value || !(*value >= 0)) {
+        std::fprintf(stderr, "command line:%s: %s is not a number >= 0\n", what, argv[a]);
+        std::exit(2);
+      }
+      return *value;
+    };
+    if (flag == "--thickness" && a + 1 < argc) thickness = number("--thickness");
     if (flag == "--steps" && a + 3 < argc) {
-      first = std::stoul(argv[++a]);
-      last = std::min<std::size_t>(std::stoul(argv[++a]), sequence.num_steps());
-      every = std::max<std::size_t>(1, std::stoul(argv[++a]));
+      first = static_cast<std::size_t>(number("--steps"));
+      last = std::min<std::size_t>(static_cast<std::size_t>(number("--steps")), sequence.num_steps());
+      every = std::max<std::size_t>(1, static_cast<std::size_t>(number("--steps")));
     }
   }
   const Scene scene = sequence.scene().with_thickness(thickness);

@@ -37,6 +37,15 @@ BUDGETS=${BUDGETS:-2G 4G 8G}
 LIMITS=${LIMITS:-25 50 100 200 400 1000}
 write_machine $VARIANTS
 
+# keep NAME START NOTE: a finished run kept (its step records compressed, its JSON in place: done), said and packed.
+keep() {
+  local stem="$out/$1"
+  gzip -c "$out/runs-$1/results.jsonl" > "$stem.jsonl.gz"
+  rm -rf "$out/runs-$1"
+  mv "$stem.json.tmp" "$stem.json"
+  echo "$1: $((SECONDS - $2)) s$3"
+  pack
+}
 # gpu NAME VARIANT STRATEGY ARGS...: one GPU run as its own process, its driver peak sampled; kept as NAME.*.
 gpu() {
   local name=$1 variant=$2 strategy=$3
@@ -59,11 +68,7 @@ gpu() {
     echo "$status" > "$stem.failed"
     return
   fi
-  gzip -c "$out/runs-$name/results.jsonl" > "$stem.jsonl.gz"
-  rm -rf "$out/runs-$name"
-  mv "$stem.json.tmp" "$stem.json"
-  echo "$name: $((SECONDS - start)) s, driver peak $(cat "$stem.smi") MiB"
-  pack
+  keep "$name" "$start" ", driver peak $(cat "$stem.smi") MiB"
 }
 # cpu NAME STRATEGY ARGS...: the CPU's answers of the same steps.
 cpu() {
@@ -73,11 +78,7 @@ cpu() {
   if [ -s "$stem.json" ]; then return; fi
   "$bin/ccdbench-after" --threads "$threads" run "$@" --strategy "$strategy" --verify none --out "$out/runs-$name" --json "$stem.json.tmp" \
     --fresh 2> "$stem.err" > "$stem.txt"
-  gzip -c "$out/runs-$name/results.jsonl" > "$stem.jsonl.gz"
-  rm -rf "$out/runs-$name"
-  mv "$stem.json.tmp" "$stem.json"
-  echo "$name: $((SECONDS - start)) s"
-  pack
+  keep "$name" "$start" ""
 }
 # scene NAME FRAMES FIRST: the spinning ball at resolution 708, frames FIRST..FRAMES-1, generated once.
 scene() {
