@@ -309,6 +309,43 @@ static inline ccd_v3 ccd_nearest_value(const ccd_inclusion* s, const ccd_sub_box
   return ccd_nearest_point_at(s, box, box->t0 + (box->t1 - box->t0) / 2, &u, &v);
 }
 
+/* Whether a plane turning with time separates the box's values from the ball of radius δ: at each time of the box,
+ * with λ its fraction of the box's length, the plane normal to n(λ) = (1 - λ)·nA + λ·nB at distance δ|n(λ)|.
+ * F is linear in t at each (u, v) and affine in (u, v) at each t, so at each λ the box's F lies in the hull of
+ * (1 - λ)·F0 + λ·F1 over its (u, v) vertices (F0, F1: the vertex's values at t0 and t1, the first and second half of
+ * `values`), with the same per-axis `error`; n(λ)·F there is a quadratic in λ whose Bernstein coefficients are
+ * nA·F0, (nA·F1 + nB·F0)/2 and nB·F1, and δ|n(λ)| plus n(λ)'s share of the error is below the line (1 - λ)·RA +
+ * λ·RB (|n(λ)| is convex in λ), RA = δ|nA| + |nA|·error. A quadratic lies above the least of its Bernstein
+ * coefficients, so when each exceeds the line's own (RA, (RA + RB)/2, RB) the box holds no contact. Any nA, nB
+ * are sound; with the nearest directions at the box's two ends the plane follows the pair's turn, and what it
+ * loses is of second order in the box's length in time, where one fixed plane loses the turn itself (first
+ * order): pairs that slide past within a hair of δ are excluded in long boxes instead of thousands of short ones.
+ * Rounding: each dot product errs by at most 3.01 u of |n|·|F| (4 u used, as ccd_separated_along), plus half a
+ * subnormal per product that underflows (4 per dot product); the sum and halving of the middle coefficient, the
+ * rounding of |n| and of the comparison are a few u of the values compared, which CCD_SEPARATION_RELATIVE_SLACK
+ * covers. */
+static inline int ccd_separated_turning(const ccd_inclusion* s, const ccd_v3* values, int count, ccd_v3 nA, ccd_v3 nB) {
+  const double length_a = ccd_norm_above(nA), length_b = ccd_norm_above(nB);
+  if (!(length_a > 0) || !(length_b > 0)) return 0;
+  const ccd_v3 magnitude_a = ccd_cwise_abs(nA), magnitude_b = ccd_cwise_abs(nB);
+  const double reach_a = s->thickness * length_a + ccd_dot(magnitude_a, s->error) + 4 * CCD_DENORM_MIN;
+  const double reach_b = s->thickness * length_b + ccd_dot(magnitude_b, s->error) + 4 * CCD_DENORM_MIN;
+  const double reach_middle = (reach_a + reach_b) / 2;
+  const int vertices = count / 2;
+  for (int i = 0; i < vertices; ++i) {
+    const ccd_v3 F0 = values[i], F1 = values[vertices + i];
+    const ccd_v3 size0 = ccd_cwise_abs(F0), size1 = ccd_cwise_abs(F1);
+    const double start = ccd_dot(nA, F0), end = ccd_dot(nB, F1);
+    const double middle = (ccd_dot(nA, F1) + ccd_dot(nB, F0)) / 2;
+    const double start_bound = 4 * CCD_UNIT_ROUNDOFF * ccd_dot(magnitude_a, size0) + CCD_SEPARATION_RELATIVE_SLACK * (fabs(start) + reach_a);
+    const double end_bound = 4 * CCD_UNIT_ROUNDOFF * ccd_dot(magnitude_b, size1) + CCD_SEPARATION_RELATIVE_SLACK * (fabs(end) + reach_b);
+    const double middle_bound = 4 * CCD_UNIT_ROUNDOFF * (ccd_dot(magnitude_a, size1) + ccd_dot(magnitude_b, size0)) / 2 + 4 * CCD_DENORM_MIN +
+                                CCD_SEPARATION_RELATIVE_SLACK * (fabs(middle) + reach_middle);
+    if (!(start - start_bound > reach_a) || !(end - end_bound > reach_b) || !(middle - middle_bound > reach_middle)) return 0;
+  }
+  return 1;
+}
+
 /* Excluded (no contact in the box), accepted (every point within δ + tolerance and the box at most toi_tolerance
  * long in time, or too small to split; *achieved is set), or split into *low and *high (in time when only the
  * box's length in time keeps it from being accepted). */
@@ -343,6 +380,11 @@ static inline int ccd_examine(ccd_inclusion* s, const ccd_sub_box* box, ccd_sub_
   if (nearest2 > s->exclusion_bound) return CCD_EXCLUDED;
   if (ccd_separated_along(s, values, count, middle_value)) return CCD_EXCLUDED;
   if (ccd_separated_along(s, values, count, ccd_nearest_value(s, box))) return CCD_EXCLUDED;
+  if (box->t1 > box->t0) {
+    double u, v;
+    const ccd_v3 start = ccd_nearest_point_at(s, box, box->t0, &u, &v);
+    if (ccd_separated_turning(s, values, count, start, ccd_nearest_point_at(s, box, box->t1, &u, &v))) return CCD_EXCLUDED;
+  }
   /* Split where F changes most (the largest corner difference along a parameter), among the parameters whose
    * interval still halves into two smaller doubles. */
   double change[3] = {0, 0, 0};
