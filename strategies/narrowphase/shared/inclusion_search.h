@@ -138,6 +138,20 @@ static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const
     /* δ > 0: the earliest contact is a first touch of the δ-tube, where boxes are accepted only when tiny; a pair
      * proven within δ at a box's end bounds the contact by then instead. */
     if (s->thickness > 0 && box.t1 < upper && ccd_within_thickness_at(s, box.t1)) upper = box.t1;
+    /* A box already within toi_tolerance in time is split in (u, v), toward acceptance; but once a contact is proven
+     * (upper), what is left is to exclude time up to it: the box is halved in time while it can be. Cut in (u, v)
+     * instead, a box whose end comes just before a first touch at δ > 0 can be neither excluded nor accepted (at its
+     * start the pair is farther than δ plus the tolerance) until the cuts reach single doubles: 20,000 sub-boxes
+     * (the iteration cap) for a pair of the paper's spinning ball that halving in time ends in 4. */
+    const double t_middle = box.t0 + (box.t1 - box.t0) / 2;
+    if (upper < INFINITY && box.t1 - box.t0 <= s->toi_tolerance && box.t0 < t_middle && t_middle < box.t1) {
+      low = box;
+      high = box;
+      low.t1 = t_middle;
+      high.t0 = t_middle;
+      low.order = s->created++;
+      high.order = s->created++;
+    }
     if (size + 2 > capacity) {
       result.overflow = 1;
       return result;
