@@ -4,7 +4,10 @@
 // their share of the time, the sub-boxes the search examined and what collides; and, for the pairs the search
 // decides, how far apart they are at the step's ends against δ. A profile, not a benchmark: the times are for
 // comparing stages within one run.
-// Usage: conservative_stages SCENE [--thickness D] [--steps FIRST LAST EVERY]
+// With --slow N DIR it profiles nothing: it writes the pairs whose search examines more than N sub-boxes to
+// DIR/vertex-face/slow.csv and DIR/edge-edge/slow.csv (rational query files, no truth: `ccdbench queries` scores
+// them), keeping nothing else, so that a step of a million triangles fits in memory.
+// Usage: conservative_stages SCENE [--thickness D] [--steps FIRST LAST EVERY] [--slow N DIR]
 
 #include <cstddef>
 
@@ -25,6 +28,7 @@ void record(int stage, const Search* search) {
 
 #include "core/number_text.hpp"
 #include "core/step.hpp"
+#include "datasets/query_file.hpp"
 #include "datasets/scene_file.hpp"
 #include "strategies/narrowphase/round_to_nearest.hpp"
 #include "strategies/narrowphase/shared.hpp"
@@ -35,6 +39,7 @@ void record(int stage, const Search* search) {
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <optional>
@@ -167,16 +172,60 @@ PairRun run_pair(const std::array<Vec3, 8>& original, double thickness, bool ver
   return run;
 }
 
+/// A query of the pair's rows as doubles (each exactly a rational).
+datasets::Query as_query(const std::array<Vec3, 8>& rows) {
+  datasets::Query query;
+  for (std::size_t i = 0; i < 8; ++i) {
+    query.rounded[i] = rows[i];
+    for (int k = 0; k < 3; ++k) query.exact[i][static_cast<std::size_t>(k)] = mpq_class(rows[i][k]);
+  }
+  return query;
+}
+
+/// --slow: the pairs whose search examines more than `over` sub-boxes, as query files; prints each one's count.
+int write_slow_pairs(const datasets::SceneSequence& sequence, const Scene& scene, std::size_t first, std::size_t last, std::size_t every, long over,
+                     const std::filesystem::path& dir) {
+  std::vector<datasets::Query> slow[2];
+  std::size_t pairs = 0;
+  const auto test = [&](const std::array<Vec3, 8>& rows, bool vertex_face) {
+    const narrowphase::RoundToNearest rounding;
+    const auto shared_rows = narrowphase::shared::to_shared_rows(rows);
+    static std::vector<sh::ccd_sub_box> storage(1 << 16);
+    sh::ccd_conservative_test(shared_rows.data(), scene.thickness(), vertex_face, 1e-10, 1e-6, 20000, 0, storage.data(),
+                              static_cast<int>(storage.size()));
+    ++pairs;
+    if (profile::ended.iterations <= over) return;
+    std::printf("%s pair, stage %d, %ld sub-boxes\n", vertex_face ? "VF" : "EE", profile::ended.stage, profile::ended.iterations);
+    slow[vertex_face ? 0 : 1].push_back(as_query(rows));
+  };
+  for (std::size_t k = first; k < last; k += every) {
+    const std::vector<Vec3> x0 = sequence.frame(k), x1 = sequence.frame(k + 1);
+    auto full = strategies::make_strategy("full");
+    full->init(scene, x0);
+    const strategies::StepResult result = full->step({&scene, k, x0, x1}, true);
+    for (const VertexFacePair& p : result.tested->vertex_face) test(pair_rows(scene.topology(), x0, x1, p), true);
+    for (const EdgeEdgePair& p : result.tested->edge_edge) test(pair_rows(scene.topology(), x0, x1, p), false);
+  }
+  std::printf("%zu pairs, %zu VF and %zu EE over %ld sub-boxes\n", pairs, slow[0].size(), slow[1].size(), over);
+  std::filesystem::create_directories(dir / "vertex-face");
+  std::filesystem::create_directories(dir / "edge-edge");
+  datasets::write_query_file(dir / "vertex-face" / "slow.csv", slow[0]);
+  datasets::write_query_file(dir / "edge-edge" / "slow.csv", slow[1]);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: conservative_stages SCENE [--thickness D] [--steps FIRST LAST EVERY]\n");
+    std::fprintf(stderr, "usage: conservative_stages SCENE [--thickness D] [--steps FIRST LAST EVERY] [--slow N DIR]\n");
     return 2;
   }
   datasets::SceneSequence sequence = datasets::load_scene_file(argv[1]);
   std::size_t first = 0, last = sequence.num_steps(), every = 1;
   double thickness = sequence.scene().thickness();
+  long slow_over = -1;
+  std::filesystem::path slow_dir;
   for (int a = 2; a < argc; ++a) {
     const std::string flag = argv[a];
     // Numbers as the project reads them (core/number_text.hpp, whatever the C locale); a bad one ends the run.
@@ -189,6 +238,10 @@ int main(int argc, char** argv) {
       return *value;
     };
     if (flag == "--thickness" && a + 1 < argc) thickness = number("--thickness");
+    if (flag == "--slow" && a + 2 < argc) {
+      slow_over = static_cast<long>(number("--slow"));
+      slow_dir = argv[++a];
+    }
     if (flag == "--steps" && a + 3 < argc) {
       first = static_cast<std::size_t>(number("--steps"));
       last = std::min<std::size_t>(static_cast<std::size_t>(number("--steps")), sequence.num_steps());
@@ -196,6 +249,7 @@ int main(int argc, char** argv) {
     }
   }
   const Scene scene = sequence.scene().with_thickness(thickness);
+  if (slow_over >= 0) return write_slow_pairs(sequence, scene, first, last, every, slow_over, slow_dir);
   std::vector<PairRun> runs;
   std::vector<Vec3> x0, x1;
   for (std::size_t k = first; k < last; k += every) {
