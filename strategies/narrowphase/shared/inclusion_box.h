@@ -380,7 +380,9 @@ static inline int ccd_examine(ccd_inclusion* s, const ccd_sub_box* box, ccd_sub_
   if (nearest2 > s->exclusion_bound) return CCD_EXCLUDED;
   if (ccd_separated_along(s, values, count, middle_value)) return CCD_EXCLUDED;
   if (ccd_separated_along(s, values, count, ccd_nearest_value(s, box))) return CCD_EXCLUDED;
-  if (box->t1 > box->t0) {
+  /* (At δ = 0 the search has nothing for it to save, 2 sub-boxes a pair on the paper's spinning ball, and on the
+   * GPU machine its cost raised the public steps' narrow phase by a third: reports/narrowphase/stages.md.) */
+  if (s->thickness > 0 && box->t1 > box->t0) {
     double u, v;
     const ccd_v3 start = ccd_nearest_point_at(s, box, box->t0, &u, &v);
     if (ccd_separated_turning(s, values, count, start, ccd_nearest_point_at(s, box, box->t1, &u, &v))) return CCD_EXCLUDED;
