@@ -24,11 +24,6 @@ std::size_t group_size_for(const DeviceInfo& device) {
   return group;
 }
 
-/// Given-up queries per host thread up to which the host decides them rather than another device pass. A pass
-/// costs about its longest query on a work item (10 to 30 ms on the H200 at the 20,000-iteration cap, a few ms
-/// at kSecondPassIterations); a host thread runs a query at the cap in about 10 ms, shorter ones in well under
-/// one (reports/opencl: with the host taking up to 64 per thread, three paper scenes spent 65-92 ms there).
-constexpr std::size_t kHostQueriesPerThread = 2;
 /// The second device pass gives up after this many iterations: the queries that cloth-funnel hands back finish
 /// within it, side by side; what is left runs to the cap.
 constexpr long kSecondPassIterations = 4000;
@@ -431,9 +426,10 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
   download(context, out_status_, status.data(), kept, events.add("download"));
   download(context, out_toi_, toi.data(), kept, events.add("download"));
   // Queries the device gave up on (past device_iterations, or out of sub-boxes), decided by the same code in
-  // tiers: a second device pass that gives up after kSecondPassIterations (most finish there, side by side), then
-  // the rest, long queries up to the iteration cap, either in a device pass without a limit or on the host, whose
-  // threads run one long query several times faster than a work item does but are few.
+  // tiers on the device: a second pass that gives up after kSecondPassIterations (most finish there, side by side),
+  // then the rest in a pass without a limit. The host decides only what that pass hands back, a query that needs
+  // more sub-boxes than a work item holds. (Until issue 51 the host took up to 2 queries per thread instead of a
+  // device pass; its searches now end in a few hundred sub-boxes at most, and the narrow phase stays on the device.)
   std::vector<std::size_t> given_up;
   for (std::size_t i = 0; i < kept; ++i) {
     if (status[i] == 2) given_up.push_back(i);
@@ -445,7 +441,6 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
     }
     return left;
   };
-  const std::size_t host_threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
   std::size_t second_pass = 0, third_pass = 0;
   if (conservative) {
     std::vector<std::size_t> left = given_up;
@@ -456,12 +451,12 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
       device_pass(events, left, limit, pairs, status, toi, x0, x1);
       milliseconds += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     };
-    if (left.size() > kHostQueriesPerThread * host_threads) {
+    if (!left.empty()) {
       second_pass = left.size();
       timed_pass(kSecondPassIterations, into.second_pass_ms);
       left = still_given_up();
     }
-    if (left.size() > kHostQueriesPerThread * host_threads) {
+    if (!left.empty()) {
       third_pass = left.size();
       timed_pass(0, into.third_pass_ms);
     }

@@ -447,8 +447,8 @@ TEST_F(OpenClParity, ApccdGrowingListsGiveTheSameAnswers) {
   EXPECT_GT(counters["pending_table_builds"], 0.0) << "no partial traversal found a pair: the pending list never grew";
 }
 
-// Queries that run longer than device_iterations on the device are given up: many go to further device passes,
-// a few to the host (the host's part is exercised by the tiny-storage test above). The same answers either way.
+// Queries that run longer than device_iterations on the device are given up and decided by further device passes,
+// none by the host (the host decides only a query out of sub-boxes: the tiny-storage test above). The same answers.
 TEST_F(OpenClParity, QueriesGivenUpByTheDeviceGetTheSameAnswers) {
   const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
   for (const char* limit : {"1", "8", "24"}) {
@@ -458,10 +458,19 @@ TEST_F(OpenClParity, QueriesGivenUpByTheDeviceGetTheSameAnswers) {
                                                       testing::all_frames(loaded), &counters);
     EXPECT_GT(colliding, 0u);
     EXPECT_GT(counters["device_given_up_pairs"], 0.0) << "no query ran past the limit: the hand-over was not exercised";
+    // Every query given up fits a work item's sub-boxes here, so the device's later passes decide it (issue 51).
+    EXPECT_EQ(counters["host_decided_pairs"], 0.0) << "a query the device could decide was left to the host";
     if (std::string(limit) == "1") {
       EXPECT_GT(counters["device_second_pass_pairs"], 0.0) << "the second device pass did not run";
     }
   }
+  // A single query given up (fold at device_iterations=48): the device decides it too (the host used to take up to
+  // 2 a thread).
+  const datasets::SceneSequence fold = harness::suite_scenes("ci").at(1).load();
+  std::map<std::string, double> counters;
+  EXPECT_GT(expect_same_answers("full", "full:backend=opencl:device_iterations=48", fold.scene(), testing::all_frames(fold), &counters), 0u);
+  EXPECT_GT(counters["device_given_up_pairs"], 0.0) << "no query ran past the limit";
+  EXPECT_EQ(counters["host_decided_pairs"], 0.0) << "a query the device could decide was left to the host";
 }
 
 // Narrow-phase keys reach the kernels as the CPU reads them, every digit (the resolved spec prints 6).
