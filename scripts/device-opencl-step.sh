@@ -13,6 +13,8 @@
 #           the same candidates and tests, met by lists already sized, and step 3 is step 1 again, warm; $REPEATS
 #           passes, each with a fresh strategy;
 #   paper:  the paper suite's first $PAPER_STEPS steps at the scenes' δ, and the ci and default suites whole;
+#   ball:   the paper's spinning ball whole (resolution 100, 99 steps at the scene's δ: resting contact, issue 51),
+#           generated here by the last variant, $BALL_REPEATS passes;
 #   large:  the `large` suite's scene (the spinning ball at resolution 708, about 1M triangles, frames 6-9),
 #           generated here by the last variant, $LARGE_REPEATS passes.
 # Every run is --verify none (the times are the point; the answers are held by the parity tests, the recorded
@@ -32,6 +34,7 @@ VARIANTS=${VARIANTS:-before after}
 REPEATS=${REPEATS:-5}
 PAPER_STEPS=${PAPER_STEPS:-10}
 LARGE_REPEATS=${LARGE_REPEATS:-3}
+BALL_REPEATS=${BALL_REPEATS:-3}
 SAMPLE_MS=${SAMPLE_MS:-20}
 write_machine $VARIANTS
 # run VARIANT NAME ARGS...: each GPU strategy in its own process, sampled by nvidia-smi; kept as NAME-VARIANT-NARROW.
@@ -80,6 +83,17 @@ if part paper; then
     run "$v" default --suite default
     run "$v" paper --suite paper --max-steps "$PAPER_STEPS"
   done
+  pack
+fi
+if part ball; then
+  echo "== the paper's spinning ball"
+  scene="$out/scene-ball"
+  if [ ! -e "$scene/scene.json" ]; then
+    start=$SECONDS
+    "$bin/ccdbench-${VARIANTS##* }" --threads "$threads" generate spinning-ball --resolution 100 --frames 100 --out "$scene" > "$out/generate-ball.txt"
+    echo "generated in $((SECONDS - start)) s"
+  fi
+  for v in $VARIANTS; do run "$v" ball --scene "$scene" --repeat "$BALL_REPEATS"; done
   pack
 fi
 if part large; then
