@@ -425,43 +425,42 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
   download(context, out_.buffer, pairs.data(), kept, events.add("download"));
   download(context, out_status_, status.data(), kept, events.add("download"));
   download(context, out_toi_, toi.data(), kept, events.add("download"));
-  // Queries the device gave up on (past device_iterations, or out of sub-boxes), decided by the same code in
-  // tiers on the device: a second pass that gives up after kSecondPassIterations (most finish there, side by side),
-  // then the rest in a pass without a limit. The host decides only what that pass hands back, a query that needs
-  // more sub-boxes than a work item holds. (Until issue 51 the host took up to 2 queries per thread instead of a
-  // device pass; its searches now end in a few hundred sub-boxes at most, and the narrow phase stays on the device.)
+  // Queries the device handed back, decided by the same code: those given up after device_iterations (status 2)
+  // in tiers on the device, a second pass that gives up after kSecondPassIterations (most finish there, side by
+  // side), then the rest in a pass without a limit; those out of a work item's sub-boxes (status 3, which no device
+  // pass mends) on the host, as is whatever a later pass hands back so. (Until issue 51 the host also took up to 2
+  // given-up queries a thread instead of a device pass; searches now end in a few hundred sub-boxes at most, and
+  // the narrow phase stays on the device.)
   std::vector<std::size_t> given_up;
   for (std::size_t i = 0; i < kept; ++i) {
-    if (status[i] == 2) given_up.push_back(i);
+    if (status[i] >= 2) given_up.push_back(i);
   }
-  auto still_given_up = [&] {
+  // The queries still handed back: all of them, or only those given up (status 2).
+  const auto handed_back = [&](bool only_given_up) {
     std::vector<std::size_t> left;
     for (const std::size_t i : given_up) {
-      if (status[i] == 2) left.push_back(i);
+      if (only_given_up ? status[i] == 2 : status[i] >= 2) left.push_back(i);
     }
     return left;
   };
   std::size_t second_pass = 0, third_pass = 0;
   if (conservative) {
-    std::vector<std::size_t> left = given_up;
     // Each later pass's wall time (it ends with a blocking download): part of the "narrow phase" stage, counted
     // apart so that the latency of a few long queries shows (reports/narrowphase/stages.md).
+    std::vector<std::size_t> left;
     const auto timed_pass = [&](long limit, double& milliseconds) {
       const auto start = std::chrono::steady_clock::now();
       device_pass(events, left, limit, pairs, status, toi, x0, x1);
       milliseconds += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     };
-    if (!left.empty()) {
-      second_pass = left.size();
-      timed_pass(kSecondPassIterations, into.second_pass_ms);
-      left = still_given_up();
-    }
-    if (!left.empty()) {
-      third_pass = left.size();
-      timed_pass(0, into.third_pass_ms);
+    for (const long limit : {kSecondPassIterations, 0L}) {
+      left = handed_back(true);
+      if (left.empty()) break;
+      (limit > 0 ? second_pass : third_pass) = left.size();
+      timed_pass(limit, limit > 0 ? into.second_pass_ms : into.third_pass_ms);
     }
   }
-  const std::vector<std::size_t> on_host = still_given_up();
+  const std::vector<std::size_t> on_host = handed_back(false);
   {
     ScopedStageTimer timer(result.stages, "host narrow phase");
     const narrowphase::NarrowPhase& host = *narrow_phase_.host;

@@ -334,6 +334,8 @@ TEST_F(OpenClParity, GrowingListsAndHostDecidedQueriesGiveTheSameAnswers) {
       expect_same_answers("full", std::string("full:backend=opencl") + kSmallestDeviceMemory, loaded.scene(), testing::all_frames(loaded), &counters);
   EXPECT_GT(colliding, 0u);
   EXPECT_GT(counters["host_decided_pairs"], 0.0) << "no query overflowed its sub-boxes: the host's part was not exercised";
+  // A query out of sub-boxes goes to the host at once: a device pass with the same sub-boxes cannot decide it.
+  EXPECT_EQ(counters["device_second_pass_pairs"], 0.0) << "queries out of sub-boxes were run again on the device";
 }
 
 // A memory budget (memory=) small enough that every step runs in at least 8 chunks gives the answers of the whole

@@ -91,6 +91,7 @@ static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 origin
   if (search.gave_up) {
     result = ccd_outcome_make(0, NAN, 0);
     result.overflow = 1;
+    result.gave_up = 1;
     return result;
   }
   if (count == 0) {

@@ -8,14 +8,15 @@
 #include "strategies/narrowphase/shared/inclusion_windows.h"
 
 /* What a conservative test answers. overflow: the caller's sub-box storage was too small, or the search gave up
- * after give_up_after iterations; nothing else is set, and the caller reruns the test with more room and no limit
- * (the search is deterministic, so a rerun gives the answer it would have). */
+ * after give_up_after iterations (then gave_up is 1 too); nothing else is set, and the caller reruns the test with
+ * more room or no limit (the search is deterministic, so a rerun gives the answer it would have). */
 typedef struct {
   int collides;
   double toi;
   int hit_iteration_cap;
   double achieved_tolerance;
   int overflow;
+  int gave_up;
 } ccd_conservative_outcome;
 
 static inline ccd_conservative_outcome ccd_outcome_make(int collides, double toi, double achieved_tolerance) {
@@ -25,6 +26,7 @@ static inline ccd_conservative_outcome ccd_outcome_make(int collides, double toi
   outcome.hit_iteration_cap = 0;
   outcome.achieved_tolerance = achieved_tolerance;
   outcome.overflow = 0;
+  outcome.gave_up = 0;
   return outcome;
 }
 
@@ -161,6 +163,7 @@ static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const
   }
   if (s->gave_up) {
     result.overflow = 1;
+    result.gave_up = 1;
     return result;
   }
   if (size == 0) return result; /* every box excluded: proven no contact */

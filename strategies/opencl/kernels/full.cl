@@ -328,8 +328,8 @@ static inline int ccd_load_rows(uint4 p, global const uint* faces, global const 
   return vertex_face;
 }
 
-/* status: 0 apart, 1 collides (toi set), 2 the query needs more sub-boxes than a work item holds, or more than
- * give_up_after iterations (the host decides it). */
+/* status: 0 apart, 1 collides (toi set), 2 the query needs more than give_up_after iterations (a later device pass
+ * decides it), 3 more sub-boxes than a work item holds (the host decides it). */
 kernel void narrow_conservative(uint count, global const uint4* pairs, global const uint* faces, global const double* x0, global const double* x1,
                                 double thickness, double tolerance, double toi_tolerance, long max_iterations, long give_up_after,
                                 global uchar* status, global double* toi) {
@@ -340,7 +340,7 @@ kernel void narrow_conservative(uint count, global const uint4* pairs, global co
   ccd_sub_box storage[CCD_DEVICE_SUB_BOXES];
   const ccd_conservative_outcome r =
       ccd_conservative_test(rows, thickness, vertex_face, tolerance, toi_tolerance, max_iterations, give_up_after, storage, CCD_DEVICE_SUB_BOXES);
-  status[i] = r.overflow ? (uchar)2 : (uchar)(r.collides ? 1 : 0);
+  status[i] = r.overflow ? (uchar)(r.gave_up ? 2 : 3) : (uchar)(r.collides ? 1 : 0);
   toi[i] = r.toi;
 }
 
