@@ -341,7 +341,14 @@ static inline int ccd_separated_turning(const ccd_inclusion* s, const ccd_v3* va
     const double end_bound = 4 * CCD_UNIT_ROUNDOFF * ccd_dot(magnitude_b, size1) + CCD_SEPARATION_RELATIVE_SLACK * (fabs(end) + reach_b);
     const double middle_bound = 4 * CCD_UNIT_ROUNDOFF * (ccd_dot(magnitude_a, size1) + ccd_dot(magnitude_b, size0)) / 2 + 4 * CCD_DENORM_MIN +
                                 CCD_SEPARATION_RELATIVE_SLACK * (fabs(middle) + reach_middle);
-    if (!(start - start_bound > reach_a) || !(end - end_bound > reach_b) || !(middle - middle_bound > reach_middle)) return 0;
+    /* Lower bounds of the difference's Bernstein coefficients (the slack terms above cover these subtractions). */
+    const double low0 = start - start_bound - reach_a, low1 = middle - middle_bound - reach_middle, low2 = end - end_bound - reach_b;
+    if (!(low0 > 0) || !(low2 > 0)) return 0;
+    /* With both ends positive, the quadratic low0·(1 - λ)² + 2·low1·λ(1 - λ) + low2·λ² (below the difference, the
+     * B's being >= 0) is positive on [0, 1] exactly when low1 > 0 or low1² < low0·low2 (no real root; a negative
+     * low1 puts the vertex inside [0, 1]). The products round by u each, which 2^-50 covers, and each may underflow
+     * by half a subnormal. */
+    if (!(low1 > 0) && !(low0 * low2 * (1 - 0x1p-50) > low1 * low1 * (1 + 0x1p-50) + 4 * CCD_DENORM_MIN)) return 0;
   }
   return 1;
 }
