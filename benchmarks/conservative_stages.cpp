@@ -7,7 +7,8 @@
 // With --slow N DIR it profiles nothing: it writes the pairs whose search examines more than N sub-boxes to
 // DIR/vertex-face/slow.csv and DIR/edge-edge/slow.csv (rational query files, no truth: `ccdbench queries` scores
 // them), keeping nothing else, so that a step of a million triangles fits in memory.
-// Usage: conservative_stages SCENE [--thickness D] [--steps FIRST LAST EVERY] [--slow N DIR]
+// --sample K profiles every K-th pair only (a step of a million triangles has some 5e8).
+// Usage: conservative_stages SCENE [--thickness D] [--steps FIRST LAST EVERY] [--slow N DIR] [--sample K]
 
 #include <cstddef>
 
@@ -218,13 +219,14 @@ int write_slow_pairs(const datasets::SceneSequence& sequence, const Scene& scene
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: conservative_stages SCENE [--thickness D] [--steps FIRST LAST EVERY] [--slow N DIR]\n");
+    std::fprintf(stderr, "usage: conservative_stages SCENE [--thickness D] [--steps FIRST LAST EVERY] [--slow N DIR] [--sample K]\n");
     return 2;
   }
   datasets::SceneSequence sequence = datasets::load_scene_file(argv[1]);
   std::size_t first = 0, last = sequence.num_steps(), every = 1;
   double thickness = sequence.scene().thickness();
   long slow_over = -1;
+  std::size_t sample = 1;
   std::filesystem::path slow_dir;
   for (int a = 2; a < argc; ++a) {
     const std::string flag = argv[a];
@@ -238,6 +240,7 @@ int main(int argc, char** argv) {
       return *value;
     };
     if (flag == "--thickness" && a + 1 < argc) thickness = number("--thickness");
+    if (flag == "--sample" && a + 1 < argc) sample = std::max<std::size_t>(1, static_cast<std::size_t>(number("--sample")));
     if (flag == "--slow" && a + 2 < argc) {
       slow_over = static_cast<long>(number("--slow"));
       slow_dir = argv[++a];
@@ -258,14 +261,20 @@ int main(int argc, char** argv) {
     auto full = strategies::make_strategy("full");
     full->init(scene, x0);
     const strategies::StepResult result = full->step({&scene, k, x0, x1}, true);
-    for (const VertexFacePair& p : result.tested->vertex_face) runs.push_back(run_pair(pair_rows(scene.topology(), x0, x1, p), thickness, true));
-    for (const EdgeEdgePair& p : result.tested->edge_edge) runs.push_back(run_pair(pair_rows(scene.topology(), x0, x1, p), thickness, false));
+    std::size_t index = 0;
+    for (const VertexFacePair& p : result.tested->vertex_face) {
+      if (index++ % sample == 0) runs.push_back(run_pair(pair_rows(scene.topology(), x0, x1, p), thickness, true));
+    }
+    for (const EdgeEdgePair& p : result.tested->edge_edge) {
+      if (index++ % sample == 0) runs.push_back(run_pair(pair_rows(scene.topology(), x0, x1, p), thickness, false));
+    }
   }
   double total = 0, cubic_total = 0;
   for (const PairRun& r : runs) {
     total += r.ns;
     cubic_total += r.cubic_ns;
   }
+  if (sample > 1) std::printf("(every %zu-th pair)\n", sample);
   std::printf("%s, δ = %g, steps %zu..%zu every %zu: %zu pairs, conservative %.1f ms, cubic64 %.1f ms (%.2fx)\n", argv[1], thickness, first, last,
               every, runs.size(), total / 1e6, cubic_total / 1e6, total / cubic_total);
   const char* names[] = {"0 within δ at t = 0",
