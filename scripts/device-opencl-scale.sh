@@ -13,6 +13,9 @@
 #   limits:  steps 2-15 of the same ball at the scene's δ, conservative with the first device pass giving a query
 #            up after $LIMITS iterations (device_iterations=, the answers the same under any: only where the time
 #            goes changes), beside cubic64; the last variant, $REPEATS passes;
+#   cpu:     resting contact on the CPU (issue 51), each of $VARIANTS, `full` and `full+cubic64` in one process,
+#            $REPEATS passes, all cores: steps 10 and 14 of the same ball (frames 10-11 and 14-15, each its own
+#            scene) and the paper's spinning ball whole (resolution 100, 99 steps);
 #   scale:   frames 26-28 of the same scene (2 steps past the old 2^32 ceiling: about 3e8 candidate pairs a step)
 #            under memory=2G, 4G and 8G, conservative and cubic64, at δ = 0 and the scene's δ, and the CPU `full` of
 #            the same steps (the answers every budget must give).
@@ -70,13 +73,13 @@ gpu() {
   fi
   keep "$name" "$start" ", driver peak $(cat "$stem.smi") MiB"
 }
-# cpu NAME STRATEGY ARGS...: the CPU's answers of the same steps.
+# cpu NAME VARIANT STRATEGY ARGS...: a CPU run of the same steps (their answers; or times, in the cpu part).
 cpu() {
-  local name=$1 strategy=$2
-  shift 2
+  local name=$1 variant=$2 strategy=$3
+  shift 3
   local stem="$out/$name" start=$SECONDS
   if [ -s "$stem.json" ]; then return; fi
-  "$bin/ccdbench-after" --threads "$threads" run "$@" --strategy "$strategy" --verify none --out "$out/runs-$name" --json "$stem.json.tmp" \
+  "$bin/ccdbench-$variant" --threads "$threads" run "$@" --strategy "$strategy" --verify none --out "$out/runs-$name" --json "$stem.json.tmp" \
     --fresh 2> "$stem.err" > "$stem.txt"
   keep "$name" "$start" ""
 }
@@ -130,8 +133,24 @@ if part scale; then
   done
   for thickness in 0 scene; do
     for narrow in conservative cubic64; do
-      cpu "scale-$thickness-$narrow-cpu" "$(narrow_spec $narrow)" --scene "$ball" --thickness "$thickness"
+      cpu "scale-$thickness-$narrow-cpu" after "$(narrow_spec $narrow)" --scene "$ball" --thickness "$thickness"
     done
+  done
+fi
+if part cpu; then
+  echo "== cpu: resting contact on the CPU, each of $VARIANTS: the ball's steps 10 and 14, the paper's spinning ball"
+  for first in 10 14; do
+    ball=$(scene "step-$first" $((first + 2)) "$first")
+    for v in $VARIANTS; do
+      cpu "cpu-step-$first-$v" "$v" "full,full+cubic64" --scene "$ball" --repeat "$REPEATS"
+    done
+  done
+  paper="$out/scene-paper-ball"
+  if [ ! -e "$paper/scene.json" ]; then
+    "$bin/ccdbench-after" --threads "$threads" generate spinning-ball --resolution 100 --frames 100 --out "$paper" > "$out/generate-paper-ball.txt"
+  fi
+  for v in $VARIANTS; do
+    cpu "cpu-paper-ball-$v" "$v" "full,full+cubic64" --scene "$paper" --repeat "$REPEATS"
   done
 fi
 if command -v python3 > /dev/null; then
