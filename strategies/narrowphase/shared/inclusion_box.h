@@ -315,8 +315,9 @@ static inline ccd_v3 ccd_nearest_value(const ccd_inclusion* s, const ccd_sub_box
  * (1 - λ)·F0 + λ·F1 over its (u, v) vertices (F0, F1: the vertex's values at t0 and t1, the first and second half of
  * `values`), with the same per-axis `error`; n(λ)·F there is a quadratic in λ whose Bernstein coefficients are
  * nA·F0, (nA·F1 + nB·F0)/2 and nB·F1, and δ|n(λ)| plus n(λ)'s share of the error is below the line (1 - λ)·RA +
- * λ·RB (|n(λ)| is convex in λ), RA = δ|nA| + |nA|·error. A quadratic lies above the least of its Bernstein
- * coefficients, so when each exceeds the line's own (RA, (RA + RB)/2, RB) the box holds no contact. Any nA, nB
+ * λ·RB (|n(λ)| is convex in λ), RA = δ|nA| + |nA|·error. When the difference of the two, a quadratic with the
+ * differences of their Bernstein coefficients (the line's being RA, (RA + RB)/2, RB), is proven positive on
+ * [0, 1] (every coefficient positive, or the two ends and AM-GM: below), the box holds no contact. Any nA, nB
  * are sound; with the nearest directions at the box's two ends the plane follows the pair's turn, and what it
  * loses is of second order in the box's length in time, where one fixed plane loses the turn itself (first
  * order): pairs that slide past within a hair of δ are excluded in long boxes instead of thousands of short ones.
@@ -351,6 +352,18 @@ static inline int ccd_separated_turning(const ccd_inclusion* s, const ccd_v3* va
     if (!(low1 > 0) && !(low0 * low2 * (1 - 0x1p-50) > low1 * low1 * (1 + 0x1p-50) + 4 * CCD_DENORM_MIN)) return 0;
   }
   return 1;
+}
+
+/* The box halved along parameter d (0 t, 1 u, 2 v) into *low and *high, each with the next creation order. */
+static inline void ccd_halve(ccd_inclusion* s, const ccd_sub_box* box, int d, ccd_sub_box* low, ccd_sub_box* high) {
+  *low = *box;
+  *high = *box;
+  const double lo = ccd_box_bound(box, d, 0), hi = ccd_box_bound(box, d, 1);
+  const double middle = lo + (hi - lo) / 2;
+  ccd_set_box_bound(low, d, 1, middle);
+  ccd_set_box_bound(high, d, 0, middle);
+  low->order = s->created++;
+  high->order = s->created++;
 }
 
 /* Excluded (no contact in the box), accepted (every point within δ + tolerance and the box at most toi_tolerance
@@ -422,14 +435,7 @@ static inline int ccd_examine(ccd_inclusion* s, const ccd_sub_box* box, ccd_sub_
    * over the whole (u, v) range, so the search advances in time instead of cutting (u, v) ever finer at one t0
    * (near a first touch at δ > 0 every box that reaches past the contact holds a piece of it, at any size). */
   if (t_splittable && box->t1 - box->t0 > s->toi_tolerance) d = 0;
-  *low = *box;
-  *high = *box;
-  const double lo = ccd_box_bound(box, d, 0), hi = ccd_box_bound(box, d, 1);
-  const double middle = lo + (hi - lo) / 2;
-  ccd_set_box_bound(low, d, 1, middle);
-  ccd_set_box_bound(high, d, 0, middle);
-  low->order = s->created++;
-  high->order = s->created++;
+  ccd_halve(s, box, d, low, high);
   return CCD_SPLIT;
 }
 

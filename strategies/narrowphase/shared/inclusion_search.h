@@ -146,14 +146,7 @@ static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const
      * start the pair is farther than δ plus the tolerance) until the cuts reach single doubles: 20,000 sub-boxes
      * (the iteration cap) for a pair of the paper's spinning ball that halving in time ends in 4. */
     const double t_middle = box.t0 + (box.t1 - box.t0) / 2;
-    if (upper < INFINITY && box.t1 - box.t0 <= s->toi_tolerance && box.t0 < t_middle && t_middle < box.t1) {
-      low = box;
-      high = box;
-      low.t1 = t_middle;
-      high.t0 = t_middle;
-      low.order = s->created++;
-      high.order = s->created++;
-    }
+    if (upper < (double)INFINITY && box.t1 - box.t0 <= s->toi_tolerance && box.t0 < t_middle && t_middle < box.t1) ccd_halve(s, &box, 0, &low, &high);
     if (size + 2 > capacity) {
       result.overflow = 1;
       return result;
