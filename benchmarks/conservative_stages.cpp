@@ -54,6 +54,9 @@ namespace sh = ccd::narrowphase::shared::f64;
 
 /// cubic64's default eta (strategies/narrowphase/cubic.cpp).
 constexpr double kCubicEta = 1e-6;
+/// conservative's defaults (tolerance, toi_tolerance, max_iterations), as `full` runs it.
+constexpr double kTolerance = 1e-10, kToiTolerance = 1e-6;
+constexpr long kMaxIterations = 20000;
 
 struct PairRun {
   int stage = -1;
@@ -101,7 +104,7 @@ bool normal_separates(const sh::ccd_v3 rows[8], double thickness, bool vertex_fa
   int exponent = 0;
   if (!sh::ccd_scale_to_unit(scaled, &delta, &exponent)) return false;
   sh::ccd_inclusion search;
-  sh::ccd_inclusion_init(&search, scaled, delta, vertex_face, 1e-10, 1e-6, 20000);
+  sh::ccd_inclusion_init(&search, scaled, delta, vertex_face, kTolerance, kToiTolerance, kMaxIterations);
   const sh::ccd_sub_box root = sh::ccd_sub_box_make(0, 1, 0, 1, 0, 1, 0);
   sh::ccd_v3 values[2 * CCD_CLIPPED_VERTICES];
   const int count = sh::ccd_box_values(&search, &root, values);
@@ -118,14 +121,40 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+/// This file's copy of the conservative test of one pair (rescaled rows; the caller holds round-to-nearest), with
+/// room for any search; profile::ended says where it ended.
+sh::ccd_conservative_outcome conservative_test(const sh::ccd_v3* rows, double thickness, bool vertex_face) {
+  static thread_local std::vector<sh::ccd_sub_box> storage(1 << 16);
+  return sh::ccd_conservative_test(rows, thickness, vertex_face, kTolerance, kToiTolerance, kMaxIterations, 0, storage.data(),
+                                   static_cast<int>(storage.size()));
+}
+
+/// Every elementary pair `full` tests on steps first, first + every, ... below last, every `sample`-th of them
+/// handed to visit(rows, vertex_face).
+template <class Visit>
+void for_each_tested_pair(const datasets::SceneSequence& sequence, const Scene& scene, std::size_t first, std::size_t last, std::size_t every,
+                          std::size_t sample, Visit&& visit) {
+  for (std::size_t k = first; k < last; k += every) {
+    const std::vector<Vec3> x0 = sequence.frame(k), x1 = sequence.frame(k + 1);
+    auto full = strategies::make_strategy("full");
+    full->init(scene, x0);
+    const strategies::StepResult result = full->step({&scene, k, x0, x1}, true);
+    std::size_t index = 0;
+    for (const VertexFacePair& p : result.tested->vertex_face) {
+      if (index++ % sample == 0) visit(pair_rows(scene.topology(), x0, x1, p), true);
+    }
+    for (const EdgeEdgePair& p : result.tested->edge_edge) {
+      if (index++ % sample == 0) visit(pair_rows(scene.topology(), x0, x1, p), false);
+    }
+  }
+}
+
 PairRun run_pair(const std::array<Vec3, 8>& original, double thickness, bool vertex_face) {
   const narrowphase::RoundToNearest rounding;
   const auto rows = narrowphase::shared::to_shared_rows(original);
-  static thread_local std::vector<sh::ccd_sub_box> storage(1 << 16);
   PairRun run;
   auto start = std::chrono::steady_clock::now();
-  const sh::ccd_conservative_outcome outcome =
-      sh::ccd_conservative_test(rows.data(), thickness, vertex_face, 1e-10, 1e-6, 20000, 0, storage.data(), static_cast<int>(storage.size()));
+  const sh::ccd_conservative_outcome outcome = conservative_test(rows.data(), thickness, vertex_face);
   run.ns = seconds_since(start) * 1e9;
   run.stage = profile::ended.stage;
   run.iterations = profile::ended.iterations;
@@ -160,7 +189,7 @@ PairRun run_pair(const std::array<Vec3, 8>& original, double thickness, bool ver
       int exponent = 0;
       if (sh::ccd_scale_to_unit(scaled, &d, &exponent)) {
         sh::ccd_inclusion search;
-        sh::ccd_inclusion_init(&search, scaled, d, vertex_face, 1e-10, 1e-6, 20000);
+        sh::ccd_inclusion_init(&search, scaled, d, vertex_face, kTolerance, kToiTolerance, kMaxIterations);
         const double times[3] = {0, 1, run.toi};
         for (int k = 0; k < 3; ++k) {
           sh::ccd_v3 S, X, Y;
@@ -188,25 +217,14 @@ int write_slow_pairs(const datasets::SceneSequence& sequence, const Scene& scene
                      const std::filesystem::path& dir) {
   std::vector<datasets::Query> slow[2];
   std::size_t pairs = 0;
-  const auto test = [&](const std::array<Vec3, 8>& rows, bool vertex_face) {
+  for_each_tested_pair(sequence, scene, first, last, every, 1, [&](const std::array<Vec3, 8>& rows, bool vertex_face) {
     const narrowphase::RoundToNearest rounding;
-    const auto shared_rows = narrowphase::shared::to_shared_rows(rows);
-    static std::vector<sh::ccd_sub_box> storage(1 << 16);
-    sh::ccd_conservative_test(shared_rows.data(), scene.thickness(), vertex_face, 1e-10, 1e-6, 20000, 0, storage.data(),
-                              static_cast<int>(storage.size()));
+    conservative_test(narrowphase::shared::to_shared_rows(rows).data(), scene.thickness(), vertex_face);
     ++pairs;
     if (profile::ended.iterations <= over) return;
     std::printf("%s pair, stage %d, %ld sub-boxes\n", vertex_face ? "VF" : "EE", profile::ended.stage, profile::ended.iterations);
     slow[vertex_face ? 0 : 1].push_back(as_query(rows));
-  };
-  for (std::size_t k = first; k < last; k += every) {
-    const std::vector<Vec3> x0 = sequence.frame(k), x1 = sequence.frame(k + 1);
-    auto full = strategies::make_strategy("full");
-    full->init(scene, x0);
-    const strategies::StepResult result = full->step({&scene, k, x0, x1}, true);
-    for (const VertexFacePair& p : result.tested->vertex_face) test(pair_rows(scene.topology(), x0, x1, p), true);
-    for (const EdgeEdgePair& p : result.tested->edge_edge) test(pair_rows(scene.topology(), x0, x1, p), false);
-  }
+  });
   std::printf("%zu pairs, %zu VF and %zu EE over %ld sub-boxes\n", pairs, slow[0].size(), slow[1].size(), over);
   std::filesystem::create_directories(dir / "vertex-face");
   std::filesystem::create_directories(dir / "edge-edge");
@@ -254,21 +272,8 @@ int main(int argc, char** argv) {
   const Scene scene = sequence.scene().with_thickness(thickness);
   if (slow_over >= 0) return write_slow_pairs(sequence, scene, first, last, every, slow_over, slow_dir);
   std::vector<PairRun> runs;
-  std::vector<Vec3> x0, x1;
-  for (std::size_t k = first; k < last; k += every) {
-    x0 = sequence.frame(k);
-    x1 = sequence.frame(k + 1);
-    auto full = strategies::make_strategy("full");
-    full->init(scene, x0);
-    const strategies::StepResult result = full->step({&scene, k, x0, x1}, true);
-    std::size_t index = 0;
-    for (const VertexFacePair& p : result.tested->vertex_face) {
-      if (index++ % sample == 0) runs.push_back(run_pair(pair_rows(scene.topology(), x0, x1, p), thickness, true));
-    }
-    for (const EdgeEdgePair& p : result.tested->edge_edge) {
-      if (index++ % sample == 0) runs.push_back(run_pair(pair_rows(scene.topology(), x0, x1, p), thickness, false));
-    }
-  }
+  for_each_tested_pair(sequence, scene, first, last, every, sample,
+                       [&](const std::array<Vec3, 8>& rows, bool vertex_face) { runs.push_back(run_pair(rows, thickness, vertex_face)); });
   double total = 0, cubic_total = 0;
   for (const PairRun& r : runs) {
     total += r.ns;
