@@ -168,6 +168,15 @@ static inline void ccd_set_box_bound(ccd_sub_box* box, int dimension, int high, 
  * crosses an edge at 1 - (the edge's fixed coordinate), taken one double further out (toward the outer corner),
  * so that the vertices enclose the exact part. Writes 2 × count values (t0's, then t1's); returns 2 × count. */
 #define CCD_CLIPPED_VERTICES 5
+/* The other coordinate where the hypotenuse u + v = 1 crosses a box edge at coordinate c: 1 - c one double further
+ * out, since the subtraction may round down; but 1 - c = 0 as it is when c = 1, where the subtraction is exact. The
+ * double after 0 would be the smallest subnormal, and a subnormal operand costs each product it enters a microcode
+ * assist of over a hundred cycles on Intel CPUs (every VF pair's first box has such an edge: it made stage 1 twice
+ * cubic64's cost there, reports/narrowphase/stages.md), for a vertex that encloses nothing more. */
+static inline double ccd_hypotenuse_crossing(double c) {
+  const double exact_or_below = 1 - c;
+  return exact_or_below > 0 ? nextafter(exact_or_below, 2.0) : exact_or_below;
+}
 static inline int ccd_clipped_values(const ccd_inclusion* s, const ccd_sub_box* box, ccd_v3* values) {
   const double cu[4] = {box->u0, box->u1, box->u1, box->u0}, cv[4] = {box->v0, box->v0, box->v1, box->v1};
   double pu[CCD_CLIPPED_VERTICES], pv[CCD_CLIPPED_VERTICES];
@@ -182,11 +191,11 @@ static inline int ccd_clipped_values(const ccd_inclusion* s, const ccd_sub_box* 
     }
     if (in_i != in_j && count < CCD_CLIPPED_VERTICES) {
       if (cv[i] == cv[j]) { /* an edge along u at v = cv[i] */
-        pu[count] = ccd_clamp(nextafter(1 - cv[i], 2.0), box->u0, box->u1);
+        pu[count] = ccd_clamp(ccd_hypotenuse_crossing(cv[i]), box->u0, box->u1);
         pv[count] = cv[i];
       } else { /* an edge along v at u = cu[i] */
         pu[count] = cu[i];
-        pv[count] = ccd_clamp(nextafter(1 - cu[i], 2.0), box->v0, box->v1);
+        pv[count] = ccd_clamp(ccd_hypotenuse_crossing(cu[i]), box->v0, box->v1);
       }
       ++count;
     }
