@@ -7,6 +7,8 @@
 # CARRY_VARIANTS="NAME=PATH ..." adds other ccdbench builds as bin/ccdbench-NAME (stripped), for runs that compare
 # builds side by side (scripts/device-cpu-step.sh), with the release build's bvh and machine benchmarks; the
 # OpenCL tests stay behind then, to keep the folder under run's 64 MiB.
+# CARRY_STAGES="NAME=PATH ..." adds builds of benchmarks/conservative_stages as bin/conservative_stages-NAME
+# (stripped), for the per-stage profile of each (device-opencl-scale.sh's part 'stages').
 # Usage: scripts/device-carry.sh   (after scripts/build.sh release)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,6 +21,9 @@ mkdir -p "$carry/bin" "$carry/lib" "$carry/root"
 if [ -x build/release/bin/opencl_tests ] && [ -z "${CARRY_VARIANTS:-}" ]; then cp build/release/bin/opencl_tests "$carry/bin/"; fi
 for variant in ${CARRY_VARIANTS:-}; do
   strip -o "$carry/bin/ccdbench-${variant%%=*}" "${variant#*=}"
+done
+for variant in ${CARRY_STAGES:-}; do
+  strip -o "$carry/bin/conservative_stages-${variant%%=*}" "${variant#*=}"
 done
 if [ -n "${CARRY_VARIANTS:-}" ]; then
   for benchmark in bvh_benchmark machine_benchmark; do strip -o "$carry/bin/$benchmark" "build/release/bin/$benchmark"; done
@@ -33,7 +38,7 @@ if [ -z "${CARRY_VARIANTS:-}" ]; then
     cp -rL "$tree" "$carry/root$tree"
   done
 fi
-for binary in "$carry"/bin/ccdbench "$carry"/bin/ccdbench-* "$carry"/bin/*_benchmark "$carry"/bin/opencl_tests "$carry/bin/orterun" "$carry"/root/usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3/*.so \
+for binary in "$carry"/bin/ccdbench "$carry"/bin/ccdbench-* "$carry"/bin/*_benchmark "$carry"/bin/conservative_stages-* "$carry"/bin/opencl_tests "$carry/bin/orterun" "$carry"/root/usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3/*.so \
               "$carry"/root/usr/lib/x86_64-linux-gnu/pmix2/lib/pmix/*.so; do
   [ -e "$binary" ] || continue
   ldd "$binary" | awk '$3 ~ /^\// {print $3}'

@@ -16,6 +16,9 @@
 #   cpu:     resting contact on the CPU (issue 51), each of $VARIANTS, `full` and `full+cubic64` in one process,
 #            $REPEATS passes, all cores: steps 10 and 14 of the same ball (frames 10-11 and 14-15, each its own
 #            scene) and the paper's spinning ball whole (resolution 100, 99 steps);
+#   stages:  the conservative test's cost by stage against cubic64's, pair by pair on one thread, for each
+#            conservative_stages build carried (CARRY_STAGES): the paper's spinning ball, steps 20-99 every 10 (the
+#            CPU's narrow phase there is nearly all stage 1; a stage costing more on this CPU than elsewhere shows);
 #   scale:   frames 26-28 of the same scene (2 steps past the old 2^32 ceiling: about 3e8 candidate pairs a step)
 #            under memory=2G, 4G and 8G, conservative and cubic64, at δ = 0 and the scene's δ, and the CPU `full` of
 #            the same steps (the answers every budget must give).
@@ -94,6 +97,14 @@ scene() {
   fi
   echo "$folder"
 }
+# paper_ball: the paper's spinning ball (resolution 100, 100 frames), generated once.
+paper_ball() {
+  local paper="$out/scene-paper-ball"
+  if [ ! -e "$paper/scene.json" ]; then
+    "$bin/ccdbench-after" --threads "$threads" generate spinning-ball --resolution 100 --frames 100 --out "$paper" > "$out/generate-paper-ball.txt"
+  fi
+  echo "$paper"
+}
 narrow_spec() { [ "$1" = conservative ] && echo "full" || echo "full+$1"; }
 
 if part context; then
@@ -121,6 +132,19 @@ if part limits; then
   done
   gpu "limits-cubic64" "$last" "full+cubic64:backend=opencl" --scene "$ball" --repeat "$REPEATS"
 fi
+if part stages; then
+  echo "== stages: the conservative test by stage, one thread, the paper's spinning ball steps 20-99 every 10"
+  paper=$(paper_ball)
+  for stages in "$bin"/conservative_stages-*; do
+    name=stages-${stages##*/conservative_stages-}
+    if [ -s "$out/$name.txt" ]; then continue; fi
+    "$stages" "$paper" --steps 20 99 10 > "$out/$name.txt.tmp"
+    mv "$out/$name.txt.tmp" "$out/$name.txt"
+    echo "${name#stages-}: $(head -n 1 "$out/$name.txt")"
+    grep -E '^(stage|[0-5] )' "$out/$name.txt"
+    pack
+  done
+fi
 if part scale; then
   echo "== scale: frames 26-28 under budgets $BUDGETS"
   ball=$(scene frames-26-28 29 26)
@@ -145,10 +169,7 @@ if part cpu; then
       cpu "cpu-step-$first-$v" "$v" "full,full+cubic64" --scene "$ball" --repeat "$REPEATS"
     done
   done
-  paper="$out/scene-paper-ball"
-  if [ ! -e "$paper/scene.json" ]; then
-    "$bin/ccdbench-after" --threads "$threads" generate spinning-ball --resolution 100 --frames 100 --out "$paper" > "$out/generate-paper-ball.txt"
-  fi
+  paper=$(paper_ball)
   for v in $VARIANTS; do
     cpu "cpu-paper-ball-$v" "$v" "full,full+cubic64" --scene "$paper" --repeat "$REPEATS"
   done
