@@ -285,7 +285,7 @@ int main(int argc, char** argv) {
   const char* names[] = {"0 within δ at t = 0",
                          "1 whole domain excluded",
                          "2 no time window",
-                         "3 contact proven at t = 0",
+                         "3 contact proven (t = 0 or near t0)",
                          "4 search",
                          "5 advancement passed every window"};
   std::printf("%-36s %10s %8s %8s %10s %10s %10s %10s\n", "stage", "pairs", "time %", "ns/pair", "iter mean", "iter p50", "iter p99", "collide");

@@ -42,7 +42,7 @@ static inline int ccd_within_thickness_at_start(const ccd_v3 r[8], double thickn
 /* The whole conservative test of one pair (the `conservative` narrow phase, inclusion.cpp): rescale; stage 1 (the
  * whole domain at once excludes far pairs); stage 0 (a pair within δ at the start); stage 2 (the time windows: most
  * pairs that come close without touching end here); stage 3 (a cheap proof of a contact, which bounds the TOI from
- * above); stage 4 (the search within the windows, which bounds it from below). `storage` holds `capacity`
+ * above, or ends the test where advancement came within toi_tolerance of it); stage 4 (the search within the windows, which bounds it from below). `storage` holds `capacity`
  * sub-boxes; on overflow the caller retries with more. give_up_after > 0 ends a long search with an overflow (the
  * caller reruns it with 0). Runs in round-to-nearest (the caller's duty on the host; the only mode on an OpenCL
  * device). */
@@ -97,6 +97,15 @@ static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 origin
   if (count == 0) {
     CCD_DECIDED_AT(5, &search);
     return ccd_outcome_make(0, NAN, 0);
+  }
+  /* δ > 0: advancement usually ends within toi_tolerance of a first touch. A point proven within δ that soon after
+   * the first window's start (ccd_within_thickness_at, with F's error bound) proves a contact by then, and nothing
+   * touches before that start (stages 1 and 2 and advancement excluded it): the start is the TOI, never late and
+   * within toi_tolerance of the proven contact, as the search would end on it (its top box against upper) after
+   * some 20 halvings in time. */
+  if (thickness > 0 && ccd_within_thickness_at(&search, ccd_min(windows[0].t0 + toi_tolerance, 1.0))) {
+    CCD_DECIDED_AT(3, &search);
+    return ccd_outcome_make(1, windows[0].t0, 0);
   }
   /* Newton's starting times: each window's middle, and its start too when it is long enough to matter; at δ > 0
    * also toi_tolerance past its start, where advancement has usually brought a first touch within reach. */

@@ -71,13 +71,25 @@ static inline int ccd_accept_nearest(ccd_inclusion* s, const ccd_sub_box* box, d
  * (ccd_examine's own test along n, with its error bound, on the box's values): when it is separated, the window
  * starts at its end, and again from there. Near a first touch the nearest direction is the separating one, so each
  * step closes most of what is left, as conservative advancement does, but every step is proven. Returns 0 when the
- * whole window is passed (no contact in it), 1 otherwise (window->t0 moved forward, or not). */
-#define CCD_ADVANCE_STEPS 24
+ * whole window is passed (no contact in it), 1 otherwise (window->t0 moved forward, or not).
+ * At δ > 0 a step first tries a longer box: to a little short of the time the nearest point's own gap n·F - δ|n|
+ * (linear in time too) would close, but at most CCD_ADVANCE_GROWTH times the longer of the last box proven this way
+ * and the step above. It is excluded as ccd_examine excludes any box (along n, or by the plane turning from n to the
+ * nearest direction at its end: ccd_separated_turning, sound for any two directions), so a box passed either way
+ * holds no contact; only the lengths tried are guesses. A pair sliding past within a hair of δ while its primitives
+ * turn is where this matters: the fixed plane loses the turn at the domain's far vertices and stepped a thousandth
+ * of the step at a time (24 steps, then some 30 sub-boxes of search on the paper's spinning ball), where the
+ * turning plane, losing only second order, passes boxes a hundred times longer (reports/narrowphase/stages.md). */
+#define CCD_ADVANCE_STEPS 48
 /* Of the way to the first vertex's crossing each step goes: short of it, so that the proof at the box's end holds. */
 #define CCD_ADVANCE_FRACTION 0.9
+/* The longer box's growth over the last one proven, and its shrinking after a failed try. */
+#define CCD_ADVANCE_GROWTH 2.0
+#define CCD_ADVANCE_SHRINK 0.25
 static inline int ccd_advance(ccd_inclusion* s, ccd_window* window) {
   const int vertices = s->vertex_face ? 3 : 4;
   const double cu[4] = {0, 1, 0, 1}, cv[4] = {0, 0, 1, 1};
+  double stride = 0; /* the length of the last longer box proven (shrunk after a failed try) */
   for (int step = 0; step < CCD_ADVANCE_STEPS; ++step) {
     const double t = window->t0;
     ccd_sub_box box = ccd_sub_box_make(t, window->t1, 0, 1, 0, 1, 0);
@@ -97,9 +109,29 @@ static inline int ccd_advance(ccd_inclusion* s, ccd_window* window) {
       if (end_gap < 0) end = ccd_min(end, t + (window->t1 - t) * (start_gap / (start_gap - end_gap)));
     }
     if (end < window->t1) end = t + (end - t) * CCD_ADVANCE_FRACTION;
+    ccd_v3 values[2 * CCD_CLIPPED_VERTICES];
+    if (s->thickness > 0) {
+      const double start_gap = ccd_dot(n, ccd_f_value(S0, nearest_u, X0, nearest_v, Y0)) - reach;
+      const double end_gap = ccd_dot(n, ccd_f_value(S1, nearest_u, X1, nearest_v, Y1)) - reach;
+      double longer = t + CCD_ADVANCE_GROWTH * ccd_max(stride, end - t);
+      if (end_gap < 0) longer = ccd_min(longer, t + (window->t1 - t) * (start_gap / (start_gap - end_gap)) * CCD_ADVANCE_FRACTION);
+      longer = ccd_min(longer, window->t1);
+      if (longer > end) {
+        box.t1 = longer;
+        const int count = ccd_box_values(s, &box, values);
+        if (ccd_over_budget(s)) return 1;
+        double u, v;
+        if (ccd_separated_along(s, values, count, n) || ccd_separated_turning(s, values, count, n, ccd_nearest_point_at(s, &box, longer, &u, &v))) {
+          stride = longer - t;
+          if (longer >= window->t1) return 0;
+          window->t0 = longer;
+          continue;
+        }
+        stride = (longer - t) * CCD_ADVANCE_SHRINK;
+      }
+    }
     if (!(end > t)) return 1;
     box.t1 = end;
-    ccd_v3 values[2 * CCD_CLIPPED_VERTICES];
     const int count = ccd_box_values(s, &box, values);
     if (ccd_over_budget(s) || !ccd_separated_along(s, values, count, n)) return 1;
     if (end >= window->t1) return 0;
