@@ -9,7 +9,8 @@
 // moves one pair, one TOI bit or one candidate fails here.
 //
 // To record the file anew (only for a change meant to change answers, said in its commit; the file is rewritten):
-//   CCDBENCH_ANSWERS_RECORD=tests/baselines/full-answers.txt build/release/bin/strategies_tests --gtest_filter='FullAnswers.*'
+//   CCDBENCH_ANSWERS_RECORD=tests/baselines/full-answers.txt build/release/bin/strategies_tests --gtest_filter='*FullAnswers*'
+// (with the public data: scripts/data-dir.sh; 'FullAnswers.*' alone would drop the public steps' lines)
 
 #include "core/collision_set.hpp"
 #include "datasets/data_dir.hpp"
