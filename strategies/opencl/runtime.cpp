@@ -3,7 +3,9 @@
 #include "strategies/opencl/kernel_source.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
+#include <iostream>
 #include <map>
 #include <mutex>
 
@@ -174,7 +176,12 @@ Context::Context(const DeviceInfo& device, const std::string& defines) : device_
   check(status, "clCreateCommandQueue");
   // Build options: the defines only, never an option that relaxes the arithmetic (mad enabling, fast or unsafe
   // math, finite math only, denormals as zero): the kernels must compute what the host computes.
-  const std::string options = "-cl-std=CL1.2 " + defines;
+  // CCDBENCH_OPENCL_BUILD_LOG=1: the build log on stderr after each build, with NVIDIA's -cl-nv-verbose (each
+  // kernel's registers and spills: what a change to the shared text does to occupancy; a diagnostic, it changes no
+  // arithmetic).
+  const bool log_build = std::getenv("CCDBENCH_OPENCL_BUILD_LOG") != nullptr;
+  const bool nvidia = device_.vendor.find("NVIDIA") != std::string::npos;
+  const std::string options = "-cl-std=CL1.2 " + defines + (log_build && nvidia ? " -cl-nv-verbose" : "");
   BinaryCache& cache = binary_cache();
   std::lock_guard lock(cache.mutex);
   const auto key = std::make_pair(device_.id, options);
@@ -199,6 +206,7 @@ Context::Context(const DeviceInfo& device, const std::string& defines) : device_
     throw OpenClError("OpenCL: the kernels do not build on device " + std::to_string(device_.index) + " (" + device_.name +
                       "): " + error_name(status) + "\n" + build_log(program_, device_.id));
   }
+  if (log_build) std::cerr << "OpenCL build log (" << device_.name << ", " << options << "):\n" << build_log(program_, device_.id) << "\n";
   if (cached == cache.binaries.end()) {
     std::size_t size = 0;
     if (clGetProgramInfo(program_, CL_PROGRAM_BINARY_SIZES, sizeof(size), &size, nullptr) == CL_SUCCESS && size > 0) {
