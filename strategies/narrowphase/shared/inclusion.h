@@ -98,23 +98,23 @@ static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 origin
     CCD_DECIDED_AT(5, &search);
     return ccd_outcome_make(0, NAN, 0);
   }
-  /* δ > 0: advancement usually ends within toi_tolerance of a first touch. A point proven within δ that soon after
-   * the first window's start (ccd_within_thickness_at, with F's error bound) proves a contact by then, and nothing
-   * touches before that start (stages 1 and 2 and advancement excluded it): the start is the TOI, never late and
-   * within toi_tolerance of the proven contact, as the search would end on it (its top box against upper) after
-   * some 20 halvings in time. */
-  if (thickness > 0 && ccd_within_thickness_at(&search, ccd_min(windows[0].t0 + toi_tolerance, 1.0))) {
-    CCD_DECIDED_AT(3, &search);
-    return ccd_outcome_make(1, windows[0].t0, 0);
-  }
   /* Newton's starting times: each window's middle, and its start too when it is long enough to matter; at δ > 0
-   * also toi_tolerance past its start, where advancement has usually brought a first touch within reach. */
+   * first a time `soon` after its start, no more than toi_tolerance past it, where advancement has usually brought a
+   * first touch within reach: a point within δ proven there ends the test (below). soon - t0 is exact where
+   * t0 >= toi_tolerance (Sterbenz), and one double less when it rounded past toi_tolerance; below, the 2^-40 of
+   * toi_tolerance held back exceeds the sum's rounding (an ulp of 2e-6, 2^-71). */
   double seeds[3 * CCD_MAX_WINDOWS];
   int seed_count = 0;
+  int soon_first = 0; /* whether seeds[0] is the first window's `soon` */
   for (int i = 0; i < count; ++i) {
     const double length = windows[i].t1 - windows[i].t0;
+    if (thickness > 0 && toi_tolerance < length / 2) {
+      double soon = windows[i].t0 + toi_tolerance * (1 - 0x1p-40);
+      if (soon - windows[i].t0 > toi_tolerance) soon = nextafter(soon, 0.0);
+      if (i == 0) soon_first = 1;
+      seeds[seed_count++] = soon;
+    }
     if (length > CCD_MIRANDA_HALF_WIDTH) seeds[seed_count++] = windows[i].t0;
-    if (thickness > 0 && toi_tolerance < length / 2) seeds[seed_count++] = windows[i].t0 + toi_tolerance;
     seeds[seed_count++] = windows[i].t0 + length / 2;
   }
   double upper = INFINITY;
@@ -122,6 +122,14 @@ static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 origin
     if (upper <= 0) {
       CCD_DECIDED_AT(3, &search);
       return result; /* a contact proven at t = 0 is the earliest there can be */
+    }
+    /* A contact proven no more than toi_tolerance after the first window's start (the first seed, `soon`, at
+     * δ > 0), before which nothing touches (stages 1 and 2 and advancement excluded it): that start is the TOI,
+     * never late and within toi_tolerance of the proven contact, the search's own answer (its top box against
+     * upper) without its ~20 halvings in time. */
+    if (soon_first && upper <= seeds[0]) {
+      CCD_DECIDED_AT(3, &search);
+      return ccd_outcome_make(1, windows[0].t0, 0);
     }
     /* The proven contact lies in a window too: no later than the last window time up to upper. */
     double latest = -1;
