@@ -202,16 +202,6 @@ PairRun run_pair(const std::array<Vec3, 8>& original, double thickness, bool ver
   return run;
 }
 
-/// A query of the pair's rows as doubles (each exactly a rational).
-datasets::Query as_query(const std::array<Vec3, 8>& rows) {
-  datasets::Query query;
-  for (std::size_t i = 0; i < 8; ++i) {
-    query.rounded[i] = rows[i];
-    for (int k = 0; k < 3; ++k) query.exact[i][static_cast<std::size_t>(k)] = mpq_class(rows[i][k]);
-  }
-  return query;
-}
-
 /// --slow: the pairs whose search examines more than `over` sub-boxes, as query files; prints each one's count.
 int write_slow_pairs(const datasets::SceneSequence& sequence, const Scene& scene, std::size_t first, std::size_t last, std::size_t every, long over,
                      const std::filesystem::path& dir) {
@@ -223,7 +213,7 @@ int write_slow_pairs(const datasets::SceneSequence& sequence, const Scene& scene
     ++pairs;
     if (profile::ended.iterations <= over) return;
     std::printf("%s pair, stage %d, %ld sub-boxes\n", vertex_face ? "VF" : "EE", profile::ended.stage, profile::ended.iterations);
-    slow[vertex_face ? 0 : 1].push_back(as_query(rows));
+    slow[vertex_face ? 0 : 1].push_back(datasets::query_of_doubles(rows));
   });
   std::printf("%zu pairs, %zu VF and %zu EE over %ld sub-boxes\n", pairs, slow[0].size(), slow[1].size(), over);
   std::filesystem::create_directories(dir / "vertex-face");

@@ -219,4 +219,13 @@ void write_query_file(const std::filesystem::path& path, const std::vector<Query
   file.commit();
 }
 
+Query query_of_doubles(const std::array<Vec3, 8>& rows) {
+  Query query;
+  for (int i = 0; i < 8; ++i) {
+    for (int k = 0; k < 3; ++k) query.exact[i][k] = mpq_class(rows[i][k]);  // exact: every double is a rational
+  }
+  query.rounded = rows;
+  return query;
+}
+
 }  // namespace ccd::datasets

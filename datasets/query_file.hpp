@@ -76,6 +76,9 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
 /// A JSON array of booleans (an mma_bool file). @throws InputError when malformed.
 std::vector<bool> read_truth_file(const std::filesystem::path& path);
 
+/// The query whose rows are these doubles (each exactly a rational), without truth.
+Query query_of_doubles(const std::array<Vec3, 8>& rows);
+
 /// Writes queries as the 7-column format (truth on every query) or the 6-column one (on none), atomically.
 void write_query_file(const std::filesystem::path& path, const std::vector<Query>& queries);
 

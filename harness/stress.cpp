@@ -106,11 +106,7 @@ std::vector<datasets::QueryFile> extremes_query_files(const std::vector<datasets
   files[1].path = "extremes-suite/edge-edge";
   files[1].kind = datasets::QueryKind::edge_edge;
   for (const datasets::ExtremeQuery& extreme : suite) {
-    datasets::Query query;
-    for (int r = 0; r < 8; ++r) {
-      for (int k = 0; k < 3; ++k) query.exact[r][k] = mpq_class(extreme.rows[r][k]);
-    }
-    query.rounded = extreme.rows;
+    datasets::Query query = datasets::query_of_doubles(extreme.rows);
     query.truth = reference::decide(reference_kind(extreme.kind), extreme.rows, 0.0).collides;
     files[extreme.kind == datasets::QueryKind::vertex_face ? 0 : 1].queries.push_back(std::move(query));
   }

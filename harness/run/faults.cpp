@@ -35,11 +35,7 @@ nlohmann::json record_faults(const Scene& scene, const std::vector<std::vector<V
         notes << "  " << fault.message << "  [" << (step / "frame_0.ply").string() << ", frame_1.ply]\n";
         continue;
       }
-      datasets::Query query;
-      for (int i = 0; i < 8; ++i) {
-        for (int c = 0; c < 3; ++c) query.exact[i][c] = mpq_class((*fault.rows)[i][c]);
-      }
-      query.rounded = *fault.rows;
+      datasets::Query query = datasets::query_of_doubles(*fault.rows);
       std::vector<datasets::Query>& list = fault.vertex_face ? vertex_face : edge_edge;
       list.push_back(std::move(query));
       notes << "  " << fault.message << "  [" << (step / (fault.vertex_face ? "vertex-face" : "edge-edge") / "errors.csv").string() << ", query "

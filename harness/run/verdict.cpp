@@ -69,11 +69,7 @@ std::size_t triangle_pair_false_alarms(const Scene& scene, const CollisionSet& t
 
 /// A missed pair as a query of the rational format, truth 1.
 datasets::Query as_query(const std::array<Vec3, 8>& rows) {
-  datasets::Query query;
-  for (int i = 0; i < 8; ++i) {
-    for (int k = 0; k < 3; ++k) query.exact[i][k] = mpq_class(rows[i][k]);
-  }
-  query.rounded = rows;
+  datasets::Query query = datasets::query_of_doubles(rows);
   query.truth = true;
   return query;
 }
