@@ -142,6 +142,8 @@ class Benchmark {
     std::size_t slot;  // cells keep the order of --strategy, kept or computed
   };
   std::optional<Pending> plan_cell(std::size_t s, const strategies::StrategySpec& spec, const std::string& content);
+  /// Why a kept cell of `spec` may not stand for a fresh one in this run (docs/DESIGN.md §10 "Kept cells"), or "".
+  std::string why_not_kept(const std::string& spec, const json& summary) const;
   /// The run's spec whose text is `text` (a work item names its cell's spec by it).
   const strategies::StrategySpec& spec_named(const std::string& text) const;
   void item_done(std::size_t index, const std::string& text, int rank);
@@ -208,6 +210,19 @@ std::string Benchmark::work_on(const std::string& payload) {
       .dump();
 }
 
+std::string Benchmark::why_not_kept(const std::string& spec, const json& summary) const {
+  // What a plugin's answers depend on is unbounded (its environment, files it reads, libraries it opens itself or
+  // that LD_PRELOAD puts before its own): no key covers it, so its answers stand for this run's only when asked.
+  if (strategies::runs_plugin(spec) && !options_.resume) {
+    return "a plugin's answers can depend on what no digest covers (its environment, files it reads, libraries it opens itself, "
+           "LD_PRELOAD); --resume reuses its kept cell, marked resumed, which check refuses unless --allow-resumed";
+  }
+  // A kept cell holds its answers' digests, not the answers: the files asked for need them.
+  if (options_.write_answers) return "--write-answers needs its answers, which a kept cell does not hold";
+  if (options_.misses && summary.value("missed", json(0)) != json(0)) return "--misses needs its missed pairs, which a kept cell does not hold";
+  return {};
+}
+
 const strategies::StrategySpec& Benchmark::spec_named(const std::string& text) const {
   for (const strategies::StrategySpec& spec : options_.strategies) {
     if (spec.text == text) return spec;
@@ -242,6 +257,12 @@ std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const stra
       throw InputError(corrupt.file(), corrupt.where(), corrupt.reason() + " (remove the file, or rerun with --fresh)");
     }
   }
+  if (kept) {
+    if (const std::string why = why_not_kept(spec.text, (*kept)["summary"]); !why.empty()) {
+      say("run: " + source.label + " / " + strategies::short_label(spec.text) + ": computed again, not kept from an earlier run: " + why);
+      kept.reset();
+    }
+  }
   cell_specs_.push_back(spec.text);
   if (!kept) {
     cells_.emplace_back();
@@ -256,8 +277,7 @@ std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const stra
   }
   (*kept)["summary"]["resumed"] = true;
   say("run: " + source.label + " / " + key.strategy +
-      ": kept from an earlier run with the same inputs, strategy, steps, δ, repeats, threads and executable (--fresh reruns it)" +
-      (options_.misses ? "; its misses are not written to --misses again" : ""));
+      ": kept from an earlier run with the same inputs, strategy, steps, δ, repeats, threads and executable (--fresh reruns it)");
   ++cells_finished_;
   cells_.push_back(std::move(*kept));
   return std::nullopt;
@@ -381,7 +401,7 @@ std::vector<json> Benchmark::report(std::ostream& out) const {
 
 }  // namespace
 
-void check_run_outputs(const RunOptions& options) {
+void prepare_run_outputs(const RunOptions& options) {
   if (rank_info().rank != 0) return;  // only rank 0 writes them
   datasets::require_writable_directory(options.out);
   datasets::require_writable_directory(options.out / "cells");
@@ -390,12 +410,19 @@ void check_run_outputs(const RunOptions& options) {
   if (options.misses) datasets::require_writable_directory(*options.misses);
   if (options.faults) datasets::require_writable_directory(*options.faults);
   if (options.write_answers) datasets::require_writable_directory(*options.write_answers);
+  // What the run writes when it ends goes now: a run that stops before (a crash, kill -9, a refusal) leaves no
+  // earlier run's results where this run's are expected, for check or a script to take as this run's.
+  std::error_code ignored;
+  if (options.json) std::filesystem::remove(*options.json, ignored);
+  if (options.report) {
+    for (const char* file : {kReportPage, kReportSummaries, kReportSteps}) std::filesystem::remove(*options.report / file, ignored);
+  }
 }
 
 std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
   // Every output is checked before any work (a run must not compute for an hour and then fail to write). The specs
   // were validated where they were parsed (the command line, the C++ API).
-  check_run_outputs(options);
+  prepare_run_outputs(options);
   Benchmark benchmark(options);
   if (rank_info().rank != 0) {
     distribute({}, benchmark.work(), {});

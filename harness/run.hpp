@@ -25,13 +25,21 @@ std::vector<SceneSource> suite_scenes(const std::string& suite);
 /// The label of a scene given as a file: the folder's name for FOLDER or FOLDER/scene.json, else the file's name.
 std::string scene_file_label(const std::filesystem::path& path);
 
-/// Checks that every output of a run can be written (rank 0's: only it writes them). @throws InputError naming one
-/// that cannot.
-void check_run_outputs(const RunOptions& options);
+/// Checks that every output of a run can be written (rank 0's: only it writes them), then removes the results the
+/// run writes when it ends (--json, --report's files), so that a run that stops before then leaves none that `check`
+/// could take for its own. @throws InputError naming an output that cannot be written (nothing removed then).
+void prepare_run_outputs(const RunOptions& options);
 
 /// Runs the cells, prints the table and writes the results. Returns the summaries (docs/DESIGN.md §5 fields). Its
 /// strategies are validated specs (strategies::validate).
 std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostream& out);
+
+/// How the gate takes results beyond their entries.
+struct GateOptions {
+  /// Gate a plugin's cells kept from an earlier run (`run --resume`) as if the plugin had given their answers in
+  /// this run (`check --allow-resumed`); without it such a cell fails (docs/DESIGN.md §10 "Kept cells").
+  bool allow_resumed = false;
+};
 
 /// The CI gate (`ccdbench check`). The baseline is a JSON array of {scene, strategy, thickness, max_missed}
 /// (strategy: the resolved name, or the spec exactly as `run --strategy` was given it, which a plugin's gate uses):
@@ -44,7 +52,8 @@ std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostrea
 /// @throws InputError (the file, the entry) for a malformed baseline or results.
 /// @return whether the gate passes.
 bool check_against_baseline(const nlohmann::json& baseline, const std::filesystem::path& baseline_file,
-                            const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, std::ostream& out);
+                            const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, const GateOptions& options,
+                            std::ostream& out);
 
 /// Keeps of the results (run --json arrays) those of the given strategies, each as --strategy gave it (a summary's
 /// spec) or its resolved name; says on `out` how many others were left out. @throws InputError when a strategy has
@@ -66,10 +75,11 @@ struct BaselineMargin {
 /// `ccdbench check --write-baseline`: one entry per result (run --json summaries, several files taken as one), with
 /// the strategy as the run was given it, δ as "scene" or the number, max_missed, max_errors and max_toi_late (with
 /// --toi) from the result plus the margin, and the steps and colliding pairs pinned. Results that could not be gated are
-/// refused, as check refuses them: not verified, no colliding pair, or two results for one cell. A result whose
+/// refused, for the reasons check fails them whatever their entry (not verified, no colliding pair, no errors count,
+/// a plugin's resumed cell unless allowed), and two results for one cell. A result whose
 /// answers changed between passes gets no allow_nondeterministic: it is named on `warnings`, and check fails it until
 /// a person says it may. @throws InputError (the file, the entry).
 nlohmann::json write_baseline(const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, const BaselineMargin& margin,
-                              std::ostream& warnings);
+                              const GateOptions& options, std::ostream& warnings);
 
 }  // namespace ccd::harness

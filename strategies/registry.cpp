@@ -174,11 +174,20 @@ bool from_outside(const std::string& spec) {
          narrowphase::is_file_head(names.narrow_phase.substr(0, names.narrow_phase.find(':')));
 }
 
-bool runs_host_method(const std::string& spec) {
+namespace {
+
+/// Whether the strategy or the narrow phase of a spec or resolved name has the head `head` (plugin, callable).
+bool has_head(const std::string& spec, const char* head) {
   const StrategyNames names = strategy_names_of(spec);
-  auto host = [](const std::string& name) { return name.substr(0, name.find(':')) == narrowphase::kHostMethodHead; };
-  return host(names.name) || host(names.narrow_phase);
+  auto is = [&](const std::string& name) { return name.substr(0, name.find(':')) == head; };
+  return is(names.name) || is(names.narrow_phase);
 }
+
+}  // namespace
+
+bool runs_host_method(const std::string& spec) { return has_head(spec, narrowphase::kHostMethodHead); }
+
+bool runs_plugin(const std::string& spec) { return has_head(spec, narrowphase::kPluginHead); }
 
 std::string short_label(const std::string& spec) {
   const StrategyNames names = strategy_names_of(spec);

@@ -84,6 +84,12 @@ bool from_outside(const std::string& spec);
 /// ccdbench cannot digest, so its cells are never kept for a later run.
 bool runs_host_method(const std::string& spec);
 
+/// Whether a spec or resolved name runs a plugin's code (plugin:PATH, as the strategy or as its narrow phase): code
+/// whose answers can depend on what no digest covers (its environment, files it reads, libraries it opens itself or
+/// that LD_PRELOAD puts before its own), so a cell of it is reused only when a run is asked to resume
+/// (docs/DESIGN.md §10 "Kept cells").
+bool runs_plugin(const std::string& spec);
+
 /// A spec's or resolved name's head, short, for progress lines and file names: "full+cubic64", "fcl", and a file
 /// head by its file's name ("full+plugin:libmy_ccd.so", "answers:run-7").
 std::string short_label(const std::string& spec);

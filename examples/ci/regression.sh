@@ -26,7 +26,8 @@
 #   BASE_BUILD, HEAD_BUILD   the plugin's two builds, already made: skips building them
 #   PR_NUMBER                with the GitHub CLI (gh) and its token: posts compare.md on that pull request
 # Where the base has no build of the plugin (the change that adds it), the head is gated alone and compare.md says so.
-# Exit status: 0 when the gate passes and no verdict got worse, 1 when either failed, 2 for bad input (ccdbench's).
+# Exit status: 0 when the gate passes and no verdict got worse, 1 when either failed, 2 for bad input (ccdbench's),
+# 3 when compare found a cell it could not compare (another input, or times made elsewhere: ccdbench compare --help).
 set -euo pipefail
 if [[ $# -ne 4 ]]; then
   sed -n '5,7p' "$0" >&2
@@ -84,7 +85,9 @@ head_spec=plugin:head/$plugin
 specs=$head_spec
 if ((with_base)); then specs=$base_spec,$head_spec; fi
 
-# 3. One invocation runs both (and whatever else RUN_ARGS names); cells already in WORK/run are kept.
+# 3. One invocation runs both (and whatever else RUN_ARGS names). The plugins' cells are computed again every time,
+#    even where WORK/run keeps one of the same code: a plugin's answers can depend on what no digest covers, and the
+#    gate judges only answers given in this run (docs/DESIGN.md §10 "Kept cells"). Built-in strategies' cells are kept.
 cd "$work"
 if [[ -z ${RUN_ARGS:-} ]]; then
   [[ -f scenes/fold/scene.json ]] || "$ccdbench" generate fold --out scenes/fold > /dev/null

@@ -17,6 +17,7 @@ namespace {
 struct CheckOptions {
   std::string baseline, write_baseline, margin = "0", strategies;
   std::vector<std::string> results;
+  harness::GateOptions gate;
 };
 
 using Results = std::vector<std::pair<std::filesystem::path, nlohmann::json>>;
@@ -31,7 +32,7 @@ Results read_results(const CheckOptions& options) {
 int write_baseline(const CheckOptions& options) {
   const harness::BaselineMargin margin = harness::BaselineMargin::parse(options.margin);
   datasets::require_writable_file(options.write_baseline);
-  const nlohmann::json baseline = harness::write_baseline(read_results(options), margin, std::cerr);
+  const nlohmann::json baseline = harness::write_baseline(read_results(options), margin, options.gate, std::cerr);
   datasets::write_json_file(options.write_baseline, baseline);
   for (const nlohmann::json& entry : baseline) {
     std::cout << "entry " << entry["scene"].get<std::string>() << " / " << entry["strategy"].get<std::string>() << " / δ "
@@ -46,7 +47,7 @@ int write_baseline(const CheckOptions& options) {
 int gate(const CheckOptions& options) {
   if (options.baseline.empty()) return refuse({}, "check needs --baseline FILE (or --write-baseline FILE to write one)");
   const nlohmann::json baseline = datasets::read_json_file(options.baseline, "baseline file");
-  const bool ok = harness::check_against_baseline(baseline, options.baseline, read_results(options), std::cout);
+  const bool ok = harness::check_against_baseline(baseline, options.baseline, read_results(options), options.gate, std::cout);
   std::cout << (ok ? "check: every result within its baseline\n" : "check: FAILED\n");
   return ok ? 0 : 1;
 }
@@ -61,8 +62,9 @@ Command add_check(CLI::App& app) {
                          "has no baseline entry or an entry no result, a result was not verified or has no colliding pair (it could\n"
                          "not miss anything, so it gates nothing), or a result misses more than its entry allows, has errors\n"
                          "(answers a plugin could not give) beyond its max_errors (default 0), or answers that changed between\n"
-                         "passes unless its entry says allow_nondeterministic: true. With --write-baseline it writes the baseline\n"
-                         "of the results instead (README: CI regression).");
+                         "passes unless its entry says allow_nondeterministic: true, or is a plugin's cell kept from an earlier\n"
+                         "run (run --resume) unless --allow-resumed. With --write-baseline it writes the baseline of the results\n"
+                         "instead, refusing what check would fail whatever the entry (README: CI regression).");
   CLI::Option* baseline_option =
       check->add_option("--baseline", options->baseline,
                         "JSON array of {scene, strategy, thickness: \"scene\" or a number, max_missed: integer >= 0}, each with optional\n"
@@ -81,6 +83,9 @@ Command add_check(CLI::App& app) {
   check->add_option("--strategy", options->strategies,
                     "gate (or write the baseline of) only the results of these strategies, comma-separated, as run's\n"
                     "--strategy gave them: a run of a plugin's base and head builds gates the head alone");
+  check->add_flag("--allow-resumed", options->gate.allow_resumed,
+                  "gate a plugin's cells that `run --resume` kept from an earlier run as if the plugin had given their\n"
+                  "answers in this run (without it they fail: its answers can depend on what no digest covers)");
   check->add_option("RESULTS", options->results, "`ccdbench run --json` summary files, taken together")->required();
   return {check, [options] { return options->write_baseline.empty() ? gate(*options) : write_baseline(*options); }};
 }

@@ -44,11 +44,16 @@ void add_run_options(CLI::App* run, RunCommandOptions& o, Shared& shared) {
   run->add_option("--repeat", o.run.repeats, "timed passes (1 to 1000); ms per step is the median")->check(CLI::Range(1, kMaxRepeats));
   run->add_option("--out", o.run.out,
                   "results folder: cells/ (one file per finished cell, reused by a later run only when its inputs,\n"
-                  "steps, δ, strategy, repeats, threads and executable are all the same) and results.jsonl (the step\n"
-                  "records and summary of every finished cell of every run into this folder)")
+                  "steps, δ, strategy, repeats, threads and executable are all the same, and for a plugin's cell only\n"
+                  "with --resume) and results.jsonl (the step records and summary of every finished cell of every run\n"
+                  "into this folder)")
       ->capture_default_str();
-  run->add_option("--json", o.run.json, "write the summaries (one per scene and strategy) as a JSON array");
-  run->add_option("--report", o.run.report, "write a Markdown page (table, steps.json for the plots) here");
+  run->add_option("--json", o.run.json,
+                  "write the summaries (one per scene and strategy) as a JSON array when the run ends (an earlier file\n"
+                  "is removed when it starts: a run that stops early leaves none)");
+  run->add_option("--report", o.run.report,
+                  "write a Markdown page (table, summaries.json and steps.json for the plots) here when the run ends\n"
+                  "(those of an earlier run are removed when it starts)");
   run->add_flag("--toi", o.run.toi,
                 "also compare every reported time of impact with the exact earliest contact (exact TOIs are computed\n"
                 "once and cached with the truth): toi_late (later than exact: a defect for conservative methods),\n"
@@ -56,6 +61,12 @@ void add_run_options(CLI::App* run, RunCommandOptions& o, Shared& shared) {
   run->add_option("--max-steps", o.run.max_steps, "only the first N steps of each scene (0: all)")
       ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 40));
   run->add_flag("--fresh", o.run.fresh, "rerun cells kept from an earlier run");
+  run->add_flag("--resume", o.run.resume,
+                "also reuse kept cells of plugins, to finish an interrupted run: without it a plugin's cell is\n"
+                "computed again, since its answers can depend on what no digest covers (its environment, files it\n"
+                "reads, libraries it opens itself, LD_PRELOAD); a reused one is marked resumed, and check refuses it\n"
+                "unless --allow-resumed")
+      ->excludes("--fresh");
   run->add_option("--misses", o.run.misses,
                   "write each cell's missed pairs here as rational query files by cause (DIR/SCENE/CELL/{vertex-face,"
                   "edge-edge}/CAUSE.csv; cause culled or tested, or for fcl why FCL's test said no), to replay with "
@@ -121,7 +132,7 @@ int run_run(RunCommandOptions& o, const Shared& shared) {
   // Answers alone (no --strategy) are judged alone: the default `full` is for runs that name no strategy at all.
   if (!o.answer_folders.empty() && o.app->count("--strategy") == 0) specs.clear();
   for (const std::string& folder : o.answer_folders) specs.push_back("answers:" + folder);
-  harness::check_run_outputs(run);
+  harness::prepare_run_outputs(run);
   // The one place a run's specs are parsed: every cell carries its spec from here (validated without making anything).
   for (const std::string& text : specs) {
     try {
@@ -151,7 +162,8 @@ Command add_run(CLI::App& app, Shared& shared) {
                                         strategy_list() + "; NARROW is " + narrowphase::narrow_phase_list() +
                                         " (default conservative).\n"
                                         "`ccdbench strategies` lists what each is, its keys with their values and defaults, and its backends.\n"
-                                        "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh.");
+                                        "Truth is cached on disk by content. Finished cells are kept in --out and reused unless --fresh (a\n"
+                                        "plugin's only with --resume: docs/DESIGN.md §10).");
   add_run_options(options->app, *options, shared);
   return {options->app, [options, &shared] { return run_run(*options, shared); }, true};
 }

@@ -6,6 +6,7 @@
 #include "harness/cell_store.hpp"
 #include "harness/rank_test.hpp"
 #include "harness/run/cells.hpp"
+#include "harness/run/record_fields.hpp"
 #include "harness/table.hpp"
 
 #include <nlohmann/json.hpp>
@@ -39,86 +40,40 @@ struct ResultSet {
 /// A cell's steps are found by what both records name: scene, δ and resolved strategy.
 std::string steps_key(const json& record) { return record["scene"].dump() + "|" + record["thickness"].dump() + "|" + record["strategy"].dump(); }
 
-/// What a field of a record must be for compare to read it.
-enum class Kind { string, number, count, numbers, object, boolean, number_or_null };
+/// Every field compare reads, checked before anything is compared or written (run/record_fields.hpp).
+const std::vector<RecordField> kSummaryFields = {{"scene", FieldKind::string, true},
+                                                 {"strategy", FieldKind::string, true},
+                                                 {"thickness", FieldKind::number, true},
+                                                 {"thickness_from", FieldKind::string, true},
+                                                 {"steps", FieldKind::count, true},
+                                                 {"ms_per_step", FieldKind::number, true},
+                                                 {"spec", FieldKind::string, false},
+                                                 {"ms_per_repeat", FieldKind::numbers, false},
+                                                 {"missed", FieldKind::count, false},
+                                                 {"errors", FieldKind::count, false},
+                                                 {"toi_late", FieldKind::count, false},
+                                                 {"false_alarms", FieldKind::count, false},
+                                                 {"colliding", FieldKind::count, false},
+                                                 {"verified", FieldKind::boolean, false},
+                                                 {"host_peak_bytes", FieldKind::number, false},
+                                                 {"device_bytes", FieldKind::number, false},
+                                                 {"toi_error_max", FieldKind::number_or_null, false},
+                                                 {"toi_error_median", FieldKind::number_or_null, false},
+                                                 {"toi_error_p99", FieldKind::number_or_null, false},
+                                                 {"nondeterministic_at_step", FieldKind::count, false},
+                                                 {"key", FieldKind::object, false},
+                                                 {"finished_at", FieldKind::string, false},
+                                                 {"machine", FieldKind::string, false},
+                                                 {"build_type", FieldKind::string, false},
+                                                 {"provenance", FieldKind::object, false}};
 
-bool has_kind(const json& value, Kind kind) {
-  switch (kind) {
-    case Kind::string: return value.is_string();
-    case Kind::number: return value.is_number() && std::isfinite(value.get<double>()) && value.get<double>() >= 0;
-    case Kind::count: return value.is_number_unsigned();
-    case Kind::numbers: return value.is_array() && std::all_of(value.begin(), value.end(), [](const json& v) { return has_kind(v, Kind::number); });
-    case Kind::object: return value.is_object();
-    case Kind::boolean: return value.is_boolean();
-    case Kind::number_or_null: return value.is_null() || has_kind(value, Kind::number);
-  }
-  return false;
-}
-
-const char* kind_name(Kind kind) {
-  switch (kind) {
-    case Kind::string: return "a string";
-    case Kind::number: return "a finite number >= 0";
-    case Kind::count: return "an integer >= 0";
-    case Kind::numbers: return "an array of finite numbers >= 0";
-    case Kind::object: return "an object";
-    case Kind::boolean: return "true or false";
-    case Kind::number_or_null: return "a finite number >= 0 or null";
-  }
-  return "";
-}
-
-struct Field {
-  const char* name;
-  Kind kind;
-  bool required;
-};
-
-/// Every field compare reads, checked before anything is compared or written: a malformed record is bad input
-/// (FILE:WHERE: REASON, exit 2), never a verdict.
-void check_fields(const json& record, const std::vector<Field>& fields, const std::filesystem::path& file, const std::string& where,
-                  const char* what) {
-  if (!record.is_object()) throw InputError(file, where, std::string("a ") + what + " must be an object");
-  for (const Field& field : fields) {
-    if (!record.contains(field.name)) {
-      if (field.required) throw InputError(file, where, std::string("a ") + what + " without '" + field.name + "': not a result of `run`");
-      continue;
-    }
-    if (!has_kind(record[field.name], field.kind)) {
-      throw InputError(file, where + "." + field.name, std::string("must be ") + kind_name(field.kind) + ", got " + record[field.name].dump());
-    }
-  }
-}
-
-const std::vector<Field> kSummaryFields = {{"scene", Kind::string, true},
-                                           {"strategy", Kind::string, true},
-                                           {"thickness", Kind::number, true},
-                                           {"thickness_from", Kind::string, true},
-                                           {"steps", Kind::count, true},
-                                           {"ms_per_step", Kind::number, true},
-                                           {"spec", Kind::string, false},
-                                           {"ms_per_repeat", Kind::numbers, false},
-                                           {"missed", Kind::count, false},
-                                           {"errors", Kind::count, false},
-                                           {"toi_late", Kind::count, false},
-                                           {"false_alarms", Kind::count, false},
-                                           {"colliding", Kind::count, false},
-                                           {"verified", Kind::boolean, false},
-                                           {"host_peak_bytes", Kind::number, false},
-                                           {"device_bytes", Kind::number, false},
-                                           {"toi_error_max", Kind::number_or_null, false},
-                                           {"toi_error_median", Kind::number_or_null, false},
-                                           {"toi_error_p99", Kind::number_or_null, false},
-                                           {"nondeterministic_at_step", Kind::count, false},
-                                           {"key", Kind::object, false},
-                                           {"finished_at", Kind::string, false},
-                                           {"machine", Kind::string, false},
-                                           {"build_type", Kind::string, false},
-                                           {"provenance", Kind::object, false}};
-
-const std::vector<Field> kStepFields = {
-    {"scene", Kind::string, true},    {"thickness", Kind::number, true}, {"strategy", Kind::string, true},         {"step", Kind::count, true},
-    {"answers", Kind::string, false}, {"missed", Kind::count, false},    {"missed_face_shape", Kind::count, false}};
+const std::vector<RecordField> kStepFields = {{"scene", FieldKind::string, true},
+                                              {"thickness", FieldKind::number, true},
+                                              {"strategy", FieldKind::string, true},
+                                              {"step", FieldKind::count, true},
+                                              {"answers", FieldKind::string, false},
+                                              {"missed", FieldKind::count, false},
+                                              {"missed_face_shape", FieldKind::count, false}};
 
 /// A kept missed pair: {kind: "vf" (ids v, f) or "ee" (ids a0, a1, b0, b1), rows: its 24 coordinates}.
 void check_missed_pairs(const json& record, const std::filesystem::path& file, const std::string& where) {
@@ -169,10 +124,10 @@ ResultSet load(const std::filesystem::path& given) {
       const std::string kind =
           record.is_object() && record.contains("record") && record["record"].is_string() ? record["record"].get<std::string>() : "";
       if (kind == "summary") {
-        check_fields(record, kSummaryFields, file, where, "summary");
+        check_record_fields(record, kSummaryFields, file, where, "summary");
         summaries.push_back(std::move(record));
       } else if (kind == "step") {
-        check_fields(record, kStepFields, file, where, "step record");
+        check_record_fields(record, kStepFields, file, where, "step record");
         check_missed_pairs(record, file, where);
         const std::string key = steps_key(record);
         const std::size_t step = record["step"].get<std::size_t>();
@@ -186,7 +141,7 @@ ResultSet load(const std::filesystem::path& given) {
     const json document = datasets::read_json_file(file, "results file");
     if (!document.is_array()) throw InputError(file, {}, "must be a JSON array of summaries (`run --json`) or a results.jsonl");
     for (std::size_t i = 0; i < document.size(); ++i) {
-      check_fields(document[i], kSummaryFields, file, "entry " + std::to_string(i), "summary");
+      check_record_fields(document[i], kSummaryFields, file, "entry " + std::to_string(i), "summary");
       summaries.push_back(document[i]);
     }
   }

@@ -2,6 +2,8 @@
 #include "core/error.hpp"
 #include "core/number_text.hpp"
 #include "harness/run.hpp"
+#include "harness/run/record_fields.hpp"
+#include "strategies/registry.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -111,12 +113,42 @@ std::uint64_t result_count(const json& result, const char* field, const std::fil
   return result[field].get<std::uint64_t>();
 }
 
+/// Every field the gate reads of a result, checked before it is gated (run/record_fields.hpp).
+const std::vector<RecordField> kGatedFields = {{"scene", FieldKind::string, true},         {"strategy", FieldKind::string, true},
+                                               {"thickness", FieldKind::number, true},     {"thickness_from", FieldKind::string, true},
+                                               {"spec", FieldKind::string, false},         {"verified", FieldKind::boolean, false},
+                                               {"steps", FieldKind::count, false},         {"colliding", FieldKind::count, false},
+                                               {"missed", FieldKind::count, false},        {"missed_culled", FieldKind::count, false},
+                                               {"missed_tested", FieldKind::count, false}, {"errors", FieldKind::count, false},
+                                               {"toi_late", FieldKind::count, false},      {"nondeterministic_at_step", FieldKind::count, false},
+                                               {"resumed", FieldKind::boolean, false}};
+
+/// Why a result cannot be gated whatever its entry says, or "": `check` fails it and `--write-baseline` refuses it,
+/// for the same reasons.
+std::string why_not_gateable(const json& result, const GateOptions& options) {
+  if (!result.value("verified", false) || !result.contains("missed")) return "not verified (run with --verify exact)";
+  if (!result.contains("colliding")) return "no colliding count (a `ccdbench run --json` summary, verified)";
+  if (result["colliding"] == 0) return "no colliding pair in any step, so it cannot miss: this cell gates nothing";
+#if CCDBENCH_GUARD_GATE
+  if (!result.contains("errors")) return "the results say nothing of errors (made by an older ccdbench: run it again)";
+  // A plugin's kept cell holds answers the plugin gave in an earlier run, which may differ from what it gives now
+  // (docs/DESIGN.md §10 "Kept cells"): they stand for this run's only where the person gating says so.
+  if (result.value("resumed", false) && strategies::runs_plugin(result["strategy"].get<std::string>()) && !options.allow_resumed) {
+    return "its answers were kept from an earlier run (run --resume), not given by the plugin in this run (rerun without --resume, "
+           "or check --allow-resumed to gate them)";
+  }
+#else
+  (void)options;
+#endif
+  return {};
+}
+
 /// Gates one result against its entry: prints its line, and whether it passes.
 bool gate_result(const json& result, const BaselineEntry& entry_ref, const std::filesystem::path& results_file, const std::string& where,
-                 const std::string& name, std::ostream& out) {
+                 const std::string& name, const GateOptions& options, std::ostream& out) {
   const BaselineEntry* entry = &entry_ref;
-  if (!result.value("verified", false) || !result.contains("missed")) {
-    out << "FAIL " << name << ": not verified (run with --verify exact)\n";
+  if (const std::string why = why_not_gateable(result, options); !why.empty()) {
+    out << "FAIL " << name << ": " << why << "\n";
     return false;
   }
   const std::uint64_t missed = result_count(result, "missed", results_file, where);
@@ -135,13 +167,7 @@ bool gate_result(const json& result, const BaselineEntry& entry_ref, const std::
     out << "FAIL " << name << ": " << result["toi_late"].dump() << " TOIs later than the exact earliest contact, "
         << "baseline allows " << *entry->max_toi_late << "\n";
     return false;
-  } else if (colliding == 0) {
-    out << "FAIL " << name << ": no colliding pair in any step, so it cannot miss: this cell gates nothing\n";
-    return false;
 #if CCDBENCH_GUARD_GATE
-  } else if (!result.contains("errors")) {
-    out << "FAIL " << name << ": the results say nothing of errors (made by an older ccdbench: run it again)\n";
-    return false;
   } else if (const std::uint64_t errors = result_count(result, "errors", results_file, where); errors > entry->max_errors) {
     out << "FAIL " << name << ": " << errors << " answers could not be taken (errors: crashes, hangs, refused answers), baseline allows "
         << entry->max_errors << " (max_errors)\n";
@@ -161,14 +187,21 @@ bool gate_result(const json& result, const BaselineEntry& entry_ref, const std::
   return true;
 }
 
+/// Every result of a results file (a `run --json` array), its fields checked. @throws InputError for a file that is
+/// not such an array or a result that is not a summary of `run`.
+void check_results_file(const std::filesystem::path& file, const json& document) {
+  if (!document.is_array()) throw InputError(file, {}, "must be a JSON array (a `ccdbench run --json` file)");
+  for (std::size_t i = 0; i < document.size(); ++i) check_record_fields(document[i], kGatedFields, file, "entry " + std::to_string(i), "summary");
+}
+
 }  // namespace
 
 bool check_against_baseline(const json& baseline, const std::filesystem::path& baseline_file,
-                            const std::vector<std::pair<std::filesystem::path, json>>& results_files, std::ostream& out) {
+                            const std::vector<std::pair<std::filesystem::path, json>>& results_files, const GateOptions& options, std::ostream& out) {
   const std::vector<BaselineEntry> entries = parse_baseline(baseline, baseline_file);
   std::vector<std::tuple<std::filesystem::path, std::size_t, const json*>> results;
   for (const auto& [file, document] : results_files) {
-    if (!document.is_array()) throw InputError(file, {}, "must be a JSON array (a `ccdbench run --json` file)");
+    check_results_file(file, document);
     for (std::size_t i = 0; i < document.size(); ++i) results.emplace_back(file, i, &document[i]);
   }
   bool ok = true;
@@ -180,11 +213,6 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
   for (const auto& [results_file, i, result_pointer] : results) {
     const json& result = *result_pointer;
     const std::string where = "entry " + std::to_string(i);
-    if (!result.is_object() || !result.contains("scene") || !result["scene"].is_string() || !result.contains("strategy") ||
-        !result["strategy"].is_string() || !result.contains("thickness") || !result["thickness"].is_number() || !result.contains("thickness_from") ||
-        !result["thickness_from"].is_string()) {
-      throw InputError(results_file, where, "not a summary of `ccdbench run --json` (scene, strategy, thickness, thickness_from)");
-    }
     const GateKey key{result["scene"], result["strategy"], result["thickness"].get<double>()};
     const bool scene_thickness = result["thickness_from"] == "scene";
     const BaselineEntry* entry = nullptr;
@@ -220,7 +248,7 @@ bool check_against_baseline(const json& baseline, const std::filesystem::path& b
       ok = false;
       continue;
     }
-    if (!gate_result(result, *entry, results_file, where, name, out)) ok = false;
+    if (!gate_result(result, *entry, results_file, where, name, options, out)) ok = false;
   }
   for (std::size_t e = 0; e < entries.size(); ++e) {
     if (matches[e] == 0) {
@@ -291,19 +319,15 @@ std::uint64_t BaselineMargin::allow(std::uint64_t value) const {
   return value + count + static_cast<std::uint64_t>(std::ceil(static_cast<double>(value) * percent / 100.0));
 }
 
-json write_baseline(const std::vector<std::pair<std::filesystem::path, json>>& results_files, const BaselineMargin& margin, std::ostream& warnings) {
+json write_baseline(const std::vector<std::pair<std::filesystem::path, json>>& results_files, const BaselineMargin& margin,
+                    const GateOptions& options, std::ostream& warnings) {
   json baseline = json::array();
   std::vector<std::string> seen;
   for (const auto& [file, document] : results_files) {
-    if (!document.is_array()) throw InputError(file, {}, "must be a JSON array (a `ccdbench run --json` file)");
+    check_results_file(file, document);
     for (std::size_t i = 0; i < document.size(); ++i) {
       const json& result = document[i];
       const std::string where = "entry " + std::to_string(i);
-      if (!result.is_object() || !result.contains("scene") || !result["scene"].is_string() || !result.contains("strategy") ||
-          !result["strategy"].is_string() || !result.contains("thickness") || !result["thickness"].is_number() ||
-          !result.contains("thickness_from") || !result["thickness_from"].is_string()) {
-        throw InputError(file, where, "not a summary of `ccdbench run --json` (scene, strategy, thickness, thickness_from)");
-      }
       // The strategy as the user gave it: a plugin's resolved name holds its absolute path and its file's digest,
       // which would tie the baseline to one checkout and one build.
       const std::string strategy =
@@ -311,13 +335,10 @@ json write_baseline(const std::vector<std::pair<std::filesystem::path, json>>& r
       const bool scene_thickness = result["thickness_from"] == "scene";
       const json thickness = scene_thickness ? json("scene") : result["thickness"];
       const std::string name = result["scene"].get<std::string>() + " / " + strategy + " / δ " + thickness.dump();
-      if (!result.value("verified", false) || !result.contains("missed"))
-        throw InputError(file, where, name + ": not verified (run with --verify exact)");
+      // What check would refuse whatever the entry, an entry cannot make pass: refused here for the same reason.
+      if (const std::string why = why_not_gateable(result, options); !why.empty())
+        throw InputError(file, where, name + ": " + why + " (check refuses it too)");
       const std::uint64_t colliding = result_count(result, "colliding", file, where);
-      if (colliding == 0) {
-        throw InputError(file, where,
-                         name + ": no colliding pair in any step, so it cannot miss: an entry for it would gate nothing (check refuses it too)");
-      }
       const std::string key = result["scene"].get<std::string>() + "|" + strategy + "|" + thickness.dump();
       if (std::find(seen.begin(), seen.end(), key) != seen.end()) throw InputError(file, where, name + ": a second result for one cell");
       seen.push_back(key);
@@ -327,7 +348,7 @@ json write_baseline(const std::vector<std::pair<std::filesystem::path, json>>& r
                     {"max_missed", margin.allow(result_count(result, "missed", file, where))},
                     {"steps", result_count(result, "steps", file, where)},
                     {"colliding", colliding}};
-      if (result.contains("errors")) entry["max_errors"] = margin.allow(result_count(result, "errors", file, where));
+      entry["max_errors"] = margin.allow(result_count(result, "errors", file, where));
       if (result.contains("toi_late")) entry["max_toi_late"] = margin.allow(result_count(result, "toi_late", file, where));
       if (result.contains("nondeterministic_at_step")) {
         warnings << "ccdbench: warning: " << name << ": its answers differed between two passes of step " << result["nondeterministic_at_step"].dump()

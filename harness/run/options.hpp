@@ -37,6 +37,10 @@ struct RunOptions {
   std::optional<std::filesystem::path> json;
   std::optional<std::filesystem::path> report;
   bool fresh = false;
+  /// Also reuse kept cells of plugins (`--resume`): a plugin's answers can depend on what no digest covers, so
+  /// without it a plugin's cell is computed again (docs/DESIGN.md §10 "Kept cells"), and a reused one is marked
+  /// `resumed`, which `check` refuses unless told otherwise.
+  bool resume = false;
   /// Write every cell's missed pairs here as query files, by cause (`--misses`).
   std::optional<std::filesystem::path> misses;
   /// Where what a step could not answer (a plugin's errors, crashes, hangs) is written to replay (`--faults`);

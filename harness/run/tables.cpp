@@ -204,9 +204,9 @@ void write_report(const std::filesystem::path& directory, const Table& table, co
   for (const json& cell : cells) {
     for (const json& step : cell["steps"]) steps.push_back(step);
   }
-  datasets::write_json_file(directory / "steps.json", steps);
-  datasets::write_json_file(directory / "summaries.json", summaries);
-  datasets::AtomicFile file(directory / "README.md", std::ios::out);
+  datasets::write_json_file(directory / kReportSteps, steps);
+  datasets::write_json_file(directory / kReportSummaries, summaries);
+  datasets::AtomicFile file(directory / kReportPage, std::ios::out);
   std::ostream& out = file.stream();
   out << "# ccdbench run\n\nEvery number below comes from one invocation (speed-ups only between cells of this run):\n\n```sh\n"
       << command << "\n```\n\n";

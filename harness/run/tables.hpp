@@ -29,6 +29,11 @@ std::string resolved_names(const std::vector<nlohmann::json>& summaries);
 /// The footnotes `table` needs (what † means), "" when none.
 std::string summary_notes(const Table& table);
 
+/// The files write_report writes into its folder (a run removes them when it starts).
+inline constexpr const char* kReportPage = "README.md";
+inline constexpr const char* kReportSummaries = "summaries.json";
+inline constexpr const char* kReportSteps = "steps.json";
+
 /// Writes DIRECTORY/README.md (the table under the command that made it, the machine, the plots' names),
 /// DIRECTORY/summaries.json and DIRECTORY/steps.json (every step record of `cells`), which scripts/plot_run.py
 /// draws, atomically.

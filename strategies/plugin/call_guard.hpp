@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Every in-process call into a plugin goes through a PluginCall (docs/DESIGN.md §10, "In-process"): what the code
+/// Every in-process call into a plugin goes through a PluginCall (docs/DESIGN.md §10 "In-process"): what the code
 /// under audit can do to the process around its answer is detected, named as that plugin's error, and undone.
 /// - The floating-point environment: each call runs in the environment the plugin's load left (a library built with
 ///   GCC's fast-math options has flush-to-zero there, and is judged as it would run in its user's program); ccdbench's own

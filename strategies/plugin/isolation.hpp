@@ -6,7 +6,7 @@
 /// before anything else); it loads the plugin, creates its context and answers requests on file descriptors 3 and
 /// 4, so that whatever the plugin prints on its standard output never mixes with its answers.
 ///
-/// What the parent holds the child to (docs/DESIGN.md §10, "Isolated"):
+/// What the parent holds the child to (docs/DESIGN.md §10 "Isolated"):
 /// - `PROGRAM plugin-host --describe PATH` describes a plugin (its table and the digest of its code as loaded), so
 ///   that this process never loads a plugin it runs isolated, nor one whose load crashes;
 /// - every child is told the digest of the code the run was planned with, and one that loaded other code (the file

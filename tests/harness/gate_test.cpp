@@ -172,5 +172,40 @@ TEST_F(Gate, MalformedFilesExitTwoAndAFailedGateOne) {
   EXPECT_EQ(check({entry("full", 0)}, {summary("full", 1, 10)}).exit_code, 1);
 }
 
+// A field of the wrong type is bad input where it is (it was a raw type_error, exit 1), before any line is gated.
+TEST_F(Gate, AWrongTypedFieldIsBadInputWhereItIs) {
+  const std::vector<std::pair<const char*, nlohmann::json>> wrong = {{"verified", "yes"}, {"missed", -1}, {"colliding", "10"},
+                                                                     {"errors", 1.5},     {"resumed", 1}, {"nondeterministic_at_step", "2"}};
+  for (const auto& [field, value] : wrong) {
+    nlohmann::json result = summary("full", 0, 10);
+    result[field] = value;
+    const auto refused = check({entry("full", 0)}, {summary("full", 0, 10), result});
+    EXPECT_EQ(refused.exit_code, 2) << field << ": " << refused.output;
+    EXPECT_NE(refused.output.find("results.json:entry 1." + std::string(field) + ": must be "), std::string::npos) << refused.output;
+    EXPECT_EQ(refused.output.find("ok   s"), std::string::npos) << "gated before the file was read whole: " << refused.output;
+  }
+}
+
+// --write-baseline refuses what check would fail whatever the entry says: it used to accept a result without an
+// errors count, whose baseline check then refused.
+TEST_F(Gate, WritingABaselineRefusesWhatCheckRefuses) {
+  auto write = [&](const nlohmann::json& result) {
+    testing::write_text(dir_ / "results.json", nlohmann::json::array({result}).dump());
+    return run_ccdbench("check --write-baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "results.json"));
+  };
+  nlohmann::json good = summary("full", 0, 10);
+  good["steps"] = 3;
+  ASSERT_EQ(write(good).exit_code, 0);
+  nlohmann::json silent = good;
+  silent.erase("errors");
+  const auto refused = write(silent);
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("the results say nothing of errors"), std::string::npos) << refused.output;
+  EXPECT_EQ(check({entry("full", 0)}, {silent}).exit_code, 1) << "check refuses it too";
+  nlohmann::json unverified = good;
+  unverified["verified"] = false;
+  EXPECT_EQ(write(unverified).exit_code, 2);
+}
+
 }  // namespace
 }  // namespace ccd

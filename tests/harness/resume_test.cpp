@@ -133,6 +133,24 @@ TEST_F(Resume, ACorruptCellFileIsAnErrorNamingItAndFreshRecomputesIt) {
   EXPECT_EQ(fresh[0]["colliding"], first[0]["colliding"]);
 }
 
+// A kept cell holds its answers' digests, not the answers: --write-answers and --misses used to write nothing for it
+// (exit 0). It is computed again, saying why, and the files are written.
+TEST_F(Resume, AKeptCellIsComputedAgainForTheFilesARunAsksFor) {
+  const std::string scene = "run --strategy full+cubic32 --thickness 0 --scene " + quoted(fold_scene("s", {{"resolution", 6}, {"frames", 6}}));
+  const nlohmann::json first = run(scene);
+  ASSERT_GT(first[0]["missed"].get<int>(), 0) << "the test needs a cell with misses";
+  EXPECT_TRUE(resumed(run(scene)));
+  const nlohmann::json answers = run(scene + " --write-answers " + quoted(dir_ / "answers"));
+  EXPECT_FALSE(resumed(answers));
+  EXPECT_NE(last_output_.find("computed again, not kept from an earlier run: --write-answers needs its answers"), std::string::npos) << last_output_;
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "answers/full+cubic32/s/step_0000.csv")) << last_output_;
+  const nlohmann::json misses = run(scene + " --misses " + quoted(dir_ / "misses"));
+  EXPECT_FALSE(resumed(misses));
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir_ / "misses")) files += entry.is_regular_file() ? 1 : 0;
+  EXPECT_GT(files, 0u) << last_output_;
+}
+
 TEST_F(Resume, ResultsKeepEveryCellOfEveryRunIntoOneFolder) {
   const std::string scene = "run --scene " + quoted(fold_scene("s", {{"resolution", 6}, {"frames", 4}}));
   run(scene + " --strategy full");

@@ -5,6 +5,7 @@
 // them fails these tests (scripts/guards-off.sh).
 
 #include "datasets/procedural_scenes.hpp"
+#include "tests/plugins/plugin_runs.hpp"
 #include "tests/support/cli.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -29,52 +30,20 @@ namespace ccd {
 namespace {
 
 using testing::cell_of;
+using testing::plugin;
 using testing::quoted;
 using testing::read_json;
 using testing::run_ccdbench;
-
-/// A plugin built with the project (tests/plugins/, examples/).
-std::filesystem::path plugin(const std::string& name) { return std::filesystem::path(CCDBENCH_PLUGIN_DIR) / ("lib" + name + ".so"); }
-
-/// An environment variable set for the scope (the ccdbench processes the test starts inherit it).
-class ScopedVariable {
- public:
-  ScopedVariable(const char* name, const std::string& value) : name_(name) {
-    if (const char* before = std::getenv(name)) before_ = before;
-    ::setenv(name, value.c_str(), 1);
-  }
-  ~ScopedVariable() { before_ ? (void)::setenv(name_, before_->c_str(), 1) : (void)::unsetenv(name_); }
-  ScopedVariable(const ScopedVariable&) = delete;
-  ScopedVariable& operator=(const ScopedVariable&) = delete;
-
- private:
-  const char* name_;
-  std::optional<std::string> before_;
-};
-
-/// ASAN_OPTIONS with handle_segv=0 added, for tests whose plugins crash on purpose: a child then dies by its signal,
-/// as in Release, instead of a sanitizer report (the sanitizer still watches everything else).
-std::string without_segv_reports() {
-  const char* before = std::getenv("ASAN_OPTIONS");
-  return before == nullptr || *before == '\0' ? std::string("handle_segv=0") : std::string(before) + ":handle_segv=0";
-}
+using testing::ScopedVariable;
+using testing::text_of;
+using testing::without_segv_reports;
 
 /// The extremes suite's families where flush-to-zero and the rounding mode change answers (subnormal and tiny
 /// coordinates), and one where they do not.
 constexpr const char* kFloatingPointFamilies = "subnormal,smallest-normal,scaled-2^-1000,scaled-2^-960,zero-motion";
 
-std::string text_of(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-class Boundary : public ::testing::Test {
+class Boundary : public testing::PluginRuns {
  protected:
-  void SetUp() override { cache_.emplace("CCDBENCH_CACHE_DIR", (dir_ / "cache").string()); }
-
-  /// The kinematic fold at resolution 8 (106 triangles, contact at both δ), generated once per test.
-  std::filesystem::path fold() { return testing::small_fold(dir_ / "fold8"); }
-
   /// The extremes suite as query files with the reference's labels (subnormal, tiny and huge coordinates: where the
   /// floating-point environment matters), written by a process that loaded no plugin.
   std::filesystem::path extremes() {
@@ -84,37 +53,6 @@ class Boundary : public ::testing::Test {
       EXPECT_EQ(written.exit_code, 0) << written.output;
     }
     return folder;
-  }
-
-  /// A copy of a built plugin in a folder of the test's own (a test that changes a plugin's file changes its copy).
-  std::filesystem::path copy_of(const std::string& name, const std::string& as = {}) {
-    const std::filesystem::path folder = dir_ / "plugins";
-    std::filesystem::create_directories(folder);
-    const std::filesystem::path target = folder / (as.empty() ? "lib" + name + ".so" : as);
-    std::filesystem::copy_file(plugin(name), target, std::filesystem::copy_options::overwrite_existing);
-    return target;
-  }
-
-  /// Replaces `target` with a copy of `source`, as a build does (a new file renamed over the old one).
-  static void replace(const std::filesystem::path& target, const std::filesystem::path& source) {
-    const std::filesystem::path fresh = target.string() + ".new";
-    std::filesystem::copy_file(source, fresh, std::filesystem::copy_options::overwrite_existing);
-    std::filesystem::rename(fresh, target);
-  }
-
-  /// The wrapper plugin beside a build of the library it links (answer 1: finds every contact; 0: finds none).
-  std::filesystem::path wrapper(int answer) {
-    const std::filesystem::path wrapper = copy_of("broken_wrapper");
-    replace(wrapper.parent_path() / "libbroken_dependency.so", plugin("broken_dependency_" + std::to_string(answer)));
-    return wrapper;
-  }
-
-  /// `ccdbench ARGUMENTS --json FILE`: exit status, output and the JSON it wrote (null when none).
-  std::pair<testing::CommandResult, nlohmann::json> with_json(const std::string& arguments, const std::filesystem::path& directory = {}) {
-    const std::filesystem::path json = dir_ / "out.json";
-    std::filesystem::remove(json);
-    testing::CommandResult result = run_ccdbench(arguments + " --json " + quoted(json), directory);
-    return {result, std::filesystem::exists(json) ? read_json(json) : nlohmann::json()};
   }
 
   /// Every step's answers digest of the built-in cells (`full`, `full+cubic64`) of a run's results.jsonl, by scene, δ,
@@ -147,9 +85,6 @@ class Boundary : public ::testing::Test {
     }
     return kept;
   }
-
-  testing::TempDir dir_;
-  std::optional<ScopedVariable> cache_;
 };
 
 // A plugin built with -Ofast sets flush-to-zero and denormals-are-zero when it is loaded (crtfastmath.o). Loaded
