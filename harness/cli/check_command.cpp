@@ -99,10 +99,12 @@ Command add_compare(CLI::App& app) {
                          "noise (a two-sided Mann-Whitney U test over the passes' times, exact for small samples; p printed: with --repeat\n"
                          "R on both sides, p can go below 0.05 only from R = 4). With step records (an --out folder, or its results.jsonl)\n"
                          "also the steps whose answers changed and the pairs the head newly misses, written as query files to replay.\n"
-                         "Cells are matched by scene, δ and the strategy as given; times are compared only between records of one\n"
-                         "machine, build type, compiler and flags. Exit 1 when a verdict got worse (more missed, errors or late TOIs,\n"
-                         "answers that now change between passes, a verdict the head lacks, or a cell only the base has), 2 for\n"
-                         "a malformed file or a --pair that names no cell, else 0.");
+                         "Cells are matched by scene, δ and the strategy as given; verdicts are compared only between cells of the same\n"
+                         "input (the scene's content, steps, δ), times only between records of one machine, thread count, build,\n"
+                         "executable and library versions: a cell that is not is named so on its row and not judged. Exit 1 when a\n"
+                         "verdict got worse (more missed, errors or late TOIs, answers that now change between passes, a verdict the\n"
+                         "head lacks, or a cell only the base has), 2 for a malformed file or a --pair that names no cell, 3 when a\n"
+                         "cell's verdicts or times could not be compared (unless --allow-incomparable), else 0.");
   compare->add_option("BASE", options->base, "the base: a `run --json` file, a run's --out folder or its results.jsonl")->required();
   compare->add_option("HEAD", options->head, "the head, as BASE (may be the same file as BASE with --pair)")->required();
   compare->add_option("--pair", options->pairs,
@@ -112,6 +114,9 @@ Command add_compare(CLI::App& app) {
   compare->add_flag("--fail-on-slower", options->fail_on_slower,
                     "also exit 1 when a cell got slower beyond the noise (a cell's passes run one after another, base's\n"
                     "before head's: a machine that slows down between them looks like a slower head; for quiet machines)");
+  compare->add_flag("--allow-incomparable", options->allow_incomparable,
+                    "exit 0, not 3, when a cell's verdicts (another input) or times (another machine, thread count, build,\n"
+                    "executable or library) cannot be compared; they are still named on their rows and not judged");
   compare->add_option("--markdown", options->markdown, "also write the comparison as Markdown (a pull request's comment)");
   compare->add_option("--json", options->json, "also write the comparison as JSON, for scripts");
   compare->add_option("--replay", options->replay,

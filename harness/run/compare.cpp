@@ -6,6 +6,7 @@
 #include "harness/cell_store.hpp"
 #include "harness/rank_test.hpp"
 #include "harness/run/cells.hpp"
+#include "harness/run/comparability.hpp"
 #include "harness/run/record_fields.hpp"
 #include "harness/table.hpp"
 
@@ -189,19 +190,6 @@ std::string change(std::optional<double> before, std::optional<double> after, in
   return text(before) + " → " + text(after);
 }
 
-/// Whether two records were made where their times may be compared: one machine, build type, compiler and flags.
-std::string times_not_comparable(const json& base, const json& head) {
-  auto field = [](const json& s, const char* name) {
-    if (s.contains(name)) return s[name].dump();
-    if (s.contains("provenance") && s["provenance"].contains(name)) return s["provenance"][name].dump();
-    return std::string("?");
-  };
-  for (const char* name : {"machine", "build_type", "compiler", "cxx_flags"}) {
-    if (field(base, name) != field(head, name)) return std::string("different ") + name + " (" + field(base, name) + ", " + field(head, name) + ")";
-  }
-  return {};
-}
-
 /// The digest in a resolved plugin spec ("...:digest=HEX:..."), or "".
 std::string digest_in(const std::string& name) {
   const std::size_t at = name.find(":digest=");
@@ -222,6 +210,8 @@ struct CellComparison {
   std::string name;
   json base, head;
   bool worse = false, slower = false;
+  /// Why its verdicts (inputs_differ) or its times (times_differ) cannot be compared, "" when they can.
+  std::string inputs_differ, times_differ;
   std::vector<std::string> notes;
   std::vector<std::size_t> changed_steps;
   /// The pairs the head misses and the base did not, by step: the records as the head kept them.
@@ -273,6 +263,12 @@ CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set
   cell.name = name;
   cell.base = base;
   cell.head = head;
+  // Verdicts of different inputs say nothing of a change: the cell is shown, not judged.
+  cell.inputs_differ = inputs_differ(base, head);
+  if (!cell.inputs_differ.empty()) {
+    cell.notes.push_back("not compared: " + cell.inputs_differ);
+    return cell;
+  }
   for (const char* field : {"missed", "errors", "toi_late"}) {
     const auto b = number(base, field), h = number(head, field);
     if (b && h && *h > *b) {
@@ -290,17 +286,14 @@ CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set
     cell.worse = true;
     cell.notes.push_back("answers now change between passes (step " + head["nondeterministic_at_step"].dump() + ")");
   }
-  if (base.contains("key") && head.contains("key") && base["key"].value("scene_content", json()) != head["key"].value("scene_content", json())) {
-    cell.notes.push_back("the scene's content differs: verdicts are of different inputs");
-  }
   if (base["strategy"] != head["strategy"]) {
     const std::string b = digest_in(base["strategy"]), h = digest_in(head["strategy"]);
     cell.notes.push_back(!b.empty() && !h.empty() && b != h ? "plugin code changed: digest " + b + " → " + h : "resolved strategy changed");
   }
   compare_steps(base_set, head_set, cell);
-  const std::string not_comparable = times_not_comparable(base, head);
-  if (!not_comparable.empty()) {
-    cell.notes.push_back("times not compared: " + not_comparable);
+  cell.times_differ = times_differ(base, head);
+  if (!cell.times_differ.empty()) {
+    cell.notes.push_back("times not compared: " + cell.times_differ);
   } else if (base.contains("ms_per_repeat") && head.contains("ms_per_repeat")) {
     const auto base_times = base["ms_per_repeat"].get<std::vector<double>>(), head_times = head["ms_per_repeat"].get<std::vector<double>>();
     cell.time_test = mann_whitney(base_times, head_times);
@@ -333,8 +326,13 @@ Table comparison_table(const std::vector<CellComparison>& cells) {
   for (const CellComparison& c : cells) {
     auto mib = [](std::optional<double> bytes) { return bytes ? std::optional<double>(*bytes / (1024.0 * 1024.0)) : std::nullopt; };
     std::string verdict = c.worse ? "WORSE" : "same or better";
-    if (c.time_test)
+    if (!c.inputs_differ.empty()) {
+      verdict = "NOT COMPARABLE: " + c.inputs_differ;
+    } else if (!c.times_differ.empty()) {
+      verdict += ", times not comparable: " + c.times_differ;
+    } else if (c.time_test) {
       verdict += c.slower ? ", slower beyond noise" : c.time_test->p < 0.05 && c.ratio < 1 ? ", faster beyond noise" : ", time within noise";
+    }
     table.add_row({c.name, change(number(c.base, "missed"), number(c.head, "missed")), change(number(c.base, "errors"), number(c.head, "errors")),
                    change(number(c.base, "false_alarms"), number(c.head, "false_alarms")),
                    change(number(c.base, "toi_late"), number(c.head, "toi_late")),
@@ -431,7 +429,13 @@ void write_comparison_json(const std::filesystem::path& path, const std::vector<
                            const std::vector<std::string>& only_head) {
   json document = json::array();
   for (const CellComparison& c : cells) {
-    json row = {{"cell", c.name}, {"worse", c.worse}, {"slower_beyond_noise", c.slower}, {"notes", c.notes}, {"changed_steps", c.changed_steps}};
+    json row = {{"cell", c.name},
+                {"worse", c.worse},
+                {"slower_beyond_noise", c.slower},
+                {"verdicts_not_comparable", c.inputs_differ.empty() ? json() : json(c.inputs_differ)},
+                {"times_not_comparable", c.times_differ.empty() ? json() : json(c.times_differ)},
+                {"notes", c.notes},
+                {"changed_steps", c.changed_steps}};
     for (const char* field : {"missed", "errors", "false_alarms", "toi_late", "toi_error_median", "toi_error_p99", "toi_error_max", "host_peak_bytes",
                               "device_bytes", "ms_per_step"}) {
       row[field] = {{"base", c.base.value(field, json())}, {"head", c.head.value(field, json())}};
@@ -526,10 +530,18 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
   // A cell the base had and the head lacks is a verdict the head cannot show.
   const bool worse = !only_base.empty() || std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.worse; });
   const bool slower = std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.slower; });
+  const auto not_comparable =
+      std::count_if(cells.begin(), cells.end(), [](const CellComparison& c) { return !c.inputs_differ.empty() || !c.times_differ.empty(); });
   if (options.markdown) write_markdown(*options.markdown, worse, table, details(cells, written), only_base, only_head);
   if (options.json) write_comparison_json(*options.json, cells, only_base, only_head);
-  out << "compare: " << (worse ? "a verdict got WORSE" : "no verdict got worse") << (slower ? "; a cell got slower beyond the noise" : "") << "\n";
-  return worse || (options.fail_on_slower && slower) ? 1 : 0;
+  out << "compare: " << (worse ? "a verdict got WORSE" : "no verdict got worse") << (slower ? "; a cell got slower beyond the noise" : "");
+  if (not_comparable > 0) {
+    out << "; " << not_comparable << " cell" << (not_comparable == 1 ? "" : "s") << " not comparable (verdicts or times, named on the row)"
+        << (options.allow_incomparable ? ", allowed" : ": --allow-incomparable accepts that");
+  }
+  out << "\n";
+  if (worse || (options.fail_on_slower && slower)) return 1;
+  return not_comparable > 0 && !options.allow_incomparable ? 3 : 0;
 }
 
 }  // namespace ccd::harness

@@ -5,8 +5,9 @@
 /// plugin in one run). Per cell it shows missed, errors, false alarms, late TOIs, the TOI error's percentiles, memory,
 /// and ms per step with the ratio and whether it is beyond the noise of the repeats (a Mann-Whitney U test over each
 /// pass's time, harness/rank_test.hpp); with step records (an --out folder or results.jsonl) also the steps whose
-/// answers digests changed and the pairs the head newly misses, which it writes as query files to replay. Times are
-/// compared only between records of one machine, build type, compiler and flags.
+/// answers digests changed and the pairs the head newly misses, which it writes as query files to replay. Verdicts
+/// are compared only between cells of the same input and times only between records made alike
+/// (run/comparability.hpp).
 
 #include <filesystem>
 #include <iosfwd>
@@ -27,6 +28,8 @@ struct CompareOptions {
   double alpha = 0.05;
   /// Exit 1 when a cell got slower beyond the noise (verdicts that got worse always do).
   bool fail_on_slower = false;
+  /// Exit 0 (not 3) when a cell's verdicts or times cannot be compared; they are still named and not judged.
+  bool allow_incomparable = false;
   std::optional<std::filesystem::path> markdown, json;
   /// Where the pairs the head newly misses are written as query files (default: compare-replay).
   std::filesystem::path replay = "compare-replay";
@@ -34,7 +37,8 @@ struct CompareOptions {
 
 /// Compares, prints the table on `out`, writes what the options ask. Returns the exit status: 1 when a verdict got
 /// worse (more missed, errors or late TOIs, or answers that changed between passes), or with fail_on_slower a time
-/// beyond the noise; else 0. @throws InputError for a file that is not a result set.
+/// beyond the noise; else 3 when a cell's verdicts or times could not be compared (unless allow_incomparable); else 0.
+/// @throws InputError for a file that is not a result set.
 int run_compare(const CompareOptions& options, std::ostream& out);
 
 }  // namespace ccd::harness

@@ -62,6 +62,9 @@ struct SyntheticCell {
   std::vector<std::string> answers = {"a0", "a1", "a2"};
   std::vector<double> ms_per_repeat = {30, 31, 29, 30.5, 29.5};
   std::string machine = "m1";
+  /// What its verdicts are of (the scene's content digest in its key) and where its times were made.
+  std::string scene_content = "c0";
+  std::size_t threads = 2;
 
   std::string resolved() const {
     return spec.rfind("plugin:", 0) == 0 ? "plugin:/abs/" + spec.substr(7) + ":digest=" + digest + ":isolate=on" : spec;
@@ -101,7 +104,10 @@ struct SyntheticCell {
                                     {"false_alarms", 2},
                                     {"errors", 0},
                                     {"host_peak_bytes", 1 << 20},
+                                    {"key", {{"scene_content", scene_content}, {"steps", 3}}},
                                     {"machine", machine},
+                                    {"threads", threads},
+                                    {"executable", "e0"},
                                     {"build_type", "Release"},
                                     {"provenance", {{"compiler", "GNU 12.2.0"}, {"cxx_flags", "-O2"}}}};
     return text + summary.dump() + "\n";
@@ -195,12 +201,56 @@ TEST_F(Compare, TimesWithinTheNoiseAreNotFlaggedATwofoldSlowdownIs) {
   const auto too_few = compare(write("few.jsonl", {few}), write("few_slow.jsonl", {few_slow}), "--fail-on-slower");
   EXPECT_EQ(too_few.exit_code, 0) << too_few.output;
   EXPECT_NE(too_few.output.find("times cannot be told apart at p < 0.05 from 3 and 3 passes"), std::string::npos) << too_few.output;
-  // Another machine: verdicts only.
+  // Another machine: verdicts only, and the times said to be not comparable (exit 3 unless allowed).
   SyntheticCell elsewhere = slow;
   elsewhere.machine = "m2";
   const auto other = compare(dir_ / "base.jsonl", write("elsewhere.jsonl", {elsewhere}), "--fail-on-slower");
-  EXPECT_EQ(other.exit_code, 0) << other.output;
-  EXPECT_NE(other.output.find("times not compared: different machine"), std::string::npos) << other.output;
+  EXPECT_EQ(other.exit_code, 3) << other.output;
+  EXPECT_NE(other.output.find("times not compared: the machine differs (m1, m2)"), std::string::npos) << other.output;
+  EXPECT_EQ(compare(dir_ / "base.jsonl", dir_ / "elsewhere.jsonl", "--fail-on-slower --allow-incomparable").exit_code, 0);
+}
+
+// Route 3 of the gate issue: another scene under one label (same name, another content) has verdicts of another
+// input: compared as if one, 49 of 49 missed looked "same or better" than 104 of 341. Not compared now, said on the
+// row, and exit 3 unless allowed; a worse verdict there is no verdict at all.
+TEST_F(Compare, AnotherSceneUnderOneLabelIsNotComparable) {
+  SyntheticCell base;
+  base.missed_pairs = {{{"vf", {4, 9}}, {"vf", {5, 9}}}, {}, {}};
+  SyntheticCell other;
+  other.scene_content = "c1";
+  const auto result = compare(write("base.jsonl", {base}), write("other.jsonl", {other}), "--json " + quoted(dir_ / "c.json"));
+  EXPECT_EQ(result.exit_code, 3) << result.output;
+  EXPECT_NE(result.output.find("NOT COMPARABLE: the scene's content differs (c0, c1): another scene under one label"), std::string::npos)
+      << result.output;
+  EXPECT_EQ(result.output.find("same or better"), std::string::npos) << result.output;
+  EXPECT_EQ(read_json(dir_ / "c.json")["cells"][0]["verdicts_not_comparable"], "the scene's content differs (c0, c1): another scene under one label");
+  EXPECT_EQ(compare(dir_ / "base.jsonl", dir_ / "other.jsonl", "--allow-incomparable").exit_code, 0);
+  // A record that does not say what its input was (no key) is not comparable either.
+  std::string text;
+  std::istringstream lines(SyntheticCell{}.lines());
+  for (std::string line; std::getline(lines, line);) {
+    nlohmann::json record = nlohmann::json::parse(line);
+    record.erase("key");
+    text += record.dump() + "\n";
+  }
+  testing::write_text(dir_ / "unkeyed.jsonl", text);
+  const auto unknown = compare(dir_ / "base.jsonl", dir_ / "unkeyed.jsonl");
+  EXPECT_EQ(unknown.exit_code, 3) << unknown.output;
+  EXPECT_NE(unknown.output.find("the head does not say what its input was"), std::string::npos) << unknown.output;
+}
+
+// Route 4: times of another thread count were compared ("0.86x p 0.016 faster beyond noise"): not now, named on the
+// row, kept out of --fail-on-slower, exit 3 unless allowed.
+TEST_F(Compare, AnotherThreadCountMakesTimesNotComparable) {
+  SyntheticCell base;
+  SyntheticCell one_thread = base;
+  one_thread.threads = 1;
+  for (double& ms : one_thread.ms_per_repeat) ms *= 2;
+  const auto result = compare(write("base.jsonl", {base}), write("one.jsonl", {one_thread}), "--fail-on-slower");
+  EXPECT_EQ(result.exit_code, 3) << result.output;
+  EXPECT_NE(result.output.find("same or better, times not comparable: the thread count differs (2, 1)"), std::string::npos) << result.output;
+  EXPECT_EQ(result.output.find("slower beyond noise"), std::string::npos) << result.output;
+  EXPECT_EQ(compare(dir_ / "base.jsonl", dir_ / "one.jsonl", "--fail-on-slower --allow-incomparable").exit_code, 0);
 }
 
 TEST_F(Compare, PairsMatchTwoBuildsOfOneRunAndCellsOnOneSideAreListed) {
