@@ -153,11 +153,13 @@ double scaled_thickness(const QueriesOptions& options) {
 /// the ones it is handed, and rank 0 puts the scores back in file order. nullopt on the other ranks.
 std::optional<std::vector<QueryScore>> score_over_ranks(const std::vector<datasets::QueryFile>& files, const QueryScoringRequest& request,
                                                         int scale_exponent, std::size_t& left_out) {
+  std::optional<QueryMethods> methods;  // made once a rank, for every file it is handed (a plugin's child starts once)
   const WorkFunction work = [&](const std::string& payload) {
     std::vector<datasets::QueryFile> one{files.at(std::stoull(payload))};
     const std::size_t left = scale_exponent != 0 ? scale_query_files(one, scale_exponent) : 0;
     nlohmann::json message = {{"left_out", left}, {"scores", nlohmann::json::array()}};
-    for (const QueryScore& score : score_query_file(one.front(), request)) message["scores"].push_back(to_message(score));
+    if (!methods) methods = make_query_methods(request.methods);
+    for (const QueryScore& score : score_query_file(one.front(), request, *methods)) message["scores"].push_back(to_message(score));
     return message.dump();
   };
   if (rank_info().rank != 0) {
@@ -239,7 +241,10 @@ int run_queries(const QueriesOptions& options, std::ostream& out) {
   }
   if (rank_info().size == 1) {
     Progress progress("queries: files", files.size());
-    scores = score_query_files(files, request, [&](std::size_t done, std::size_t) { progress.update(done); });
+    // Progress within a file too, a batch at a time (a file with hangs moved only when it was done).
+    scores = score_query_files(files, request, [&](double done, std::size_t total) {
+      progress.update(done, total, files[std::min(static_cast<std::size_t>(done), total - 1)].path.filename().string());
+    });
   }
   report_query_scores(scores, files, options, out);
   return 0;

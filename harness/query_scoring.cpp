@@ -61,13 +61,19 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
     return query_answer(file.kind == datasets::QueryKind::vertex_face ? narrow_phase_->vertex_face(query.rounded, thickness)
                                                                       : narrow_phase_->edge_edge(query.rounded, thickness));
   }
-  std::vector<QueryAnswer> answer_all(const datasets::QueryFile& file, double thickness) const override {
-    if (!narrow_phase_->prefers_batches()) return QueryMethod::answer_all(file, thickness);
+  std::vector<QueryAnswer> answer_all(const datasets::QueryFile& file, double thickness,
+                                      const std::function<void(std::size_t)>& answered) const override {
+    if (!narrow_phase_->prefers_batches()) return QueryMethod::answer_all(file, thickness, answered);
     std::vector<narrowphase::NarrowPhase::BatchPair> pairs;
     pairs.reserve(file.queries.size());
     for (const datasets::Query& query : file.queries) pairs.push_back({&query.rounded, file.kind == datasets::QueryKind::vertex_face, thickness});
     std::vector<narrowphase::NarrowPhaseResult> results(pairs.size());
-    narrow_phase_->answer_batch(pairs, results);
+    // A batch at a time, so that progress moves on a long file (one batch of an isolated plugin each).
+    for (std::size_t first = 0; first < pairs.size(); first += kProgressQueries) {
+      const std::size_t count = std::min(kProgressQueries, pairs.size() - first);
+      narrow_phase_->answer_batch(std::span(pairs).subspan(first, count), std::span(results).subspan(first, count));
+      if (answered) answered(first + count);
+    }
     std::vector<QueryAnswer> answers;
     answers.reserve(results.size());
     for (narrowphase::NarrowPhaseResult& result : results) answers.push_back(query_answer(std::move(result)));
@@ -150,13 +156,21 @@ class AnswerFileMethod final : public QueryMethod {
 
 }  // namespace
 
-std::vector<QueryAnswer> QueryMethod::answer_all(const datasets::QueryFile& file, double thickness) const {
+std::vector<QueryAnswer> QueryMethod::answer_all(const datasets::QueryFile& file, double thickness,
+                                                 const std::function<void(std::size_t)>& answered) const {
   std::vector<QueryAnswer> answers(file.queries.size());
   for (std::size_t q = 0; q < file.queries.size(); ++q) {
     plugin::set_activity_item(q + 1);  // which query a plugin that ends the process was answering
     answers[q] = answer(file, q, thickness);
+    if (answered && (q + 1) % kProgressQueries == 0) answered(q + 1);
   }
   return answers;
+}
+
+QueryMethods make_query_methods(const std::vector<std::string>& specs) {
+  QueryMethods methods;
+  for (const std::string& spec : specs) methods.push_back(make_query_method(spec));
+  return methods;
 }
 
 void bind_answer_files(const std::vector<std::string>& methods, const std::vector<datasets::QueryFile>& files) {
@@ -193,6 +207,18 @@ std::vector<std::string> query_method_names() {
 }
 
 namespace {
+
+/// How many answers of `again` differ from `first`'s: outcome, TOI bits, or whether it was an error.
+std::size_t changed_answers(const std::vector<QueryAnswer>& again, const std::vector<QueryAnswer>& first) {
+  std::size_t changed = 0;
+  for (std::size_t q = 0; q < again.size(); ++q) {
+    const QueryAnswer& a = again[q];
+    const QueryAnswer& b = first[q];
+    const bool same_toi = (std::isnan(a.toi) && std::isnan(b.toi)) || std::memcmp(&a.toi, &b.toi, sizeof a.toi) == 0;
+    if (a.collides != b.collides || !same_toi || a.fault.empty() != b.fault.empty()) ++changed;
+  }
+  return changed;
+}
 
 /// A count over the labelled queries, or null (unknown) when none is labelled: never a 0 nobody measured.
 nlohmann::json labelled_count(const QueryScore& s, std::size_t count) { return s.any_labelled() ? nlohmann::json(count) : nlohmann::json(nullptr); }
@@ -231,8 +257,11 @@ nlohmann::json to_json(const QueryScore& s) {
 }
 
 std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const QueryScoringRequest& request) {
-  std::vector<std::unique_ptr<QueryMethod>> methods;
-  for (const std::string& name : request.methods) methods.push_back(make_query_method(name));
+  return score_query_file(file, request, make_query_methods(request.methods));
+}
+
+std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const QueryScoringRequest& request, const QueryMethods& methods,
+                                         const std::function<void(double)>& moved) {
   std::vector<QueryScore> scores;
   // Exact TOI floors, once per file for every method, outside the timed passes: of the doubles the narrow phases
   // are given (for a query that is not exactly doubles, its rationals are another question).
@@ -244,6 +273,8 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
       if (decision.toi_floor) exact_toi[q] = *decision.toi_floor;
     }
   }
+  const double passes = static_cast<double>(methods.size()) * std::max(1, request.repeats);
+  double passes_done = 0;
   for (const auto& method : methods) {
     QueryScore score;
     score.method = method->name();
@@ -257,21 +288,20 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
     for (int repeat = 0; repeat < std::max(1, request.repeats); ++repeat) {
       std::vector<QueryAnswer> answers;
       const auto start = std::chrono::steady_clock::now();
+      const auto answered = [&](std::size_t count) {
+        if (moved) moved((passes_done + static_cast<double>(count) / static_cast<double>(std::max<std::size_t>(1, file.queries.size()))) / passes);
+      };
       {
         const TimedRegion timed;
-        answers = method->answer_all(file, request.thickness);
+        answers = method->answer_all(file, request.thickness, moved ? answered : std::function<void(std::size_t)>());
       }
+      ++passes_done;
       const std::chrono::duration<double, std::nano> elapsed = std::chrono::steady_clock::now() - start;
       per_query.push_back(file.queries.empty() ? 0.0 : elapsed.count() / static_cast<double>(file.queries.size()));
       if (repeat > 0) {
         // Later passes only time, and say whether an answer changed (verdicts are the first pass's).
         harness_pass("query scoring");
-        for (std::size_t q = 0; q < answers.size(); ++q) {
-          const QueryAnswer& a = answers[q];
-          const QueryAnswer& b = first_answers[q];
-          const bool same_toi = (std::isnan(a.toi) && std::isnan(b.toi)) || std::memcmp(&a.toi, &b.toi, sizeof a.toi) == 0;
-          if (a.collides != b.collides || !same_toi || a.fault.empty() != b.fault.empty()) ++score.changed_between_passes;
-        }
+        score.changed_between_passes += changed_answers(answers, first_answers);
         continue;
       }
       first_answers = answers;
@@ -311,6 +341,11 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
         for (const datasets::Query& query : file.queries) score.labels.push_back(query.truth);
       }
     }
+    // As run audits a cell with misses: a plugin that missed, asked once, answers the file again (untimed), and
+    // answers that changed are counted (it answers by what it was asked before, or another reply was taken for one).
+    if (request.repeats <= 1 && score.false_negatives > 0 && plugin::names_plugin(score.method)) {
+      score.changed_between_passes += changed_answers(method->answer_all(file, request.thickness), first_answers);
+    }
     score.ns_per_query = median(per_query);
     scores.push_back(std::move(score));
   }
@@ -342,8 +377,10 @@ void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std:
     total.changed_between_passes += score.changed_between_passes;
     total_nanoseconds[score.method] += score.ns_per_query * static_cast<double>(score.queries);
   }
-  for (const std::string& name : methods) {
-    const std::string method = make_query_method(name)->name();
+  // Per-file scores come in the order of `methods` for each file: the first file's name each method (resolved),
+  // without making any again (an isolated plugin would start a child for its name).
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    const std::string method = k < scores.size() ? scores[k].method : make_query_method(methods[k])->name();
     QueryScore total = totals[method];
     total.method = method;
     total.file = "(all)";
@@ -353,11 +390,15 @@ void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std:
 }
 
 std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files, const QueryScoringRequest& request,
-                                          const std::function<void(std::size_t, std::size_t)>& on_file) {
+                                          const std::function<void(double, std::size_t)>& moved) {
+  const QueryMethods methods = make_query_methods(request.methods);
   std::vector<QueryScore> scores;
   for (std::size_t index = 0; index < files.size(); ++index) {
-    for (QueryScore& score : score_query_file(files[index], request)) scores.push_back(std::move(score));
-    if (on_file) on_file(index + 1, files.size());
+    const auto within = [&](double fraction) { moved(static_cast<double>(index) + fraction, files.size()); };
+    for (QueryScore& score : score_query_file(files[index], request, methods, moved ? within : std::function<void(double)>())) {
+      scores.push_back(std::move(score));
+    }
+    if (moved) moved(static_cast<double>(index + 1), files.size());
   }
   append_query_totals(scores, request.methods);
   return scores;

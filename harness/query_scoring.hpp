@@ -39,9 +39,19 @@ class QueryMethod {
   /// or the doubles they round to).
   virtual QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const = 0;
   /// Every query of `file`, in order: one `answer` each, or, for a method that prefers batches (an isolated
-  /// plugin), the whole file in batches. What is timed as the method's work on the file.
-  virtual std::vector<QueryAnswer> answer_all(const datasets::QueryFile& file, double thickness) const;
+  /// plugin), the whole file in batches. What is timed as the method's work on the file. `answered(n)` is told how
+  /// many are answered every kProgressQueries or so (progress on a long file).
+  virtual std::vector<QueryAnswer> answer_all(const datasets::QueryFile& file, double thickness,
+                                              const std::function<void(std::size_t)>& answered = {}) const;
 };
+
+/// How many queries a method answers between two calls of answer_all's `answered` (a batch of an isolated plugin).
+inline constexpr std::size_t kProgressQueries = 4096;
+
+/// The methods of a scoring, made once for every file a process scores: an isolated plugin's child starts once,
+/// before any timed pass, instead of once per file inside the first.
+using QueryMethods = std::vector<std::unique_ptr<QueryMethod>>;
+QueryMethods make_query_methods(const std::vector<std::string>& specs);
 
 /// The method that is the reference itself (certified filter, then exact root isolation, on the rationals).
 inline constexpr const char* kExactMethod = "exact";
@@ -128,7 +138,13 @@ void write_query_answers(const std::filesystem::path& path, const std::vector<Qu
 /// is left out. @return the number of queries left out.
 std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int exponent);
 
-/// Scores every method of `request` on one file, one score per method in the request's order.
+/// Scores every method of `request` (made as `methods`) on one file, one score per method in the request's order.
+/// `moved(fraction)` is told how much of the file is done. A method from outside ccdbench (a plugin) that misses a
+/// query of a file scored in one pass answers the file once more, untimed, and its answers that changed are counted
+/// (changed_between_passes), as `run` audits a cell with misses.
+std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const QueryScoringRequest& request, const QueryMethods& methods,
+                                         const std::function<void(double)>& moved = {});
+/// The same with its methods made for this file alone.
 std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const QueryScoringRequest& request);
 
 /// Appends one "(all)" score per method (in the order of `methods`, specs as given) summed over `scores`; ns per
@@ -139,10 +155,10 @@ void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std:
 nlohmann::json to_message(const QueryScore& score);
 QueryScore from_message(const nlohmann::json& message);
 
-/// Scores every method on every file; returns per-file scores followed by one "(all)" score per method.
-/// `on_file(index, count)` is called after each file (progress).
+/// Scores every method on every file (each method made once); returns per-file scores followed by one "(all)" score
+/// per method. `moved(done, count)` is told how many files are done, a fraction of the one under way included.
 std::vector<QueryScore> score_query_files(const std::vector<datasets::QueryFile>& files, const QueryScoringRequest& request,
-                                          const std::function<void(std::size_t, std::size_t)>& on_file = {});
+                                          const std::function<void(double, std::size_t)>& moved = {});
 
 /// The methods of a sweep: each narrow-phase variant of `methods` at a range of each of its accuracy parameters in
 /// turn, its other keys as given (conservative: tolerance, then toi_tolerance; cubic32, cubic64, advancement: eta);

@@ -10,6 +10,7 @@
 #include "harness/table.hpp"
 #include "harness/timed_region.hpp"
 #include "strategies/plugin/call_guard.hpp"
+#include "strategies/plugin/child_process.hpp"
 #include "strategies/registry.hpp"
 
 #include <algorithm>
@@ -71,7 +72,7 @@ struct Passes {
   std::string resolved;
   RecordEnvironment environment;
   std::optional<std::size_t> nondeterministic_step;
-  double host_peak = 0;
+  double host_peak = 0, child_peak = 0;
   bool peak_of_cell = false;
 };
 
@@ -135,9 +136,12 @@ Passes time_passes(const CellContext& cell, const CellProgress& progress, const 
   // The host's peak over the cell's timed passes: the strategy's memory and the frames it is given (the truth and
   // verification come after).
   passes.peak_of_cell = reset_peak_resident();
+  // An isolated plugin's memory is its child's: each pass's child is ended (and its peak kept) with its strategy.
+  plugin::reset_children_peak();
   for (int repeat = 0; repeat < std::max(1, cell.options.repeats); ++repeat) time_pass(cell, passes, repeat, progress, planned_name);
   plugin::set_activity({});
-  passes.host_peak = static_cast<double>(peak_resident_bytes());
+  passes.child_peak = static_cast<double>(plugin::children_peak_bytes());
+  passes.host_peak = static_cast<double>(peak_resident_bytes()) + passes.child_peak;
   return passes;
 }
 
@@ -363,6 +367,7 @@ CellSummary cell_summary(const CellContext& cell, const Passes& passes, const Ju
   summary.device_bytes = totals.device;
   summary.host_peak_bytes = passes.host_peak;
   summary.host_peak_of = passes.peak_of_cell ? "cell" : "process";
+  summary.child_peak_bytes = passes.child_peak;
   summary.reported = totals.reported;
   summary.judged_by = cell.entry.judging == strategies::Judging::triangle_pairs ? "triangle pairs" : "elementary pairs";
   summary.thickness_from = cell.data.thickness_from;

@@ -226,6 +226,7 @@ void to_json(json& j, const CellSummary& s) {
                     {"toi_error_p99", toi->error_p99 ? json(*toi->error_p99) : json()}});
     }
   }
+  if (s.child_peak_bytes > 0) j["child_peak_bytes"] = s.child_peak_bytes;
   put_optional(j, "errors_written", s.errors_written);
   put_optional(j, "nondeterministic_at_step", s.nondeterministic_at_step);
   j.update(json(s.environment));
@@ -266,6 +267,7 @@ void from_json(const json& j, CellSummary& s) {
   s.device_bytes = j.value("device_bytes", 0.0);
   s.host_peak_bytes = j.value("host_peak_bytes", 0.0);
   s.host_peak_of = j.value("host_peak_of", std::string("process"));
+  s.child_peak_bytes = j.value("child_peak_bytes", 0.0);
   s.reported = j.at("reported").get<std::size_t>();
   s.judged_by = j.value("judged_by", std::string("elementary pairs"));
   s.verified = j.value("verified", false);

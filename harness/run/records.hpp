@@ -113,6 +113,10 @@ struct CellSummary {
   /// Means over the steps (candidates, tests) and peaks (memory, bytes).
   double candidate_pairs = 0, elementary_tests = 0, kept_bytes = 0, history_bytes = 0, device_bytes = 0, host_peak_bytes = 0;
   std::string host_peak_of;  // "cell", or "process" where the peak could not be reset
+  /// An isolated plugin's child processes: the largest peak resident memory of those ended during the timed passes,
+  /// added to host_peak_bytes (the two peaks summed: an upper bound of the two processes' memory at once); 0 for a
+  /// cell that started none.
+  double child_peak_bytes = 0;
   std::size_t reported = 0;
   std::string judged_by;  // "elementary pairs" or "triangle pairs"
   bool verified = false;

@@ -6,14 +6,15 @@
 //   vf,VERTEX,FACE[,TOI]
 //   ee,A0,A1,B0,B1[,TOI]
 // with the scene's global vertex and face ids (0-based) and an optional TOI in [0, 1]; '#' starts a comment line.
-// An empty file is a step with no contact. The folder is read once per process, when its entry is made; every file of
-// the scene is parsed and checked in init, before any step:
+// An empty file is a step with no contact. The folder's step files (and nothing else of it) are read once per
+// process, when its entry is made; every file of the scene is parsed and checked in init, before any step:
 // a malformed line, an index out of range, a pair that cannot collide, a pair given twice or a line cut short is
 // refused as FILE:line N: REASON, a missing scene folder as FOLDER: REASON; a step past the last file is refused
 // (FILE: missing) when the run reaches it.
 #include "ccd/config.hpp"
 #include "core/error.hpp"
 #include "strategies/plugin/contact_check.hpp"
+#include "strategies/plugin/digest.hpp"
 #include "strategies/plugin/library.hpp"
 #include "strategies/plugin/plugin_strategy.hpp"
 
@@ -36,40 +37,112 @@ std::string step_file_name(std::size_t step) {
   return name;
 }
 
-/// A folder of answers as read once (docs/DESIGN.md §10 "Identity"): every regular file's bytes by its path relative
-/// to the folder (folders linked into it followed), and the digest of exactly those bytes. Its steps are judged from
-/// these bytes, never from a second read, so that a file rewritten during the run cannot put one answer's digest on
-/// another's verdict. The whole folder is held in memory for the process (answers are text, a few bytes a pair).
+/// A folder of answers as read once (docs/DESIGN.md §10 "Identity"): the bytes of every step file (SCENE/step_NNNN.csv,
+/// SCENE any folder path under it) by its path relative to the folder, and the digest of exactly those bytes. Its
+/// steps are judged from these bytes, never from a second read, so that a file rewritten during the run cannot put
+/// one answer's digest on another's verdict. Nothing else under the folder is read (a log or a core file beside the
+/// steps costs nothing), and each step file is read in bounded memory: its size is checked first, and it is read no
+/// further than that size.
 struct FolderSnapshot {
   std::map<std::string, std::string> files;
   std::string digest;
 };
 
+/// A step file is at most this large: about 35 million pairs at 30 bytes a line, far beyond any mesh's contacts in one
+/// step (the 1M-triangle ball's most contact-rich step has about 500,000). Larger is refused before it is read.
+constexpr std::uintmax_t kMaxStepFileBytes = std::uintmax_t{1} << 30;
+
+/// Whether `name` is a step file's name: step_ then four digits or more, then .csv.
+bool is_step_file_name(const std::string& name) {
+  constexpr std::size_t kDigitsFrom = 5, kSuffix = 4;  // "step_", ".csv"
+  if (name.size() < kDigitsFrom + 4 + kSuffix || name.rfind("step_", 0) != 0 || name.substr(name.size() - kSuffix) != ".csv") return false;
+  const std::string digits = name.substr(kDigitsFrom, name.size() - kDigitsFrom - kSuffix);
+  return std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+/// What a path that should be a step file is, when it is not a regular file (or a link to one): "" when it is.
+std::string not_a_regular_file(const std::filesystem::path& path) {
+  std::error_code error;
+  const std::filesystem::file_status own = std::filesystem::symlink_status(path, error);
+  auto kind = [](std::filesystem::file_type type) -> std::string {
+    switch (type) {
+      case std::filesystem::file_type::directory: return "a folder";
+      case std::filesystem::file_type::fifo: return "a FIFO (named pipe)";
+      case std::filesystem::file_type::character: return "a character device";
+      case std::filesystem::file_type::block: return "a block device";
+      case std::filesystem::file_type::socket: return "a socket";
+      default: return "not a regular file";
+    }
+  };
+  if (own.type() == std::filesystem::file_type::regular) return {};
+  if (own.type() != std::filesystem::file_type::symlink) return "is " + kind(own.type()) + ", not a step file (a regular file)";
+  const std::filesystem::file_status target = std::filesystem::status(path, error);
+  if (error) {
+    return error == std::errc::too_many_symbolic_link_levels
+               ? "is a link in a loop of links, not a step file"
+               : "is a link to " + std::filesystem::read_symlink(path, error).string() + ", which does not exist";
+  }
+  if (target.type() == std::filesystem::file_type::regular) return {};
+  return "is a link to " + kind(target.type()) + ", not to a step file (a regular file)";
+}
+
+/// The step file at `path` whole, its size checked first. @throws InputError(FILE, REASON) for one that is not a
+/// regular file or a link to one, is larger than kMaxStepFileBytes, or cannot be read to its size.
+std::string read_step_bytes(const std::filesystem::path& path) {
+  if (const std::string why = not_a_regular_file(path); !why.empty()) throw InputError(path, {}, why);
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  if (error) throw InputError(path, {}, "cannot be read: " + error.message());
+  if (size > kMaxStepFileBytes) {
+    throw InputError(path, {}, std::to_string(size) + " bytes, more than a step file may hold (" + std::to_string(kMaxStepFileBytes) + ")");
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes(static_cast<std::size_t>(size), '\0');
+  if (!in || !in.read(bytes.data(), static_cast<std::streamsize>(size))) throw InputError(path, {}, "cannot be read to its size");
+  return bytes;
+}
+
+/// The step files under `folder` (scene folders found through links too, each folder once), by relative path.
+void find_step_files(const std::filesystem::path& folder, const std::filesystem::path& relative, std::vector<std::filesystem::path>& visited,
+                     std::vector<std::string>& found) {
+  std::error_code error;
+  const std::filesystem::path real = std::filesystem::canonical(folder, error);
+  if (error || std::find(visited.begin(), visited.end(), real) != visited.end()) return;  // a loop of folders: once
+  visited.push_back(real);
+  std::vector<std::filesystem::directory_entry> entries;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) entries.push_back(entry);
+  for (const auto& entry : entries) {
+    const std::string name = entry.path().filename().string();
+    const std::filesystem::path path = relative / name;
+    if (is_step_file_name(name)) {
+      found.push_back(path.generic_string());  // whatever it is: read_step_bytes says what is wrong with it
+    } else if (std::filesystem::is_directory(entry.path(), error)) {
+      find_step_files(entry.path(), path, visited, found);
+    }
+  }
+}
+
 std::shared_ptr<const FolderSnapshot> read_folder(const std::filesystem::path& folder) {
   auto snapshot = std::make_shared<FolderSnapshot>();
-  std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(folder, std::filesystem::directory_options::follow_directory_symlink)) {
-    if (entry.is_regular_file()) files.push_back(entry.path());
-  }
-  std::sort(files.begin(), files.end());
+  std::vector<std::filesystem::path> visited;
+  std::vector<std::string> names;
+  find_step_files(folder, {}, visited, names);
+  std::sort(names.begin(), names.end());
   // Each name and each file's bytes with its length before it: no two folders give the same stream (a file's bytes
-  // may hold anything, a name's end included).
-  std::string stream;
+  // may hold anything, a name's end included). The digest is taken as the files are read, not of a copy of them all.
+  StreamDigest stream;
   auto append = [&](const std::string& part) {
     const std::uint64_t size = part.size();
-    stream.append(reinterpret_cast<const char*>(&size), sizeof size);
-    stream += part;
+    stream.update(std::string_view(reinterpret_cast<const char*>(&size), sizeof size));
+    stream.update(part);
   };
-  for (const std::filesystem::path& file : files) {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw InputError(file, {}, "cannot be read");
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const std::string name = std::filesystem::relative(file, folder).generic_string();
+  for (const std::string& name : names) {
+    std::string bytes = read_step_bytes(folder / name);
     append(name);
     append(bytes);
     snapshot->files.emplace(name, std::move(bytes));
   }
-  snapshot->digest = bytes_digest(stream);
+  snapshot->digest = stream.hex();
   return snapshot;
 }
 

@@ -16,7 +16,9 @@
 
 namespace ccd::plugin::child_protocol {
 
-// Requests (one byte, then their payload; replies start with a 32-bit status or outcome, then a message).
+// Requests: one byte, the request's number (64 bits, counting up from 1 for each parent), then their payload.
+// Replies: the number of the request they answer, then a 32-bit status or outcome and a message (a batch's: its
+// number and kBatchDone). A reply with another number is not this request's: a process the plugin started wrote it.
 inline constexpr char kQuery = 'Q';
 inline constexpr char kBegin = 'B';
 inline constexpr char kStep = 'S';
@@ -90,13 +92,22 @@ inline constexpr std::size_t kGreetingSize = kStatusSize + kDigestSize;
 inline constexpr std::int32_t kChangedStatus = 2;
 /// A child that could not load the plugin at all (removed, half-written by a build): its code changed too.
 inline constexpr std::int32_t kUnloadableStatus = 3;
+/// A child whose plugin's create call failed (it left the floating-point environment changed, or threw): the plugin
+/// is refused, as in-process.
+inline constexpr std::int32_t kCreateFailedStatus = 4;
 
 /// The child's end of the lifeline (docs/DESIGN.md §10): the parent holds the other end open and never writes, so
 /// the pipe reports its end only when the parent is gone.
 inline constexpr int kLifelineFd = 5;
 /// The memory of query batches (query_batch.hpp), when the parent shares one.
 inline constexpr int kBatchFd = 6;
-/// A batch says it is done with one byte on the reply pipe.
+/// A batch says it is done with its request's number and one byte on the reply pipe.
 inline constexpr char kBatchDone = 'D';
+inline constexpr std::size_t kBatchDoneSize = sizeof(std::uint64_t) + 1;
+/// While a batch is answered, the parent looks this often at how many answers are done (each moves the deadline on).
+inline constexpr double kBatchWatchSeconds = 0.1;
+/// How long a child whose requests ended (its pipe closed) may take to end by itself (its plugin's destroy) before it
+/// is killed.
+inline constexpr double kEndSeconds = 10;
 
 }  // namespace ccd::plugin::child_protocol

@@ -26,6 +26,14 @@ void hash_file(XXH3_state_t* state, const std::filesystem::path& path) {
 
 std::string bytes_digest(std::string_view bytes) { return hex128(XXH3_128bits(bytes.data(), bytes.size())); }
 
+StreamDigest::StreamDigest() : state_(XXH3_createState()) { XXH3_128bits_reset(static_cast<XXH3_state_t*>(state_)); }
+
+StreamDigest::~StreamDigest() { XXH3_freeState(static_cast<XXH3_state_t*>(state_)); }
+
+void StreamDigest::update(std::string_view bytes) { XXH3_128bits_update(static_cast<XXH3_state_t*>(state_), bytes.data(), bytes.size()); }
+
+std::string StreamDigest::hex() const { return hex128(XXH3_128bits_digest(static_cast<XXH3_state_t*>(state_))); }
+
 std::string content_digest(const std::filesystem::path& path) {
   XXH3_state_t* state = XXH3_createState();
   XXH3_128bits_reset(state);

@@ -1,14 +1,11 @@
 #include "strategies/plugin/isolation.hpp"
 
 #include "ccd/config.hpp"
+#include "strategies/plugin/child_process.hpp"
 #include "strategies/plugin/child_protocol.hpp"
 #include "strategies/plugin/query_batch.hpp"
 
-#include <fcntl.h>
-#include <poll.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -21,154 +18,12 @@
 #include <mutex>
 #include <optional>
 #include <stdexcept>
-#include <thread>
-
-extern char** environ;
 
 namespace ccd::plugin {
 
-namespace {
-
-std::mutex& host_program_mutex() {
-  static std::mutex mutex;
-  return mutex;
-}
-
-std::string& host_program_path() {
-  static std::string path = "/proc/self/exe";
-  return path;
-}
-
-}  // namespace
-
-void set_host_program(const std::string& path) {
-  std::lock_guard lock(host_program_mutex());
-  host_program_path() = path;
-}
-
-std::string host_program() {
-  std::lock_guard lock(host_program_mutex());
-  return host_program_path();
-}
-
 using namespace child_protocol;
 
-namespace {}  // namespace
-
 namespace {
-
-/// A child of this program, `PROGRAM plugin-host ARGUMENTS...`, with its request pipe on fd 3, its reply pipe on
-/// fd 4 and the lifeline on fd 5; the parent's ends are close-on-exec, so that no other child holds them.
-struct Child {
-  pid_t pid = -1;
-  int to_child = -1, from_child = -1, lifeline = -1;
-};
-
-Child spawn_child(const std::vector<std::string>& plugin_host_arguments, int batch_fd = -1) {
-  int pipes[3][2] = {{-1, -1}, {-1, -1}, {-1, -1}};  // requests, replies, lifeline
-  auto close_all = [&] {
-    for (auto& pipe : pipes) {
-      for (int& fd : pipe) {
-        if (fd >= 0) ::close(fd);
-        fd = -1;
-      }
-    }
-  };
-  for (auto& pipe : pipes) {
-    if (::pipe2(pipe, O_CLOEXEC) != 0) {
-      const std::string why = std::strerror(errno);
-      close_all();
-      throw std::runtime_error("plugin isolation: cannot make a pipe to a child: " + why);
-    }
-  }
-  // The child's descriptors are moved above the numbers they get in the child first: dup2 of a descriptor onto its
-  // own number does nothing, not even clear close-on-exec, and the child would start without it.
-  constexpr int kAboveChildDescriptors = 16;
-  auto above = [&](int& fd) {
-    const int moved = ::fcntl(fd, F_DUPFD_CLOEXEC, kAboveChildDescriptors);
-    if (moved >= 0) {
-      ::close(fd);
-      fd = moved;
-    }
-    return moved >= 0;
-  };
-  int batch = batch_fd >= 0 ? ::fcntl(batch_fd, F_DUPFD_CLOEXEC, kAboveChildDescriptors) : -1;
-  const bool moved = above(pipes[0][0]) && above(pipes[1][1]) && above(pipes[2][0]) && (batch_fd < 0 || batch >= 0);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  int prepared = moved ? 0 : EMFILE;
-  if (prepared == 0) prepared = posix_spawn_file_actions_adddup2(&actions, pipes[0][0], kRequestFd);
-  if (prepared == 0) prepared = posix_spawn_file_actions_adddup2(&actions, pipes[1][1], kReplyFd);
-  if (prepared == 0) prepared = posix_spawn_file_actions_adddup2(&actions, pipes[2][0], kLifelineFd);
-  if (prepared == 0 && batch >= 0) prepared = posix_spawn_file_actions_adddup2(&actions, batch, kBatchFd);
-  // Nothing else of this process goes to the child (descriptors not marked close-on-exec by the libraries).
-  if (prepared == 0) prepared = posix_spawn_file_actions_addclosefrom_np(&actions, kBatchFd + 1);
-  const std::string program = host_program();
-  std::vector<std::string> arguments{program, kPluginHostCommand};
-  arguments.insert(arguments.end(), plugin_host_arguments.begin(), plugin_host_arguments.end());
-  std::vector<char*> argv;
-  for (std::string& argument : arguments) argv.push_back(argument.data());
-  argv.push_back(nullptr);
-  // This program's own file through /proc/self/exe (unless set_host_program named another: a process using the C++
-  // API names the ccdbench program), not a name looked up on PATH nor its path: the child is this very build, even
-  // when the file was rebuilt or removed since this process started.
-  // The child leads a process group of its own, so that killing it kills what it started too (unless that left the
-  // group on purpose).
-  posix_spawnattr_t attributes;
-  posix_spawnattr_init(&attributes);
-  if (prepared == 0) prepared = posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
-  if (prepared == 0) prepared = posix_spawnattr_setpgroup(&attributes, 0);
-  Child child;
-  const int spawned = prepared != 0 ? prepared : ::posix_spawn(&child.pid, program.c_str(), &actions, &attributes, argv.data(), environ);
-  posix_spawnattr_destroy(&attributes);
-  posix_spawn_file_actions_destroy(&actions);
-  if (batch >= 0) ::close(batch);
-  child.to_child = pipes[0][1];
-  child.from_child = pipes[1][0];
-  child.lifeline = pipes[2][1];
-  pipes[0][1] = pipes[1][0] = pipes[2][1] = -1;
-  close_all();  // the child's ends
-  if (spawned != 0) {
-    for (int fd : {child.to_child, child.from_child, child.lifeline}) ::close(fd);
-    throw std::runtime_error("plugin isolation: cannot start a child process: " + std::string(std::strerror(spawned)));
-  }
-  return child;
-}
-
-/// Reaps a child; what happened to it, in words.
-std::string reap(pid_t pid, bool kill_it) {
-  if (kill_it) ::kill(-pid, SIGKILL);  // its process group: the child and what it started
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (WIFSIGNALED(status)) {
-    return "it crashed with signal " + std::to_string(WTERMSIG(status)) + " (" + ::strsignal(WTERMSIG(status)) + ")";
-  }
-  if (WIFEXITED(status)) return "its process exited with status " + std::to_string(WEXITSTATUS(status));
-  return "its process ended";
-}
-
-/// Reads exactly `size` bytes from `fd` before `deadline` (seconds, steady clock); false at the end of the stream,
-/// an error, or the deadline (`timed_out` then says so).
-bool read_until(int fd, char* data, std::size_t size, double deadline, bool& timed_out) {
-  timed_out = false;
-  while (size > 0) {
-    const double left = deadline - now_seconds();
-    pollfd ready{fd, POLLIN, 0};
-    const int polled = left > 0 ? ::poll(&ready, 1, static_cast<int>(std::ceil(left * 1000))) : 0;
-    if (polled < 0 && errno == EINTR) continue;
-    if (polled == 0) {
-      timed_out = true;
-      return false;
-    }
-    const ssize_t n = ::read(fd, data, size);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    data += n;
-    size -= static_cast<std::size_t>(n);
-  }
-  return true;
-}
 
 /// A description's reply is at most this long: a table with a thousand keys of long help texts fits many times.
 constexpr std::uint64_t kMaxDescriptionBytes = 16u << 20;
@@ -182,13 +37,14 @@ PluginDescription describe_in_child(const std::string& given) {
   if (!std::filesystem::is_regular_file(path)) throw std::invalid_argument("plugin " + path + ": no such file");
   // A broken pipe is an answer here (the child died), never a reason for this process to die.
   ::signal(SIGPIPE, SIG_IGN);
-  Child child = spawn_child({"--describe", path});
+  ChildProcess child = spawn_child({"--describe", path});
   const double deadline = now_seconds() + kLoadSeconds;
   char head[kStatusSize + sizeof(std::uint64_t)];
   bool timed_out = false;
   std::string failure;
   std::string bytes;
-  if (read_until(child.from_child, head, sizeof head, deadline, timed_out)) {
+  ChildRead read = read_from_child(child, head, sizeof head, deadline);
+  if (read == ChildRead::whole) {
     const char* at = head;
     const auto status = take<std::int32_t>(at);
     const std::string message(at, strnlen(at, CCDBENCH_MESSAGE_SIZE));
@@ -199,7 +55,8 @@ PluginDescription describe_in_child(const std::string& given) {
       failure = "its child process sent a reply of " + std::to_string(size) + " bytes";
     } else {
       bytes.resize(size);
-      if (!read_until(child.from_child, bytes.data(), size, deadline, timed_out)) {
+      read = read_from_child(child, bytes.data(), size, deadline);
+      if (read != ChildRead::whole) {
         failure = "its child process stopped while describing it";
       } else if (status != 0) {
         failure = !bytes.empty() ? bytes : message.empty() ? "it was refused" : message;
@@ -208,8 +65,9 @@ PluginDescription describe_in_child(const std::string& given) {
   } else {
     failure = "its child process ended while loading it";
   }
-  for (int fd : {child.to_child, child.from_child, child.lifeline}) ::close(fd);
-  const std::string ended = reap(child.pid, timed_out);
+  timed_out = read == ChildRead::timed_out;
+  // Whatever it started at load goes with it (a process the plugin forked must not outlive its description).
+  const std::string ended = end_child(child, timed_out, kEndSeconds);
   if (timed_out) {
     throw std::invalid_argument("plugin " + path + ": loading it did not finish within " + narrowphase::format_spec_number(kLoadSeconds) + " s");
   }
@@ -254,10 +112,14 @@ IsolatedPlugin::IsolatedPlugin(const PluginDescription& description, std::vector
   // A broken pipe is an answer here (the child died), never a reason for this process to die.
   ::signal(SIGPIPE, SIG_IGN);
   if (batch_ > 1) region_ = std::make_unique<BatchRegion>(BatchRegion::create());
+  // Started now, not at the first request: its start is not timed with the first query or step, and a plugin whose
+  // create fails is refused here, as in-process (a child that dies while starting is its first request's error).
+  std::string why;
+  start(why);
 }
 
 IsolatedPlugin::~IsolatedPlugin() {
-  if (child_ > 0) stop(false);
+  if (child_.pid > 0) stop(false);
 }
 
 bool IsolatedPlugin::start(std::string& why) {
@@ -269,11 +131,7 @@ bool IsolatedPlugin::start(std::string& why) {
   std::vector<std::string> arguments{path_, "-", "0"};
 #endif
   arguments.insert(arguments.end(), values_.begin(), values_.end());
-  const Child child = spawn_child(arguments, region_ ? region_->fd() : -1);
-  child_ = child.pid;
-  to_child_ = child.to_child;
-  from_child_ = child.from_child;
-  lifeline_ = child.lifeline;
+  child_ = spawn_child(arguments, region_ ? region_->fd() : -1);
   std::vector<char> greeting;
   deadline_ = now_seconds() + timeout_seconds_ + 10;  // loading and configuring may take longer than one query
   if (!read_more(greeting, kGreetingSize, why)) {
@@ -296,6 +154,10 @@ bool IsolatedPlugin::start(std::string& why) {
     why = changed_;
     return false;
   }
+  if (status == kCreateFailedStatus) {
+    stop(true);
+    throw std::invalid_argument("plugin " + path_ + ": its create call failed: " + message);
+  }
   if (status != 0) {
     stop(true);
     throw std::invalid_argument("plugin " + path_ + ": its configuration was refused: " + (message.empty() ? "no reason given" : message));
@@ -303,23 +165,14 @@ bool IsolatedPlugin::start(std::string& why) {
   return true;
 }
 
-std::string IsolatedPlugin::stop(bool kill_it) {
-  for (int* fd : {&to_child_, &from_child_, &lifeline_}) {
-    if (*fd >= 0) ::close(*fd);
-    *fd = -1;
-  }
-  if (child_ <= 0) return "it was not running";
-  const std::string ended = reap(child_, kill_it);
-  child_ = -1;
-  return ended;
-}
+std::string IsolatedPlugin::stop(bool kill_it) { return end_child(child_, kill_it, kEndSeconds); }
 
 bool IsolatedPlugin::read_more(std::vector<char>& reply, std::size_t size, std::string& why) {
   const std::size_t start = reply.size();
   reply.resize(start + size);
-  bool timed_out = false;
-  if (read_until(from_child_, reply.data() + start, size, deadline_, timed_out)) return true;
-  if (timed_out) {
+  const ChildRead read = read_from_child(child_, reply.data() + start, size, deadline_);
+  if (read == ChildRead::whole) return true;
+  if (read == ChildRead::timed_out) {
     stop(true);
     why = "it did not answer within its timeout of " + narrowphase::format_spec_number(timeout_seconds_) + " s (killed)";
   } else {
@@ -328,32 +181,47 @@ bool IsolatedPlugin::read_more(std::vector<char>& reply, std::size_t size, std::
   return false;
 }
 
+bool IsolatedPlugin::send(std::vector<char> request, std::string& why) {
+  // Its number right after the kind: the child puts it before its reply, and no reply of another request (a second
+  // one a process the plugin started wrote) is ever taken for this one's.
+  const std::uint64_t sequence = ++sequence_;
+  request.insert(request.begin() + 1, reinterpret_cast<const char*>(&sequence), reinterpret_cast<const char*>(&sequence) + sizeof sequence);
+  deadline_ = now_seconds() + timeout_seconds_;
+  if (write_all(child_.to_child, request.data(), request.size())) return true;
+  why = stop(false);
+  return false;
+}
+
+bool IsolatedPlugin::reply_is_this_requests(std::string& why) {
+  std::vector<char> number;
+  if (!read_more(number, sizeof(std::uint64_t), why)) return false;
+  const char* at = number.data();
+  const auto sequence = take<std::uint64_t>(at);
+  if (sequence == sequence_) return true;
+  stop(true);
+  why = "its reply was not to this request (a reply to request " + std::to_string(sequence) + " when " + std::to_string(sequence_) +
+        " was asked: did the plugin start a process that answers too?) (killed)";
+  return false;
+}
+
 bool IsolatedPlugin::exchange(const std::vector<char>& request, std::vector<char>& reply, std::size_t reply_size, std::string& why) {
   if (!changed_.empty()) {
     why = changed_;
     return false;
   }
-  if (child_ <= 0) {
+  if (child_.pid <= 0) {
     // A child that dies while starting (the plugin's constructor or create crashed) is this request's error.
     if (!start(why)) return false;
     if (!scene_request_.empty() && request.front() != kBegin && !send_scene(why)) return false;
   }
-  deadline_ = now_seconds() + timeout_seconds_;
-  if (!write_all(to_child_, request.data(), request.size())) {
-    why = stop(false);
-    return false;
-  }
+  if (!send(request, why) || !reply_is_this_requests(why)) return false;
   reply.clear();
   return read_more(reply, reply_size, why);
 }
 
 bool IsolatedPlugin::send_scene(std::string& message) {
   std::vector<char> reply;
-  deadline_ = now_seconds() + timeout_seconds_;
-  if (!write_all(to_child_, scene_request_.data(), scene_request_.size())) {
-    message = stop(false);
-    return false;
-  }
+  if (!send(scene_request_, message) || !reply_is_this_requests(message)) return false;
   if (!read_more(reply, kStatusSize, message)) return false;
   const char* at = reply.data();
   if (take<std::int32_t>(at) != 0) {
@@ -406,7 +274,7 @@ std::vector<ccdbench_answer> IsolatedPlugin::queries(const std::vector<Query>& a
       continue;
     }
     // A child that dies while starting is the error of the query it was started for.
-    if (child_ <= 0 && !start(why)) {
+    if (child_.pid <= 0 && !start(why)) {
       error(answers[next++], why);
       continue;
     }
@@ -430,50 +298,55 @@ std::size_t IsolatedPlugin::batch(const std::vector<Query>& asked, std::size_t f
   region_->set_done(0);
   std::vector<char> request{kBatch};
   put(request, static_cast<std::uint64_t>(count));
-  bool finished = false;
-  if (!write_all(to_child_, request.data(), request.size())) {
-    why = stop(false);
-  } else {
+  bool finished = false, foreign = false;
+  if (send(request, why)) {
     // Each query has its own timeout: the deadline moves on with every answer the child counts done.
     std::uint64_t seen = 0;
-    double deadline = now_seconds() + timeout_seconds_;
+    char reply[kBatchDoneSize];
+    std::size_t filled = 0;
     while (true) {
-      const double left = deadline - now_seconds();
-      if (left <= 0) {
-        why = "it did not answer within its timeout of " + narrowphase::format_spec_number(timeout_seconds_) + " s (killed)";
-        stop(true);
-        break;
-      }
-      pollfd ready{from_child_, POLLIN, 0};
-      const int polled = ::poll(&ready, 1, static_cast<int>(std::ceil(std::min(left, 0.1) * 1000)));
-      if (polled < 0 && errno != EINTR) {
-        why = stop(true);
-        break;
-      }
-      if (polled > 0) {
-        char done = 0;
-        const ssize_t n = ::read(from_child_, &done, 1);
-        if (n < 0 && errno == EINTR) continue;
-        if (n == 1 && done == kBatchDone) {
-          finished = true;
-        } else {
-          why = n == 1 ? "its reply was not one (killed)" : "";
-          const std::string ended = stop(n == 1);
-          if (why.empty()) why = ended;
+      const ChildRead read = read_some_from_child(child_, reply, sizeof reply, filled, std::min(deadline_, now_seconds() + kBatchWatchSeconds));
+      if (read == ChildRead::whole) {
+        const char* at = reply;
+        const auto sequence = take<std::uint64_t>(at);
+        finished = sequence == sequence_ && *at == kBatchDone;
+        foreign = !finished;
+        if (foreign) {
+          stop(true);
+          why = "its reply was not this batch's (a reply to request " + std::to_string(sequence) + " when " + std::to_string(sequence_) +
+                " was asked: did the plugin start a process that answers too?) (killed)";
         }
+        break;
+      }
+      if (read == ChildRead::ended) {
+        why = stop(false);
         break;
       }
       if (const std::uint64_t now_done = region_->done(); now_done != seen) {
         seen = now_done;
-        deadline = now_seconds() + timeout_seconds_;
+        deadline_ = now_seconds() + timeout_seconds_;
+      } else if (now_seconds() >= deadline_) {
+        stop(true);
+        why = "it did not answer within its timeout of " + narrowphase::format_spec_number(timeout_seconds_) + " s (killed)";
+        break;
       }
     }
   }
-  // What the child counted done, never more than was asked; on a clean finish, every query.
-  const std::size_t answered = finished ? count : std::min<std::size_t>(region_->done(), count);
-  for (std::size_t k = 0; k < answered; ++k) {
-    const BatchAnswer& in = region_->answers()[k];
-    ccdbench_answer& out = answers[first + k];
+  // What the child counted done, never more than was asked; on a clean finish, every query; after a reply that was
+  // not this batch's, none (two processes answered: the batch is its first query's error, and a fresh child answers
+  // the rest). An answer stamped with another batch's number was not written for this one (a process the plugin
+  // started wrote it, or none was): it and those after it are not taken.
+  const std::size_t counted = finished ? count : foreign ? 0 : std::min<std::size_t>(region_->done(), count);
+  const auto stamp = static_cast<std::uint32_t>(sequence_);
+  std::size_t answered = 0;
+  for (; answered < counted; ++answered) {
+    const BatchAnswer& in = region_->answers()[answered];
+    if (in.batch != stamp) {
+      if (child_.pid > 0) stop(true);
+      why = "its answer was not written for this batch (it holds batch " + std::to_string(in.batch) + "'s number) (killed)";
+      break;
+    }
+    ccdbench_answer& out = answers[first + answered];
     out.outcome = in.outcome;
     out.toi = in.toi;
     std::memcpy(out.message, in.message, CCDBENCH_MESSAGE_SIZE);
@@ -564,7 +437,7 @@ int IsolatedPlugin::step(const ccdbench_step& step, std::size_t vertex_count, co
 
 void IsolatedPlugin::end() {
   std::lock_guard lock(mutex_);
-  if (child_ <= 0) return;
+  if (child_.pid <= 0) return;
   std::vector<char> reply;
   std::string why;
   exchange({kEnd}, reply, kStatusSize, why);

@@ -11,10 +11,14 @@
 ///   that this process never loads a plugin it runs isolated, nor one whose load crashes;
 /// - every child is told the digest of the code the run was planned with, and one that loaded other code (the file
 ///   was replaced or rebuilt during the run) calls none of it and says so: from then on each request is an error;
-/// - a child dies with its parent: it watches a pipe that only the parent holds open (fd 5), and exits when the
-///   parent is gone, even while the plugin hangs in a call.
+/// - a child dies with its parent: it watches a pipe that only the parent holds open (fd 5), and ends its process
+///   group when the parent is gone, even while the plugin hangs in a call;
+/// - every request is numbered and every reply carries its request's number, and every batch answer its batch's:
+///   a second reply (a process the plugin forked, still answering) is never taken for another request's;
+/// - ending a child ends its process group (child_process.hpp).
 
 #include "strategies/plugin/ccdbench_plugin.h"
+#include "strategies/plugin/child_process.hpp"
 #include "strategies/plugin/library.hpp"
 
 #include <sys/types.h>
@@ -30,15 +34,6 @@ namespace ccd::plugin {
 /// PROGRAM plugin-host --describe PATH. Returns the process's exit status.
 int serve_plugin(int argc, char** argv);
 
-/// The program an isolated plugin's child runs: this process's own file (/proc/self/exe), the ccdbench program,
-/// unless set otherwise. A process that is not ccdbench (a program using the C++ API) sets the ccdbench program
-/// installed beside the library.
-void set_host_program(const std::string& path);
-std::string host_program();
-
-/// The first argument that makes ccdbench a plugin's child process.
-inline constexpr const char* kPluginHostCommand = "plugin-host";
-
 /// The description of the plugin at `path`, made once per process (by a child process: plugin-host --describe).
 /// @throws std::invalid_argument "plugin PATH: REASON" when it cannot be loaded, its table is refused, or its child
 ///         crashed or hung while loading it.
@@ -51,8 +46,9 @@ PluginDescription describe_in_child(const std::string& path);
 
 class IsolatedPlugin {
  public:
-  /// The child is started at the first request (and again after a crash or a hang). Queries go to it `batch` at a
-  /// time (query_batch.hpp); 1 sends each on its own over the pipe.
+  /// The child is started here, outside any timed call (and again at the request after a crash or a hang). Queries
+  /// go to it `batch` at a time (query_batch.hpp); 1 sends each on its own over the pipe. @throws
+  /// std::invalid_argument when the plugin refuses its configuration or its create call fails (as in-process).
   IsolatedPlugin(const PluginDescription& description, std::vector<std::string> values, double timeout_seconds, std::size_t batch);
   ~IsolatedPlugin();
   IsolatedPlugin(const IsolatedPlugin&) = delete;
@@ -82,10 +78,16 @@ class IsolatedPlugin {
   /// than the run's (every later request is then an error too). @throws std::invalid_argument when the plugin
   /// refuses its configuration.
   bool start(std::string& why);
-  /// Kills and reaps the child; returns what happened to it ("crashed with signal 11 (Segmentation fault)").
+  /// Ends the child and its process group (killed first with `kill_it`) and reaps it; returns what happened to it
+  /// ("it crashed with signal 11 (Segmentation fault)").
   std::string stop(bool kill_it);
+  /// Numbers a request ({kind, payload...}) and writes it, starting its timeout; false (with `why`) when the child
+  /// is gone (it is then stopped).
+  bool send(std::vector<char> request, std::string& why);
+  /// Reads the number the reply starts with: false (with `why`, the child killed) when it is another request's.
+  bool reply_is_this_requests(std::string& why);
   /// Writes a request and reads `reply_size` bytes of its reply within the timeout; false (with `why`) when the
-  /// child died or did not answer in time (it is then stopped).
+  /// child died, did not answer in time or answered another request (it is then stopped).
   bool exchange(const std::vector<char>& request, std::vector<char>& reply, std::size_t reply_size, std::string& why);
   /// Reads more of a reply (after exchange), within the same deadline.
   bool read_more(std::vector<char>& reply, std::size_t size, std::string& why);
@@ -103,8 +105,9 @@ class IsolatedPlugin {
   /// The memory shared with every child for batches (none when batch_ is 1).
   std::unique_ptr<class BatchRegion> region_;
   std::mutex mutex_;
-  pid_t child_ = -1;
-  int to_child_ = -1, from_child_ = -1, lifeline_ = -1;
+  ChildProcess child_;
+  /// The number of the last request sent (every reply must carry it).
+  std::uint64_t sequence_ = 0;
   double deadline_ = 0;
   /// The scene of `begin`, as sent (empty: none yet), and the most contacts of each kind its mesh can have.
   std::vector<char> scene_request_;

@@ -30,16 +30,33 @@ struct StepReply {
   std::uint64_t vertex_face_count = 0, edge_edge_count = 0;
 };
 
-/// Ends the child when its parent is gone, even while the plugin hangs in a call on the main thread.
+/// Ends this child's process group (itself and whatever the plugin started in it), when it leads one (the parent
+/// starts it so); else only itself. Async-signal-safe.
+void end_own_group() {
+  if (::getpgrp() == ::getpid()) ::kill(0, SIGKILL);
+  // The system call itself: the program's _exit is interposed, and a lookup there could wait for ever on the
+  // loader's lock, which a plugin whose constructor hangs inside dlopen holds.
+  ::syscall(SYS_exit_group, 3);
+}
+
+/// The signal the kernel sends when the parent dies (PR_SET_PDEATHSIG): caught to end the whole group, where SIGKILL
+/// would end the child alone and leave what the plugin started running.
+const int kParentDeathSignal = SIGRTMIN + 1;
+
+/// Ends the child's group when its parent is gone, even while the plugin hangs in a call on the main thread: the
+/// kernel's parent-death signal, and a thread watching the lifeline (a plugin can change a signal's handler, or stop
+/// a thread, but not both by accident).
 void watch_the_parent() {
 #if CCDBENCH_GUARD_LIFELINE
+  struct sigaction ending {};
+  ending.sa_handler = [](int) { end_own_group(); };
+  ::sigaction(kParentDeathSignal, &ending, nullptr);
+  ::prctl(PR_SET_PDEATHSIG, kParentDeathSignal);
   std::thread([] {
     pollfd lifeline{kLifelineFd, POLLIN, 0};
     while (::poll(&lifeline, 1, -1) < 0 && errno == EINTR) {
     }
-    // The system call itself: the program's _exit is interposed, and a lookup there could wait for ever on the
-    // loader's lock, which a plugin whose constructor hangs inside dlopen holds.
-    ::syscall(SYS_exit_group, 3);
+    end_own_group();
   }).detach();
 #endif
 }
@@ -110,10 +127,6 @@ int serve_plugin(int argc, char** argv) {
   if (argc < 3) return 2;
   // This process runs the plugin, and nothing here is ccdbench's own work to guard: its exits are its own.
   set_plugin_host_process();
-#if CCDBENCH_GUARD_LIFELINE
-  // Killed with the parent thread that started it, as well as watching the lifeline (a plugin can stop a thread).
-  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-#endif
   watch_the_parent();
   // Whatever the plugin prints goes to the standard error (never into ccdbench's own output, which a script may be
   // reading); its answers go to fd 4 alone.
@@ -163,7 +176,15 @@ int serve_plugin(int argc, char** argv) {
   std::vector<const char*> pointers;
   for (const std::string& value : values) pointers.push_back(value.c_str());
   char error[CCDBENCH_MESSAGE_SIZE] = {};
-  void* context = library.table().create(pointers.data(), error);
+  void* context = nullptr;
+  // Held to what an in-process create is held to (a floating-point environment left changed, an exception): its
+  // fault refuses the plugin, as in-process, where it would otherwise be blamed on its first query.
+  const std::string create_fault = child_call(library, [&] { context = library.table().create(pointers.data(), error); });
+  if (!create_fault.empty()) {
+    if (context != nullptr) child_call(library, [&] { library.table().destroy(context); });
+    greet(kCreateFailedStatus, create_fault, digest);
+    return 1;
+  }
   error[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
   if (!greet(context != nullptr ? 0 : 1, context != nullptr ? "" : error, digest) || context == nullptr) return 1;
   // The scene of `begin`, kept for the step calls.
@@ -171,7 +192,16 @@ int serve_plugin(int argc, char** argv) {
   std::vector<std::uint8_t> self;
   ccdbench_scene scene{};
   std::optional<BatchRegion> region;
+  std::uint64_t sequence = 0;
+  // Each reply carries the number of the request it answers, in one write with the reply.
+  auto reply_to_request = [&](const std::vector<char>& reply) {
+    std::vector<char> numbered;
+    put(numbered, sequence);
+    numbered.insert(numbered.end(), reply.begin(), reply.end());
+    return write_all(kReplyFd, numbered.data(), numbered.size());
+  };
   for (char kind = 0; read_all(kRequestFd, &kind, 1);) {
+    if (!read_all(kRequestFd, reinterpret_cast<char*>(&sequence), sizeof sequence)) return 1;
     if (kind == kBatch) {
       std::uint64_t count = 0;
       if (!read_all(kRequestFd, reinterpret_cast<char*>(&count), sizeof count) || count > kBatchCapacity) return 1;
@@ -181,11 +211,12 @@ int serve_plugin(int argc, char** argv) {
         const ccdbench_answer answer = answer_query(library, context, query.vertex_face != 0, query.rows, query.thickness);
         BatchAnswer& out = region->answers()[k];
         out.outcome = answer.outcome;
+        out.batch = static_cast<std::uint32_t>(sequence);
         out.toi = answer.toi;
         std::memcpy(out.message, answer.message, CCDBENCH_MESSAGE_SIZE);
         region->set_done(k + 1);
       }
-      if (!write_all(kReplyFd, &kBatchDone, 1)) return 1;
+      if (!reply_to_request({kBatchDone})) return 1;
     } else if (kind == kQuery) {
       char payload[1 + 25 * sizeof(double)];
       if (!read_all(kRequestFd, payload, sizeof payload)) return 1;
@@ -198,7 +229,7 @@ int serve_plugin(int argc, char** argv) {
       const ccdbench_answer answer = answer_query(library, context, vertex_face, rows, thickness);
       std::vector<char> reply = status_reply(answer.outcome, answer.message);
       put(reply, answer.toi);
-      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
+      if (!reply_to_request(reply)) return 1;
     } else if (kind == kBegin) {
       auto read_array = [&](auto& out) {
         std::uint64_t count = 0;
@@ -223,8 +254,7 @@ int serve_plugin(int argc, char** argv) {
         }
       }
       message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-      const std::vector<char> reply = status_reply(status, message);
-      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
+      if (!reply_to_request(status_reply(status, message))) return 1;
     } else if (kind == kStep) {
       std::uint64_t index = 0, vertices = 0;
       double thickness = 0;
@@ -267,11 +297,10 @@ int serve_plugin(int argc, char** argv) {
       reply.insert(reply.end(), collected.vertex_face.begin(), collected.vertex_face.end());
       put(reply, collected.edge_edge_count);
       reply.insert(reply.end(), collected.edge_edge.begin(), collected.edge_edge.end());
-      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
+      if (!reply_to_request(reply)) return 1;
     } else if (kind == kEnd) {
       if (library.table().end) child_call(library, [&] { library.table().end(context); });
-      const std::vector<char> reply = status_reply(0, "");
-      if (!write_all(kReplyFd, reply.data(), reply.size())) return 1;
+      if (!reply_to_request(status_reply(0, ""))) return 1;
     } else {
       return 1;
     }

@@ -7,8 +7,9 @@
 /// the parent knows, when the child crashes or hangs, exactly which query it was answering: that query alone is the
 /// error, the answers before it stand, and a fresh child takes the queries after it.
 ///
-/// The parent trusts nothing it reads back: `done` is clamped to the batch, each answer is copied out once and
-/// checked as any plugin answer is (plugin_narrow_phase.hpp), and its message is terminated.
+/// The parent trusts nothing it reads back: `done` is clamped to the batch, an answer counts only with this batch's
+/// stamp, each answer is copied out once and checked as any plugin answer is (plugin_narrow_phase.hpp), and its
+/// message is terminated.
 
 #include "strategies/plugin/ccdbench_plugin.h"
 
@@ -25,10 +26,11 @@ struct BatchQuery {
   std::uint32_t reserved;
 };
 
-/// One answer, as the child writes it.
+/// One answer, as the child writes it, stamped with its batch's number (the low 32 bits of its request's): an answer
+/// left from an earlier batch, or written by a process the plugin started, is never taken for this batch's.
 struct BatchAnswer {
   std::int32_t outcome;
-  std::int32_t reserved;
+  std::uint32_t batch;
   double toi;
   char message[CCDBENCH_MESSAGE_SIZE];
 };

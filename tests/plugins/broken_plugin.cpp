@@ -28,6 +28,16 @@
 //   BROKEN_HANG_AT_LOAD  its constructor never returns;
 //   BROKEN_ERRORS_LATER=N answers "apart" to its first N queries and "error" after them: with errors=miss the same
 //                       pairs are reported either way, and only the count of errors tells two passes apart.
+// and, for isolation (tests/plugins/isolation_test.cpp):
+//   BROKEN_FORK_RETURNS  answers each query by a hash of its rows (contact or apart, a TOI from the hash: every query
+//                       its own answer, the same in any process); on its Nth query (counted in its process; N from
+//                       CCDBENCH_TEST_FORK_ON, never when unset) it forks, and both processes return from the call,
+//                       as a careless fork/exec does: two processes answer on one pipe;
+//   BROKEN_FORK_AT_LOAD  its constructor forks a process that sleeps ten minutes in its process group, and appends
+//                       its pid to the file CCDBENCH_TEST_PID_FILE names;
+//   BROKEN_CREATE_ROUNDING its create leaves the rounding mode upward;
+//   BROKEN_TOUCH         its create allocates and writes CCDBENCH_TEST_TOUCH_MB megabytes (default 1024), kept
+//                       until destroy.
 #ifdef BROKEN_ASSERT
 #undef NDEBUG  // the assert must be there in a release build
 #endif
@@ -35,6 +45,7 @@
 
 #include <dlfcn.h>
 #include <err.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -50,6 +61,7 @@
 #include <iterator>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace {
 
@@ -57,6 +69,21 @@ namespace {
 struct CrashAtLoad {
   CrashAtLoad() { std::raise(SIGSEGV); }
 } crash_at_load;
+#endif
+#ifdef BROKEN_FORK_AT_LOAD
+struct ForkAtLoad {
+  ForkAtLoad() {
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      // Its standard streams to /dev/null: it holds nothing of the test's (a pipe the test reads to its end).
+      const int null = ::open("/dev/null", O_RDWR);
+      for (int fd = 0; fd < 3; ++fd) ::dup2(null, fd);
+      std::this_thread::sleep_for(std::chrono::minutes(10));
+      ::_exit(0);
+    }
+    if (const char* file = std::getenv("CCDBENCH_TEST_PID_FILE")) std::ofstream(file, std::ios::app) << pid << "\n";
+  }
+} fork_at_load;
 #endif
 #ifdef BROKEN_HANG_AT_LOAD
 struct HangAtLoad {
@@ -111,8 +138,25 @@ void replace_self() {
 }
 #endif
 
-void* create(const char* const*, char*) { return &queries_answered; }
-void destroy(void*) {}
+#ifdef BROKEN_TOUCH
+std::vector<char> touched;
+#endif
+
+void* create(const char* const*, char*) {
+#ifdef BROKEN_CREATE_ROUNDING
+  std::fesetround(FE_UPWARD);
+#endif
+#ifdef BROKEN_TOUCH
+  const char* megabytes = std::getenv("CCDBENCH_TEST_TOUCH_MB");
+  touched.assign(static_cast<std::size_t>(megabytes ? std::atoll(megabytes) : 1024) << 20, 1);
+#endif
+  return &queries_answered;
+}
+void destroy(void*) {
+#ifdef BROKEN_TOUCH
+  std::vector<char>().swap(touched);
+#endif
+}
 
 #ifdef ONE_THREAD
 std::atomic<std::thread::id> first_thread{};
@@ -135,6 +179,16 @@ void answer(void*, const double* rows, double, ccdbench_answer* out) {
 #endif
 #ifdef BROKEN_ERRORS_LATER
   out->outcome = queries_answered <= BROKEN_ERRORS_LATER ? CCDBENCH_APART : CCDBENCH_ERROR;
+  return;
+#endif
+#ifdef BROKEN_FORK_RETURNS
+  static const int fork_on = std::getenv("CCDBENCH_TEST_FORK_ON") ? std::atoi(std::getenv("CCDBENCH_TEST_FORK_ON")) : 0;
+  if (queries_answered == fork_on) ::fork();
+  std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over the rows' bytes
+  const auto* bytes = reinterpret_cast<const unsigned char*>(rows);
+  for (std::size_t i = 0; i < 24 * sizeof(double); ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+  out->outcome = (hash >> 7) % 2 == 0 ? CCDBENCH_CONTACT : CCDBENCH_APART;
+  out->toi = static_cast<double>((hash >> 8) % 1000) / 1000.0;
   return;
 #endif
 #ifdef BROKEN_FIRST_CALLS

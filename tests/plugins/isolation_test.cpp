@@ -1,0 +1,210 @@
+// Isolation that keeps its word (docs/DESIGN.md §10 "Isolated"): a plugin run in a child process never has another
+// request's answer taken for one of its own, leaves no process of its group behind, gets the verdict it would get
+// in-process, and its memory is counted in the cell. Each test runs ccdbench as a user would, with a plugin broken on
+// purpose (broken_plugin.cpp).
+
+#include "tests/plugins/plugin_runs.hpp"
+#include "tests/support/cli.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <thread>
+
+extern char** environ;
+
+namespace ccd {
+namespace {
+
+using testing::cell_of;
+using testing::plugin;
+using testing::quoted;
+using testing::read_json;
+using testing::run_ccdbench;
+using testing::ScopedVariable;
+using testing::text_of;
+
+class Isolation : public testing::PluginRuns {
+ protected:
+  /// Families of the extremes suite at unit scale as labelled query files (322 queries, labelled in a few
+  /// milliseconds; written by a process that loaded no plugin).
+  std::filesystem::path queries() {
+    const std::filesystem::path folder = dir_ / "queries";
+    if (!std::filesystem::exists(folder)) {
+      const auto written = run_ccdbench(
+          "stress --family coplanar-motion,parallel-collinear,zero-motion,touch-at-t0-t1,through-edge-or-corner,hourglass,two-roots,near-miss-1e-12,"
+          "magnitudes --write-queries " +
+          quoted(folder));
+      EXPECT_EQ(written.exit_code, 0) << written.output;
+    }
+    return folder;
+  }
+
+  /// Every answer line of `queries --write-answers` (file,index,method,...) by file and index: the method's hit, TOI.
+  static std::map<std::string, std::string> answers_of(const std::filesystem::path& file) {
+    std::map<std::string, std::string> answers;
+    std::istringstream lines(text_of(file));
+    std::string line;
+    std::getline(lines, line);  // the header
+    for (; std::getline(lines, line);) {
+      std::vector<std::string> fields;
+      std::istringstream split(line);
+      for (std::string field; std::getline(split, field, ',');) fields.push_back(field);
+      if (fields.size() < 5 || fields[2].rfind("plugin:", 0) != 0) continue;
+      answers[fields[0] + "#" + fields[1]] = fields[3] + "," + fields[4];
+    }
+    return answers;
+  }
+
+  /// Whether the process `pid` is gone (or dead, not yet reaped), within five seconds.
+  static bool gone(pid_t pid) {
+    for (int tries = 0; tries < 100; ++tries) {
+      const std::string stat = text_of("/proc/" + std::to_string(pid) + "/stat");
+      if (stat.empty() || stat.find(") Z") != std::string::npos) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+  }
+
+  /// The pids the plugin fork_at_load wrote (the processes it forked at load), killed once the test has looked.
+  std::vector<pid_t> forked() {
+    std::vector<pid_t> pids;
+    std::istringstream lines(text_of(dir_ / "pids"));
+    for (pid_t pid = 0; lines >> pid;) pids.push_back(pid);
+    return pids;
+  }
+  void expect_every_forked_process_gone(const char* after) {
+    const std::vector<pid_t> pids = forked();
+    EXPECT_FALSE(pids.empty()) << after << ": the plugin forked nothing, so this proves nothing";
+    for (pid_t pid : pids) {
+      EXPECT_TRUE(gone(pid)) << after << ": process " << pid << " the plugin forked at load is still running";
+      ::kill(pid, SIGKILL);
+    }
+    std::filesystem::remove(dir_ / "pids");
+  }
+};
+
+// A plugin whose fork returns from the call: two processes answer on one pipe, and the second "done" of a batch used
+// to finish the next batch at once with the previous batch's answers still in the shared memory (44 false negatives
+// for a plugin with none, 0 errors). Now a reply of another request, or an answer stamped with another batch's
+// number, is the query's error: every answer is the plugin's own for that query, or an error.
+TEST_F(Isolation, APluginWhoseForkReturnsGivesNoOtherQuerysAnswer) {
+  // Batches of 64: the queries of a file go in several, so that a second reply to one meets the next.
+  const std::string p = "plugin:" + plugin("broken_fork_returns").string() + ":batch=64";
+  const std::string score = "queries " + quoted(queries()) + " --method " + p + " --faults " + quoted(dir_ / "faults") + " --write-answers ";
+  const auto clean = run_ccdbench(score + quoted(dir_ / "clean.csv"));
+  ASSERT_EQ(clean.exit_code, 0) << clean.output;
+  const ScopedVariable forking("CCDBENCH_TEST_FORK_ON", "5");
+  const auto forked = run_ccdbench(score + quoted(dir_ / "forked.csv"));
+  ASSERT_EQ(forked.exit_code, 0) << forked.output;
+  const std::map<std::string, std::string> expected = answers_of(dir_ / "clean.csv"), got = answers_of(dir_ / "forked.csv");
+  ASSERT_EQ(got.size(), expected.size());
+  std::size_t errors = 0;
+  for (const auto& [query, answer] : got) {
+    if (answer.rfind("error", 0) == 0) {
+      ++errors;
+      continue;
+    }
+    EXPECT_EQ(answer, expected.at(query)) << query << ": another query's answer";
+  }
+  EXPECT_GT(errors, 0u) << "the fork was never noticed: this proves nothing\n" << forked.output;
+
+  // In a run: what it misses beyond the clean run is its errors (errors=miss), and it raises no false alarm more.
+  const std::string run = "run --scene " + quoted(fold()) + " --thickness 0 --strategy full+" + p + " --out " + quoted(dir_ / "out");
+  const ScopedVariable once("CCDBENCH_TEST_FORK_ON", "");
+  const auto [clean_run, clean_cells] = with_json(run);
+  ASSERT_EQ(clean_run.exit_code, 0) << clean_run.output;
+  const nlohmann::json before = cell_of(clean_cells, "full+" + p);
+  const ScopedVariable again("CCDBENCH_TEST_FORK_ON", "5");
+  const auto [forked_run, forked_cells] = with_json(run);
+  ASSERT_EQ(forked_run.exit_code, 0) << forked_run.output;
+  const nlohmann::json after = cell_of(forked_cells, "full+" + p);
+  ASSERT_GT(before["colliding"].get<int>(), 0);
+  EXPECT_GT(after["errors"].get<int>(), 0) << forked_run.output;
+  EXPECT_LE(after["missed"].get<int>(), before["missed"].get<int>() + after["errors"].get<int>()) << forked_run.output;
+  EXPECT_LE(after["false_alarms"].get<int>(), before["false_alarms"].get<int>()) << forked_run.output;
+}
+
+// `queries` audits a plugin that misses as `run` does: asked once (--repeat 1), it answers the file again, untimed, and
+// the answers that changed are counted. errors_later answers "apart" to its first 200 queries and "error" after:
+// on the second file its answers change between the pass and the audit (it had no audit: 0 changed).
+TEST_F(Isolation, QueriesAuditsAPluginThatMissesAsRunDoes) {
+  const auto scored = run_ccdbench("queries " + quoted(queries()) + " --method plugin:" + plugin("broken_errors_later").string() + " --faults " +
+                                   quoted(dir_ / "faults") + " --json " + quoted(dir_ / "q.json"));
+  ASSERT_EQ(scored.exit_code, 0) << scored.output;
+  const nlohmann::json rows = read_json(dir_ / "q.json");
+  const nlohmann::json& total = rows.back();
+  ASSERT_EQ(total["file"], "(all)");
+  ASSERT_GT(total["false_negatives"].get<int>(), 0) << "a method that misses nothing is not audited";
+  EXPECT_GT(total["changed_between_passes"].get<int>(), 0) << scored.output;
+}
+
+// What a plugin forks at load is in its child's process group: gone after the description, after a run, and after
+// ccdbench itself is killed (the child ends its group then, not only itself).
+TEST_F(Isolation, NoProcessOfThePluginsGroupOutlivesItsChild) {
+  const ScopedVariable pid_file("CCDBENCH_TEST_PID_FILE", (dir_ / "pids").string());
+  const std::string p = "plugin:" + plugin("broken_fork_at_load").string();
+  const auto described = run_ccdbench("strategies --plugin " + plugin("broken_fork_at_load").string());
+  ASSERT_EQ(described.exit_code, 0) << described.output;
+  expect_every_forked_process_gone("after plugin-host --describe");
+  const auto ran = run_ccdbench("run --scene " + quoted(fold()) + " --max-steps 2 --strategy full+" + p + " --out " + quoted(dir_ / "out"));
+  ASSERT_EQ(ran.exit_code, 0) << ran.output;
+  expect_every_forked_process_gone("after a run");
+
+  std::vector<std::string> arguments = {CCDBENCH_EXECUTABLE, "run",       "--scene", fold().string(),           "--repeat", "1000",
+                                        "--strategy",        "full+" + p, "--out",   (dir_ / "killed").string()};
+  std::vector<char*> argv;
+  for (std::string& argument : arguments) argv.push_back(argument.data());
+  argv.push_back(nullptr);
+  pid_t running = -1;
+  ASSERT_EQ(::posix_spawn(&running, CCDBENCH_EXECUTABLE, nullptr, nullptr, argv.data(), environ), 0);
+  // Killed once its cell's child has forked (the description's fork, then the child's), at most 30 s.
+  for (int tries = 0; tries < 300 && forked().size() < 2; ++tries) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ::kill(running, SIGKILL);
+  int status = 0;
+  ::waitpid(running, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the run ended before it was killed";
+  expect_every_forked_process_gone("after kill -9 of ccdbench");
+}
+
+// A create that leaves the floating-point environment changed: refused in-process (exit 2); isolated, its first
+// query used to be blamed and the run went on. One verdict now, either way.
+TEST_F(Isolation, ACreateThatChangesTheFloatingPointEnvironmentIsRefusedInEitherMode) {
+  for (const char* isolate : {":isolate=off", ":isolate=on"}) {
+    const auto run =
+        run_ccdbench("run --scene " + quoted(fold()) + " --max-steps 1 --strategy full+plugin:" + plugin("broken_create_rounding").string() +
+                     isolate + " --out " + quoted(dir_ / "out"));
+    EXPECT_EQ(run.exit_code, 2) << isolate << "\n" << run.output;
+    EXPECT_NE(run.output.find("its create call failed: it left the floating-point environment changed"), std::string::npos) << isolate << "\n"
+                                                                                                                            << run.output;
+  }
+}
+
+// The memory a plugin takes is the cell's, wherever it runs: isolated, its child's peak is counted (it was 13.7 MiB
+// isolated against 1,037 MiB in-process for a plugin that touches 1 GB).
+TEST_F(Isolation, TheChildsMemoryIsCountedInTheCell) {
+  const ScopedVariable size("CCDBENCH_TEST_TOUCH_MB", "512");
+  std::map<std::string, double> peak;
+  for (const char* isolate : {"off", "on"}) {
+    const std::string spec = "full+plugin:" + plugin("broken_touch").string() + ":isolate=" + isolate;
+    const auto [run, cells] = with_json("run --scene " + quoted(fold()) + " --max-steps 1 --strategy " + spec + " --out " + quoted(dir_ / "out"));
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    peak[isolate] = cell_of(cells, spec)["host_peak_bytes"].get<double>();
+    if (std::string(isolate) == "on") {
+      EXPECT_GE(cell_of(cells, spec).value("child_peak_bytes", 0.0), 512.0 * (1 << 20));
+    }
+  }
+  ASSERT_GE(peak["off"], 512.0 * (1 << 20));
+  EXPECT_NEAR(peak["on"], peak["off"], 0.1 * peak["off"]) << "isolated " << peak["on"] / (1 << 20) << " MiB, in-process " << peak["off"] / (1 << 20);
+}
+
+}  // namespace
+}  // namespace ccd
