@@ -12,13 +12,16 @@
 namespace ccd::reference {
 namespace {}  // namespace
 
-// Rounding down twice (to 53 bits, then to a double, which may be subnormal) stays <= q, and likewise upwards.
-Interval enclosing_interval(const mpq_class& q) {
+// Rounding down twice (to 53 bits, then to a double, which may be subnormal) stays <= q·2^exponent, and likewise
+// upwards; the multiplication by 2^exponent in between is exact (MPFR's exponents reach far beyond double's).
+Interval enclosing_interval(const mpq_class& q, long exponent) {
   mpfr_t down, up;
   mpfr_init2(down, 53);
   mpfr_init2(up, 53);
   mpfr_set_q(down, q.get_mpq_t(), MPFR_RNDD);
   mpfr_set_q(up, q.get_mpq_t(), MPFR_RNDU);
+  mpfr_mul_2si(down, down, exponent, MPFR_RNDD);
+  mpfr_mul_2si(up, up, exponent, MPFR_RNDU);
   const Interval result(mpfr_get_d(down, MPFR_RNDD), mpfr_get_d(up, MPFR_RNDU));
   mpfr_clear(down);
   mpfr_clear(up);

@@ -51,7 +51,7 @@ std::array<IntervalPoint, 8> interval_rows(const std::array<Vec3, 8>& rows);
 /// The tightest intervals of doubles that contain these rationals.
 std::array<IntervalPoint, 8> interval_rows(const std::array<RationalPoint, 8>& rows);
 
-/// The tightest interval of doubles that contains q.
-Interval enclosing_interval(const mpq_class& q);
+/// The tightest interval of doubles that contains q·2^exponent.
+Interval enclosing_interval(const mpq_class& q, long exponent = 0);
 
 }  // namespace ccd::reference

@@ -65,7 +65,7 @@ bool matches(const std::string& unit, const std::string& pattern) {
 const std::map<std::string, std::vector<std::vector<std::string>>> kLayers = {
     {"reference",
      {{"reference/exact_pair", "reference/rational_polynomial", "reference/sign_conditions"},  // the pair and exact arithmetic
-      {"reference/certified_filter", "reference/exact_decision"},                              // the two ways to decide
+      {"reference/certified_filter", "reference/exact_decision", "reference/unit_scale"},      // the two ways to decide; the pair at unit size
       {"reference/elementary_pair"},                                                           // deciding: filter, then exact
       {"reference/face_shape", "reference/step_truth"}}},                                      // whole steps
     {"datasets",
