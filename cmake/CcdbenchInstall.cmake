@@ -1,14 +1,16 @@
-# `cmake --install BUILD --prefix PREFIX` puts ccdbench where a plugin project finds it (README "Audit your CCD"):
+# `cmake --install BUILD --prefix PREFIX` puts ccdbench where a plugin project finds it (docs/audit.md):
 #   PREFIX/bin/ccdbench
 #   PREFIX/include/ccdbench/ccdbench_plugin.h, ccdbench_plugin.hpp (the plugin ABI), ccdbench.hpp (the C++ API)
 #   PREFIX/lib/libccdbench.so (the C++ API)
 #   PREFIX/lib/cmake/ccdbench/ccdbenchConfig.cmake (+ version and targets): find_package(ccdbench) gives
 #     ccdbench::plugin (the headers; a plugin links nothing else), ccdbench::library (the C++ API) and
 #     ccdbench::ccdbench (the program).
+#   PREFIX/share/ccdbench/plugin-template/ (examples/plugin/: the template a plugin project starts from)
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 install(TARGETS ccdbench EXPORT ccdbenchTargets RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/plugin/ DESTINATION ${CMAKE_INSTALL_DATADIR}/ccdbench/plugin-template)
 install(TARGETS ccdbench_plugin_header EXPORT ccdbenchTargets)
 set_target_properties(ccdbench_library PROPERTIES EXPORT_NAME library)
 install(TARGETS ccdbench_library EXPORT ccdbenchTargets LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})

@@ -27,7 +27,7 @@ constexpr const char* kDescription =
     "reported '0 missed' is a checked statement. Commands print tables for people; --json gives the same for\n"
     "scripts. Bad input (or a bad option) stops with FILE:WHERE: REASON and exit status 2, before anything is\n"
     "written; `check` exits 1 when the gate fails. Under mpirun (mpirun -n N --bind-to none ccdbench ...), run,\n"
-    "truth and queries spread their work over the ranks; the output is that of one process (README: Runs on MPI).";
+    "truth and queries spread their work over the ranks; the output is that of one process (docs/mpi.md).";
 
 /// At most this many worker threads: far beyond any machine this runs on, and small enough that TBB's per-thread
 /// state stays a few megabytes (--threads 1e8 would ask it for gigabytes).

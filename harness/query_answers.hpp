@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Query answer files (README "Answer files"): per-query answers of CCD code that cannot be loaded into ccdbench,
+/// Query answer files (docs/audit.md "Answer files"): per-query answers of CCD code that cannot be loaded into ccdbench,
 /// scored like a built-in method (`queries --answers FILE`), and the answers `queries --write-answers FILE` writes
 /// (each method's, with the exact label and TOI) in the same format.
 ///

@@ -125,7 +125,7 @@ int run_strategies(bool json_output, std::ostream& out, const std::vector<std::s
     print_keys(n["keys"], out);
     out << "\n";
   }
-  out << "Code from outside ccdbench (README \"Audit your CCD\"): plugin:PATH[:key=value] names a plugin (its whole step as a\n"
+  out << "Code from outside ccdbench (docs/audit.md): plugin:PATH[:key=value] names a plugin (its whole step as a\n"
          "strategy; NAME+plugin:PATH its queries as a narrow phase; --plugin PATH lists its keys above), answers:DIR a folder of\n"
          "per-step answer files (run --answers DIR), answers:FILE a file of per-query answers (queries --answers FILE).\n\n";
   out << "--json prints the same for scripts.\n";

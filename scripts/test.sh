@@ -30,5 +30,6 @@ out=build/$preset/ci-results
 "build/$preset/bin/ccdbench" run --suite ci --toi --strategy full,full+cubic64,apccd --out "$out" --json "$out/summary.json" --fresh
 "build/$preset/bin/ccdbench" run --suite ci --toi --thickness 0 --strategy full,full+cubic64,apccd --out "$out-0" --json "$out-0/summary.json" --fresh
 "build/$preset/bin/ccdbench" check --baseline tests/baselines/ci.json "$out/summary.json" "$out-0/summary.json"
-# The README's "Audit your CCD" walkthrough, exactly as written (with the Release build it installs).
-if [ "$preset" = release ]; then scripts/readme-walkthrough.sh; fi
+# Every command block of the README and of docs/, as written, and the output each page claims (docs/development.md,
+# "The docs walkthrough"; with the Release build, which the audit page installs).
+if [ "$preset" = release ]; then /usr/bin/python3 scripts/docs-walkthrough.py; fi

@@ -82,7 +82,7 @@ CCDBENCH_API ExactAnswer exact_oracle(PairKind kind, const RationalRows& rows, c
 /// @throws std::invalid_argument as the single-pair form does, naming the pair.
 CCDBENCH_API std::vector<ExactAnswer> exact_oracle(PairKind kind, const Rows* rows, std::size_t count, double thickness, bool want_toi = true);
 
-/// A query file (CSV of rationals, 8 rows a query; README "Inputs").
+/// A query file (CSV of rationals, 8 rows a query; docs/data.md "Inputs").
 struct QueryFile {
   std::string path;
   PairKind kind = PairKind::vertex_face;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The regression check of a change to a CCD plugin, as CI runs it (ccdbench's README, "CI regression"): build
+# The regression check of a change to a CCD plugin, as CI runs it (ccdbench's docs/ci-regression.md): build
 # ccdbench and the base and head versions of the plugin, run both in one invocation (same machine, same scenes, so
 # their times compare too), gate the head against the baseline kept in its repository, and compare head with base.
 #

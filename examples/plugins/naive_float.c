@@ -1,4 +1,4 @@
-/* naive-float: a deliberately naive CCD, as a ccdbench plugin in plain C (README "Audit your CCD").
+/* naive-float: a deliberately naive CCD, as a ccdbench plugin in plain C (docs/audit.md).
  *
  * It samples the step at `samples` evenly spaced times and calls a pair colliding when, at one of them, its
  * distance in single precision is within the thickness. It misses every contact that happens between two samples

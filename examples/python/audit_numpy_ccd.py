@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A CCD written in vectorized numpy, audited by ccdbench from Python (README "Python").
+"""A CCD written in vectorized numpy, audited by ccdbench from Python (docs/python.md).
 
 The method samples the pair's coplanarity function f(t) over the step, finds a root by linear interpolation between
 two samples of opposite sign, and tests the primitives there: a common way to write CCD quickly, and wrong in known

@@ -64,7 +64,7 @@ Command add_check(CLI::App& app) {
                          "(answers a plugin could not give) beyond its max_errors (default 0), or answers that changed between\n"
                          "passes unless its entry says allow_nondeterministic: true, or is a plugin's cell kept from an earlier\n"
                          "run (run --resume) unless --allow-resumed. With --write-baseline it writes the baseline of the results\n"
-                         "instead, refusing what check would fail whatever the entry (README: CI regression).");
+                         "instead, refusing what check would fail whatever the entry (docs/ci-regression.md).");
   CLI::Option* baseline_option =
       check->add_option("--baseline", options->baseline,
                         "JSON array of {scene, strategy, thickness: \"scene\" or a number, max_missed: integer >= 0}, each with optional\n"
@@ -94,7 +94,7 @@ Command add_compare(CLI::App& app) {
   auto options = std::make_shared<harness::CompareOptions>();
   CLI::App* compare =
       app.add_subcommand("compare",
-                         "Compare two result sets of `run`, cell by cell (README: CI regression): missed, errors, false alarms, late TOIs,\n"
+                         "Compare two result sets of `run`, cell by cell (docs/ci-regression.md): missed, errors, false alarms, late TOIs,\n"
                          "the TOI error's median and 99th percentile, memory, and ms per step with the ratio and whether it is beyond the\n"
                          "noise (a two-sided Mann-Whitney U test over the passes' times, exact for small samples; p printed: with --repeat\n"
                          "R on both sides, p can go below 0.05 only from R = 4). With step records (an --out folder, or its results.jsonl)\n"

@@ -16,7 +16,7 @@ void add_isolation_flags(CLI::App* command, Shared& shared) {
                     "exit or a hang is that query's or step's error, and the run goes on");
   command->add_flag("--in-process", shared.in_process,
                     "run every plugin whose spec does not say isolate=on inside ccdbench (faster for tiny queries; a\n"
-                    "crash ends the run, an exit or a hang past timeout= ends it with status 1: README \"Audit your CCD\")");
+                    "crash ends the run, an exit or a hang past timeout= ends it with status 1: docs/audit.md)");
 }
 
 void make_absolute(std::filesystem::path& output) {

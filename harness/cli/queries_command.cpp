@@ -40,10 +40,10 @@ Command add_queries(CLI::App& app, Shared& shared) {
                    "comma-separated methods: " + query_method_list() +
                        " (`exact` is the reference itself;\n"
                        "narrow phases take their keys, NAME:key=value, as `ccdbench strategies` lists them);\n"
-                       "plugin:PATH[:key=value] is a plugin's queries (README: Audit your CCD)")
+                       "plugin:PATH[:key=value] is a plugin's queries (docs/audit.md)")
       ->capture_default_str();
   queries->add_option("--answers", options->answer_files,
-                      "also score the answers in this CSV (file,index,hit,toi per query, README: Answer files) as a\n"
+                      "also score the answers in this CSV (file,index,hit,toi per query, docs/audit.md, Answer files) as a\n"
                       "method: answers:FILE; answers:FILE:method=NAME picks one method of a file that holds several");
   queries->add_option("--write-answers", q.write_answers,
                       "write every method's answer and TOI per query, with the label and the exact TOI floor, as an\n"

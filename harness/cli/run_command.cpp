@@ -73,7 +73,7 @@ void add_run_options(CLI::App* run, RunCommandOptions& o, Shared& shared) {
                   "`ccdbench queries`");
   run->add_option("--answers", o.answer_folders,
                   "also judge the answers in this folder as a strategy, answers:DIR: DIR/SCENE/step_0000.csv, ... one\n"
-                  "colliding pair per line (README: Answer files)");
+                  "colliding pair per line (docs/audit.md, Answer files)");
   run->add_option("--write-answers", o.run.write_answers,
                   "write each cell's answers here as DIR/STRATEGY/SCENE/step_0000.csv, ..., as --answers DIR/STRATEGY\n"
                   "reads them (STRATEGY@δ when the run has several δ: a folder of answers is for one δ)");

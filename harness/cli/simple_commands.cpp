@@ -36,7 +36,7 @@ Command add_strategies(CLI::App& app) {
                                             "List the strategies and narrow phases (the registries): what each is, its keys with their values and\n"
                                             "defaults, its backends, and for a strategy what it is judged by and its speed-up baseline.");
   strategies->add_flag("--json", options->json, "print one JSON object ({strategies, narrow_phases}) for scripts");
-  strategies->add_option("--plugin", options->plugins, "also list this plugin (a shared library, README: Audit your CCD) with its keys");
+  strategies->add_option("--plugin", options->plugins, "also list this plugin (a shared library, docs/audit.md) with its keys");
   return {strategies, [options] { return harness::run_strategies(options->json, std::cout, options->plugins); }};
 }
 

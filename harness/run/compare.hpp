@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// `ccdbench compare BASE HEAD`: two result sets of `run` (README "CI regression"), cell by cell. Cells are matched
+/// `ccdbench compare BASE HEAD`: two result sets of `run` (docs/ci-regression.md), cell by cell. Cells are matched
 /// as the gate matches them (scene, δ, the strategy as given), or by `--pair BASE_SPEC=HEAD_SPEC` (two builds of a
 /// plugin in one run). Per cell it shows missed, errors, false alarms, late TOIs, the TOI error's percentiles, memory,
 /// and ms per step with the ratio and whether it is beyond the noise of the repeats (a Mann-Whitney U test over each

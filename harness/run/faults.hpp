@@ -22,7 +22,7 @@ nlohmann::json record_faults(const Scene& scene, const std::vector<std::vector<V
                              const std::filesystem::path& directory);
 
 /// Writes each step's answers as DIRECTORY/step_0000.csv, ... in the format answers:DIR reads (one `vf,V,F,TOI` or
-/// `ee,A0,A1,B0,B1,TOI` line per pair, TOI empty when none; README "Answer files"), atomically per file.
+/// `ee,A0,A1,B0,B1,TOI` line per pair, TOI empty when none; docs/audit.md "Answer files"), atomically per file.
 void write_step_answers(const std::vector<strategies::StepResult>& results, const std::filesystem::path& directory);
 
 }  // namespace ccd::harness

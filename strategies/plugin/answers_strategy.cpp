@@ -2,7 +2,7 @@
 // cannot be loaded into ccdbench (a CUDA program, a Python prototype, a run on another machine).
 //
 // DIR/LABEL/step_0000.csv, step_0001.csv, ... for a scene labelled LABEL in results (the suite's scene name, or a
-// scene file's folder). Each line is one colliding pair (README "Answer files"):
+// scene file's folder). Each line is one colliding pair (docs/audit.md "Answer files"):
 //   vf,VERTEX,FACE[,TOI]
 //   ee,A0,A1,B0,B1[,TOI]
 // with the scene's global vertex and face ids (0-based) and an optional TOI in [0, 1]; '#' starts a comment line.
@@ -228,7 +228,7 @@ class AnswersStrategy final : public strategies::Strategy {
     if (label_.empty() || step_file(0) == snapshot_->files.end()) {
       throw InputError(folder, {},
                        "no answer folder for scene '" + label_ + "' (answers:DIR reads DIR/SCENE/" + step_file_name(0) +
-                           ", one file per step; README \"Answer files\")");
+                           ", one file per step; docs/audit.md, \"Answer files\")");
     }
     ContactCheck check(scene, ContactCheck::Toi::optional);
     steps_.clear();

@@ -1,5 +1,5 @@
 /* ccdbench's plugin ABI: how a continuous collision detection method of your own, in any language that can export
- * C functions, is judged by ccdbench like its built-in methods (README "Audit your CCD").
+ * C functions, is judged by ccdbench like its built-in methods (docs/audit.md).
  *
  * A plugin is a shared library that exports one function, CCDBENCH_PLUGIN_ENTRY (ccdbench_plugin_init_v1). ccdbench
  * loads it with dlopen, calls it with the ABI version it speaks, and reads the table it returns. The table starts

@@ -9,7 +9,7 @@
 /// against the object in memory: every read-only segment the loader mapped (code, constants) must equal those bytes.
 /// A file rebuilt or replaced after it was loaded therefore fails the check instead of naming code that did not run.
 /// Only objects in the process's link map when the digest is taken count: a library the plugin opens itself later,
-/// inside a call, is not covered (said in the README).
+/// inside a call, is not covered (said in docs/audit.md).
 
 #include <cstdint>
 #include <string>

@@ -11,6 +11,8 @@
 
 #include <cmath>
 #include <fstream>
+#include <regex>
+#include <sstream>
 #include <stdexcept>
 
 namespace {
@@ -22,6 +24,28 @@ using ccd::testing::run_command;
 constexpr unsigned kFlushToZero = 0x8000, kDenormalsAreZero = 0x0040;
 
 /// The extremes suite's families where flushing subnormals changes arithmetic, written by ccdbench as query files.
+/// A line with its numbers masked and its blanks collapsed (what stays the same from run to run).
+std::string masked(const std::string& line) {
+  const std::string numbers = std::regex_replace(line, std::regex(R"([-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)"), "#");
+  std::istringstream words(numbers);
+  std::string out, word;
+  while (words >> word) out += (out.empty() ? "" : " ") + word;
+  return out;
+}
+
+/// The lines of the ```text block that follows the ```sh block holding `command` in a docs page.
+std::vector<std::string> shown_output(const std::filesystem::path& page, const std::string& command) {
+  std::ifstream in(page);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  std::size_t k = 0;
+  while (k < lines.size() && lines[k].find(command) == std::string::npos) ++k;
+  while (k < lines.size() && lines[k] != "```text") ++k;
+  std::vector<std::string> shown;
+  for (++k; k < lines.size() && lines[k] != "```"; ++k) shown.push_back(lines[k]);
+  return shown;
+}
+
 std::vector<ccdbench::QueryFile> subnormal_queries(const std::filesystem::path& folder) {
   const auto written = run_command(std::string(CCDBENCH_EXECUTABLE) + " stress --family subnormal,smallest-normal --write-queries " + quoted(folder));
   EXPECT_EQ(written.exit_code, 0) << written.output;
@@ -198,6 +222,19 @@ TEST(Api, TheExampleBuiltAgainstAnInstalledCcdbenchRuns) {
   EXPECT_EQ(ran.exit_code, 0) << ran.output;
   EXPECT_NE(ran.output.find("0 against their label; 0 pairs missed"), std::string::npos) << ran.output;
   EXPECT_NE(ran.output.find("apccd"), std::string::npos) << ran.output;
+  // What docs/cpp-api.md shows it printing, line by line, its numbers masked (as the docs walkthrough checks pages).
+  const std::vector<std::string> shown = shown_output(std::filesystem::path(CCDBENCH_SOURCE_DIR) / "docs" / "cpp-api.md", "build-api/api_example q");
+  ASSERT_FALSE(shown.empty()) << "docs/cpp-api.md shows no output for the example";
+  std::vector<std::string> printed;
+  std::istringstream lines(ran.output);
+  for (std::string line; std::getline(lines, line);) printed.push_back(masked(line));
+  std::size_t at = 0;
+  for (const std::string& line : shown) {
+    while (at < printed.size() && printed[at] != masked(line)) ++at;
+    EXPECT_LT(at, printed.size()) << "docs/cpp-api.md shows a line the example does not print: " << line << "\n" << ran.output;
+    if (at == printed.size()) break;
+    ++at;
+  }
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Auditing a CCD as its users do (README "Audit your CCD"): isolation by default and cheap, and each defect a real
+// Auditing a CCD as its users do (docs/audit.md): isolation by default and cheap, and each defect a real
 // audit found in the harness, fixed. Every test runs ccdbench as a user would, without the public data.
 
 #include "ccd/config.hpp"

@@ -1,4 +1,4 @@
-// CI regression as its users run it (README "CI regression"): the rank test compare uses, `compare` on fixed
+// CI regression as its users run it (docs/ci-regression.md): the rank test compare uses, `compare` on fixed
 // synthetic result files, and a real round trip: a baseline written from a run, the gate passing it, and a rebuilt
 // plugin that misses one more pair failing it, with compare naming the pair.
 

@@ -39,7 +39,7 @@ testing::CommandResult mpirun(int ranks, const std::string& arguments, const std
   return run_command(command);
 }
 
-/// Every field of a summary that must not depend on where and how fast a cell ran (README "MPI": the rest are
+/// Every field of a summary that must not depend on where and how fast a cell ran (docs/mpi.md: the rest are
 /// timings, host, rank, threads and when it finished).
 nlohmann::json verdict(const nlohmann::json& summary) {
   nlohmann::json kept;

@@ -1,4 +1,4 @@
-// Plugins and answer files (strategies/plugin/, README "Audit your CCD"): a user's CCD code, loaded or not, is judged
+// Plugins and answer files (strategies/plugin/, docs/audit.md): a user's CCD code, loaded or not, is judged
 // like the built-ins; a plugin broken on purpose is reported as the plugin's fault and nothing else is lost.
 
 #include "ccd/config.hpp"
@@ -365,7 +365,7 @@ TEST_F(Plugins, StepAnswerFoldersAreJudgedAsTheStrategyThatWroteThem) {
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
 }
 
-// The README's walkthrough: install ccdbench, build the template against the installed package, and run it through
+// The walkthrough of docs/audit.md: install ccdbench, build the template against the installed package, and run it through
 // every command with the installed program.
 TEST_F(Plugins, TheTemplateBuiltAgainstAnInstalledCcdbenchRunsEverywhere) {
   CCD_REQUIRE_EXTERNAL_DATA(data);

@@ -1,4 +1,4 @@
-// Answer folders read in bounded memory (docs/DESIGN.md §10 "Identity", README "Answer files"): `answers:DIR` reads
+// Answer folders read in bounded memory (docs/DESIGN.md §10 "Identity", docs/audit.md "Answer files"): `answers:DIR` reads
 // the step files of its scenes and nothing else, each a regular file (or a link to one) read no further than its
 // size, and every path that should be a step file and is not one says what it is.
 

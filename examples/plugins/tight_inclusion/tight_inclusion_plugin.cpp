@@ -1,5 +1,5 @@
 // Tight-Inclusion (Wang et al. 2021, github.com/Continuous-Collision-Detection/Tight-Inclusion) as a ccdbench plugin:
-// the worked example of README "Audit your CCD" and reports/plugins/. Only this adapter is ours; the library is
+// the worked example of docs/audit.md and reports/plugins/. Only this adapter is ours; the library is
 // fetched and built beside it (this folder's CMakeLists.txt says how) and never committed.
 //
 // Each query calls ticcd::vertexFaceCCD / edgeEdgeCCD as the library's README and its own benchmark app do: the
