@@ -5,6 +5,7 @@
 
 #include "ccd/config.hpp"
 #include "core/error.hpp"
+#include "datasets/atomic_file.hpp"
 #include "datasets/input_file.hpp"
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/query_file.hpp"
@@ -434,6 +435,23 @@ std::vector<CellSummary> run(const RunRequest& request) {
     std::vector<CellSummary> cells;
     for (const json& summary : ccd::harness::run_benchmark(options, table)) cells.push_back(cell_summary(summary));
     return cells;
+  });
+}
+
+std::vector<std::string> write_baseline(const std::string& baseline_file, const std::vector<CellSummary>& results, const std::string& margin) {
+  return guarded([&] {
+    json summaries = json::array();
+    for (const CellSummary& cell : results) summaries.push_back(json::parse(cell.json));
+    const ccd::harness::BaselineMargin parsed = ccd::harness::BaselineMargin::parse(margin);
+    ccd::datasets::require_writable_file(baseline_file);
+    std::ostringstream warnings;
+    const json baseline = ccd::harness::write_baseline({{"(results given to ccdbench::write_baseline)", summaries}}, parsed, {}, warnings);
+    ccd::datasets::write_json_file(baseline_file, baseline);
+    std::vector<std::string> lines;
+    for (const json& entry : baseline) lines.push_back(entry.dump());
+    std::istringstream in(warnings.str());
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
   });
 }
 

@@ -47,8 +47,8 @@ struct GateOptions {
 /// steps and colliding (exactly equal) and max_toi_late (results from a run with --toi). `results` is
 /// a `ccdbench run --json` array (several are taken as one). It passes only when the results are not empty, every result has exactly one
 /// baseline entry (and only one) and every entry exactly one result, every result was verified and has at least one colliding
-/// pair (a cell that cannot miss proves nothing), and none misses more than its entry allows. Prints one line per
-/// result and per unmatched entry.
+/// pair (a cell that cannot miss proves nothing), and none misses more than its entry allows. Prints a FAIL line per
+/// reason a result fails (every one), or its ok line, and one line per unmatched entry.
 /// @throws InputError (the file, the entry) for a malformed baseline or results.
 /// @return whether the gate passes.
 bool check_against_baseline(const nlohmann::json& baseline, const std::filesystem::path& baseline_file,

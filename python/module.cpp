@@ -332,6 +332,13 @@ PYBIND11_MODULE(_ccdbench, m) {
           return records;
         });
 
+  m.def("write_baseline", [](const std::string& baseline, const std::vector<std::string>& records, const std::string& margin) {
+    std::vector<ccdbench::CellSummary> cells(records.size());
+    for (std::size_t i = 0; i < records.size(); ++i) cells[i].json = records[i];
+    py::gil_scoped_release released;
+    return ccdbench::write_baseline(baseline, cells, margin);
+  });
+
   m.def("check", [](const std::string& baseline, const std::vector<std::string>& records) {
     std::vector<ccdbench::CellSummary> cells(records.size());
     for (std::size_t i = 0; i < records.size(); ++i) cells[i].json = records[i];

@@ -248,4 +248,10 @@ struct GateResult {
 };
 CCDBENCH_API GateResult check(const std::string& baseline_file, const std::vector<CellSummary>& results);
 
+/// Writes the gate's baseline of these summaries to `baseline_file` (as `ccdbench check --write-baseline`): one
+/// entry per result, allowing `margin` more missed pairs, errors and late TOIs ("N" or "P%"); refuses, as
+/// std::invalid_argument, what check would fail whatever the entry. Returns the entries' lines.
+CCDBENCH_API std::vector<std::string> write_baseline(const std::string& baseline_file, const std::vector<CellSummary>& results,
+                                                     const std::string& margin = "0");
+
 }  // namespace ccdbench

@@ -4,6 +4,7 @@
 #include "harness/cli/cli.hpp"
 #include "harness/run.hpp"
 #include "harness/run/compare.hpp"
+#include "harness/run/result_set.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -24,7 +25,15 @@ using Results = std::vector<std::pair<std::filesystem::path, nlohmann::json>>;
 
 Results read_results(const CheckOptions& options) {
   Results results;
-  for (const std::string& file : options.results) results.emplace_back(file, datasets::read_json_file(file, "results file"));
+  for (const std::string& file : options.results) {
+    // A run's --out folder or its results.jsonl, as compare reads them (the latest summary of each cell), or a run's
+    // --json array.
+    if (std::filesystem::is_directory(file) || std::filesystem::path(file).extension() == ".jsonl") {
+      results.emplace_back(file, nlohmann::json(harness::read_result_set(file).summaries));
+    } else {
+      results.emplace_back(file, datasets::read_json_file(file, "results file"));
+    }
+  }
   if (!options.strategies.empty()) results = harness::select_results(results, CLI::detail::split(options.strategies, ','), std::cout);
   return results;
 }
@@ -86,7 +95,11 @@ Command add_check(CLI::App& app) {
   check->add_flag("--allow-resumed", options->gate.allow_resumed,
                   "gate a plugin's cells that `run --resume` kept from an earlier run as if the plugin had given their\n"
                   "answers in this run (without it they fail: its answers can depend on what no digest covers)");
-  check->add_option("RESULTS", options->results, "`ccdbench run --json` summary files, taken together")->required();
+  check
+      ->add_option("RESULTS", options->results,
+                   "results taken together: `ccdbench run --json` files, or a run's --out folders or their results.jsonl\n"
+                   "(the latest summary of each cell kept there: every cell of every run into the folder)")
+      ->required();
   return {check, [options] { return options->write_baseline.empty() ? gate(*options) : write_baseline(*options); }};
 }
 

@@ -143,47 +143,52 @@ std::string why_not_gateable(const json& result, const GateOptions& options) {
   return {};
 }
 
-/// Gates one result against its entry: prints its line, and whether it passes.
-bool gate_result(const json& result, const BaselineEntry& entry_ref, const std::filesystem::path& results_file, const std::string& where,
-                 const std::string& name, const GateOptions& options, std::ostream& out) {
-  const BaselineEntry* entry = &entry_ref;
-  if (const std::string why = why_not_gateable(result, options); !why.empty()) {
-    out << "FAIL " << name << ": " << why << "\n";
-    return false;
-  }
+/// Every reason a result fails its entry (none: it passes), each in words.
+std::vector<std::string> failures(const json& result, const BaselineEntry& entry, const std::filesystem::path& results_file, const std::string& where,
+                                  const GateOptions& options) {
+  if (const std::string why = why_not_gateable(result, options); !why.empty()) return {why};
+  std::vector<std::string> reasons;
   const std::uint64_t missed = result_count(result, "missed", results_file, where);
   const std::uint64_t colliding = result_count(result, "colliding", results_file, where);
-  if (entry->steps && result_count(result, "steps", results_file, where) != *entry->steps) {
-    out << "FAIL " << name << ": " << result["steps"].dump() << " steps, the baseline pins " << *entry->steps << "\n";
-    return false;
-  } else if (entry->colliding && colliding != *entry->colliding) {
-    out << "FAIL " << name << ": " << colliding << " colliding pairs, the baseline pins " << *entry->colliding
-        << " (the scene or the truth changed: check why before updating the baseline)\n";
-    return false;
-  } else if (entry->max_toi_late && !result.contains("toi_late")) {
-    out << "FAIL " << name << ": the baseline gates late TOIs but the results have none (run with --toi)\n";
-    return false;
-  } else if (entry->max_toi_late && result_count(result, "toi_late", results_file, where) > *entry->max_toi_late) {
-    out << "FAIL " << name << ": " << result["toi_late"].dump() << " TOIs later than the exact earliest contact, "
-        << "baseline allows " << *entry->max_toi_late << "\n";
-    return false;
-#if CCDBENCH_GUARD_GATE
-  } else if (const std::uint64_t errors = result_count(result, "errors", results_file, where); errors > entry->max_errors) {
-    out << "FAIL " << name << ": " << errors << " answers could not be taken (errors: crashes, hangs, refused answers), baseline allows "
-        << entry->max_errors << " (max_errors)\n";
-    return false;
-  } else if (result.contains("nondeterministic_at_step") && !entry->allow_nondeterministic) {
-    out << "FAIL " << name << ": its answers differed between two passes of step " << result["nondeterministic_at_step"].dump()
-        << " (nondeterministic; baseline entry allow_nondeterministic: true accepts it)\n";
-    return false;
-#endif
-  } else if (missed > entry->max_missed) {
-    out << "FAIL " << name << ": missed " << missed << " of " << colliding << " (culled " << result.value("missed_culled", json(0)).dump()
-        << ", tested " << result.value("missed_tested", json(0)).dump() << "), baseline allows " << entry->max_missed << "\n";
-    return false;
-  } else {
-    out << "ok   " << name << ": missed " << missed << " of " << colliding << " <= " << entry->max_missed << "\n";
+  if (entry.steps && result_count(result, "steps", results_file, where) != *entry.steps) {
+    reasons.push_back(result["steps"].dump() + " steps, the baseline pins " + std::to_string(*entry.steps));
   }
+  if (entry.colliding && colliding != *entry.colliding) {
+    reasons.push_back(std::to_string(colliding) + " colliding pairs, the baseline pins " + std::to_string(*entry.colliding) +
+                      " (the scene or the truth changed: check why before updating the baseline)");
+  }
+  if (entry.max_toi_late && !result.contains("toi_late")) {
+    reasons.push_back("the baseline gates late TOIs but the results have none (run with --toi)");
+  } else if (entry.max_toi_late && result_count(result, "toi_late", results_file, where) > *entry.max_toi_late) {
+    reasons.push_back(result["toi_late"].dump() + " TOIs later than the exact earliest contact, baseline allows " +
+                      std::to_string(*entry.max_toi_late));
+  }
+#if CCDBENCH_GUARD_GATE
+  if (const std::uint64_t errors = result_count(result, "errors", results_file, where); errors > entry.max_errors) {
+    reasons.push_back(std::to_string(errors) + " answers could not be taken (errors: crashes, hangs, refused answers), baseline allows " +
+                      std::to_string(entry.max_errors) + " (max_errors)");
+  }
+  if (result.contains("nondeterministic_at_step") && !entry.allow_nondeterministic) {
+    reasons.push_back("its answers differed between two passes of step " + result["nondeterministic_at_step"].dump() +
+                      " (nondeterministic; baseline entry allow_nondeterministic: true accepts it)");
+  }
+#endif
+  if (missed > entry.max_missed) {
+    reasons.push_back("missed " + std::to_string(missed) + " of " + std::to_string(colliding) + " (culled " +
+                      result.value("missed_culled", json(0)).dump() + ", tested " + result.value("missed_tested", json(0)).dump() +
+                      "), baseline allows " + std::to_string(entry.max_missed));
+  }
+  return reasons;
+}
+
+/// Gates one result against its entry: prints a FAIL line for every reason it fails (a maintainer sees them all at
+/// once), or its ok line; returns whether it passes.
+bool gate_result(const json& result, const BaselineEntry& entry, const std::filesystem::path& results_file, const std::string& where,
+                 const std::string& name, const GateOptions& options, std::ostream& out) {
+  const std::vector<std::string> reasons = failures(result, entry, results_file, where, options);
+  for (const std::string& reason : reasons) out << "FAIL " << name << ": " << reason << "\n";
+  if (!reasons.empty()) return false;
+  out << "ok   " << name << ": missed " << result["missed"].dump() << " of " << result["colliding"].dump() << " <= " << entry.max_missed << "\n";
   return true;
 }
 

@@ -214,6 +214,14 @@ def run(scenes, strategies=("full",), thickness=None, verify=True, toi=False, re
     return [json.loads(r) for r in records]
 
 
+def write_baseline(baseline, results, margin=0):
+    """Writes the gate's baseline of run() results to the file `baseline` (as `ccdbench check --write-baseline`):
+    one entry per result, allowing `margin` more missed pairs, errors and late TOIs (a count, or "P%"). Refuses
+    (ValueError) what check would fail whatever the entry. Returns the entries written, as dicts."""
+    lines = _ccdbench.write_baseline(str(baseline), [json.dumps(r) for r in results], str(margin))
+    return [json.loads(line) for line in lines if line.startswith("{")]
+
+
 def check(baseline, results):
     """The gate's verdict on run() results against a baseline file (as `ccdbench check --baseline`): (passed, lines)."""
     return _ccdbench.check(str(baseline), [json.dumps(r) for r in results])

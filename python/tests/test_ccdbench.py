@@ -226,6 +226,21 @@ def test_a_python_strategy_is_verified_and_gated(program, tmp_path):
     # Its cell is never kept: a changed method is run again, not read back.
     again = ccdbench.run(scene, [("never", lambda kind, q, delta: np.ones(len(q), dtype=bool))], max_steps=3, out=tmp_path / "out")
     assert again[0]["missed"] == 0 and again[0]["false_alarms"] > 0
+    # A baseline written from Python gates the same results through check, and the command line's check reads it.
+    written = tmp_path / "written.json"
+    entries = ccdbench.write_baseline(written, results)
+    assert [e["strategy"] for e in entries] == ["full", "full+callable:never"]
+    assert entries[1]["max_missed"] == python["missed"] and entries[1]["colliding"] == python["colliding"]
+    passed, lines = ccdbench.check(written, results)
+    assert passed, lines
+    gate = subprocess.run([str(program), "check", "--baseline", str(written), str(summary)], capture_output=True, text=True)
+    assert gate.returncode == 0, gate.stdout + gate.stderr
+    worse = [dict(r) for r in results]
+    worse[0]["missed"] = 1
+    assert not ccdbench.check(written, worse)[0]
+    unverified = [dict(results[0], verified=False)]
+    with pytest.raises(ValueError, match="not verified"):
+        ccdbench.write_baseline(tmp_path / "refused.json", unverified)
 
 
 def test_scenes_as_arrays(tmp_path):

@@ -172,6 +172,40 @@ TEST_F(Gate, MalformedFilesExitTwoAndAFailedGateOne) {
   EXPECT_EQ(check({entry("full", 0)}, {summary("full", 1, 10)}).exit_code, 1);
 }
 
+// A cell that fails several ways shows every one (it showed the first: 2,534 late TOIs hid 2,662 missed pairs).
+TEST_F(Gate, EveryReasonACellFailsIsShown) {
+  nlohmann::json result = summary("full", 5, 10);
+  result["toi_late"] = 7;
+  result["errors"] = 2;
+  nlohmann::json pinned = entry("full", 0);
+  pinned["max_toi_late"] = 0;
+  const auto failed = check({pinned}, {result});
+  EXPECT_EQ(failed.exit_code, 1) << failed.output;
+  for (const char* reason : {": 7 TOIs later than the exact earliest contact", ": 2 answers could not be taken", ": missed 5 of 10"}) {
+    EXPECT_NE(failed.output.find("FAIL s / full / δ scene's 0.01" + std::string(reason)), std::string::npos) << reason << "\n" << failed.output;
+  }
+}
+
+// check reads what compare reads: a run's --out folder and its results.jsonl (the latest summary of each cell), as well
+// as its --json array.
+TEST_F(Gate, ReadsARunsOutFolderAndItsResultsLog) {
+  const std::filesystem::path fold = testing::small_fold(dir_ / "fold8", 4);
+  const auto ran = run_ccdbench("run --scene " + quoted(fold) + " --thickness 0 --strategy full,full+cubic64 --out " + quoted(dir_ / "out") +
+                                " --json " + quoted(dir_ / "r.json"));
+  ASSERT_EQ(ran.exit_code, 0) << ran.output;
+  ASSERT_EQ(run_ccdbench("check --write-baseline " + quoted(dir_ / "b.json") + " " + quoted(dir_ / "r.json")).exit_code, 0);
+  for (const std::filesystem::path& results : {dir_ / "out", dir_ / "out" / "results.jsonl", dir_ / "r.json"}) {
+    const auto gate = run_ccdbench("check --baseline " + quoted(dir_ / "b.json") + " " + quoted(results));
+    EXPECT_EQ(gate.exit_code, 0) << results << "\n" << gate.output;
+    EXPECT_NE(gate.output.find("ok   fold8 / full+cubic64 / δ 0"), std::string::npos) << gate.output;
+  }
+  // A results.jsonl that is not one: bad input where it is.
+  testing::write_text(dir_ / "bad.jsonl", "{\"record\": \"summary\", \"scene\": 1}\n");
+  const auto bad = run_ccdbench("check --baseline " + quoted(dir_ / "b.json") + " " + quoted(dir_ / "bad.jsonl"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("bad.jsonl:line 1.scene: must be a string"), std::string::npos) << bad.output;
+}
+
 // A field of the wrong type is bad input where it is (it was a raw type_error, exit 1), before any line is gated.
 TEST_F(Gate, AWrongTypedFieldIsBadInputWhereItIs) {
   const std::vector<std::pair<const char*, nlohmann::json>> wrong = {{"verified", "yes"}, {"missed", -1}, {"colliding", "10"},
