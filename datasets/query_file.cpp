@@ -1,6 +1,7 @@
 #include "datasets/query_file.hpp"
 
 #include "core/error.hpp"
+#include "core/number_text.hpp"
 #include "datasets/atomic_file.hpp"
 #include "datasets/input_file.hpp"
 #include "datasets/rational.hpp"
@@ -8,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 
@@ -107,6 +109,24 @@ std::vector<bool> read_truth_file(const std::filesystem::path& path) {
   return truth;
 }
 
+namespace {
+
+/// The thickness a file's first line says its labels are for. @throws InputError for any other comment line, or
+/// this one anywhere but first.
+double labels_thickness_of(const std::filesystem::path& path, const std::string& line, std::size_t line_number, bool not_first) {
+  const std::string header = kLabelsThicknessLine;
+  if (line.rfind(header, 0) != 0 || not_first) {
+    throw InputError(path, line_at(line_number), "the only comment a query file may hold is its first line, '" + header + "D'");
+  }
+  const std::optional<double> thickness = parse_double(line.substr(header.size()));
+  if (!thickness || !std::isfinite(*thickness) || *thickness < 0) {
+    throw InputError(path, line_at(line_number), "'" + line.substr(header.size()) + "' is not a thickness (a finite number >= 0)");
+  }
+  return *thickness;
+}
+
+}  // namespace
+
 QueryFile read_query_file(const std::filesystem::path& path, std::optional<QueryKind> kind) {
   if (!kind) kind = classify_query_path(path);
   if (!kind) {
@@ -116,12 +136,19 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
   }
   std::ifstream in = open_input_file(path, "query file");
 
+  QueryFile file;
+  bool saw_header = false;
   std::vector<Row> rows;
   std::size_t columns_expected = 0;
   std::string line;
   for (std::size_t line_number = 1; std::getline(in, line); ++line_number) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.find_first_not_of(" \t") == std::string::npos) continue;
+    if (line.front() == '#') {
+      file.labels_thickness = labels_thickness_of(path, line, line_number, !rows.empty() || saw_header);
+      saw_header = true;
+      continue;
+    }
     const auto columns = split_columns(line);
     if (columns_expected == 0) {
       if (columns.size() != 6 && columns.size() != 7) {
@@ -162,7 +189,9 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
                      std::to_string(rows.size()) + " rows is not a multiple of 8 (8 rows per query)");
   }
 
-  QueryFile file;
+  if (saw_header && file.labels_thickness > 0 && columns_expected != 7) {
+    throw InputError(path, "line 1", "says what thickness its labels are for, but it has no labels (no 7th column)");
+  }
   file.path = path;
   file.kind = *kind;
   file.queries.resize(rows.size() / kRowsPerQuery);
@@ -203,11 +232,15 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
   return file;
 }
 
-void write_query_file(const std::filesystem::path& path, const std::vector<Query>& queries) {
+void write_query_file(const std::filesystem::path& path, const std::vector<Query>& queries, double labels_thickness) {
   AtomicFile file(path, std::ios::out);
   std::ofstream& out = file.stream();
   // Labelled (7 columns) or not (6): a file is one or the other.
   const bool labelled = !queries.empty() && queries.front().truth.has_value();
+  if (labelled && labels_thickness > 0) {
+    char text[64];
+    out << kLabelsThicknessLine << std::string_view(text, std::to_chars(text, text + sizeof text, labels_thickness).ptr - text) << '\n';
+  }
   for (const Query& query : queries) {
     if (query.truth.has_value() != labelled) throw std::invalid_argument("write_query_file: every query needs a truth label, or none does");
     for (const Query::RationalPoint& point : query.exact) {

@@ -2,7 +2,9 @@
 /// @file
 /// The rational CSV query format (docs/DATA.md; docs/DESIGN.md §7): 8 rows per query, 3 exact rationals
 /// per row as numerator,denominator pairs, an optional 7th column of truth (1 = the primitives touch for some
-/// t in [0, 1] at zero thickness), or the truth in mma_bool/NAME_mma_bool.json beside queries/NAME.csv.
+/// t in [0, 1] at zero thickness), or the truth in mma_bool/NAME_mma_bool.json beside queries/NAME.csv. A file whose
+/// labels are for another thickness (the misses of a run at δ, a comparison's newly missed pairs) says so on its
+/// first line: `# labels at thickness D` (D the shortest decimal that reads back as the double δ).
 
 #include "core/vec.hpp"
 
@@ -44,6 +46,8 @@ struct QueryFile {
   std::vector<Query> queries;
   /// The mma_bool file the truth came from; nullopt when it came from the 7th column or there is none.
   std::optional<std::filesystem::path> truth_file;
+  /// The thickness its labels are for, when its first line says one (`# labels at thickness D`); else 0.
+  double labels_thickness = 0;
 
   /// Whether every query has a truth label.
   bool has_truth() const;
@@ -66,6 +70,9 @@ std::vector<std::filesystem::path> discover_query_files(const std::vector<std::f
 /// For `.../queries/NAME.csv`, the truth file `.../mma_bool/NAME_mma_bool.json`; nullopt for other paths.
 std::optional<std::filesystem::path> truth_file_for(const std::filesystem::path& csv);
 
+/// The first line of a file whose labels are for thickness δ > 0.
+inline constexpr const char* kLabelsThicknessLine = "# labels at thickness ";
+
 /// Reads a query file and its truth. `kind` overrides the path rule.
 /// @throws InputError (file, line, reason) for: a row whose column count is not 6 or 7 or differs from the
 ///         first row's, a non-integer, a zero denominator, a row count that is not a multiple of 8, a truth
@@ -79,7 +86,8 @@ std::vector<bool> read_truth_file(const std::filesystem::path& path);
 /// The query whose rows are these doubles (each exactly a rational), without truth.
 Query query_of_doubles(const std::array<Vec3, 8>& rows);
 
-/// Writes queries as the 7-column format (truth on every query) or the 6-column one (on none), atomically.
-void write_query_file(const std::filesystem::path& path, const std::vector<Query>& queries);
+/// Writes queries as the 7-column format (truth on every query) or the 6-column one (on none), atomically; labels for
+/// a thickness `labels_thickness` > 0 are said so on the first line. @throws std::invalid_argument for mixed labels.
+void write_query_file(const std::filesystem::path& path, const std::vector<Query>& queries, double labels_thickness = 0);
 
 }  // namespace ccd::datasets

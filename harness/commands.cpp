@@ -43,51 +43,7 @@ int run_inspect(const InspectOptions& options, std::ostream& out) {
   return 0;
 }
 
-namespace {
-
-/// The queries each method gave no answer to, written as query files under options.faults/METHOD/KIND/FILE-HASH.csv
-/// (the file's label kept; HASH from the file's whole path, so that two inputs of one name in two folders never
-/// share a file), with FAULTS.txt beside them saying which query and why; said on `out`.
-void write_query_faults(const std::vector<QueryScore>& scores, const std::vector<datasets::QueryFile>& files, const QueriesOptions& options,
-                        std::ostream& out) {
-  std::map<std::filesystem::path, std::string> notes_of_folder;
-  for (const QueryScore& score : scores) {
-    if (score.file == "(all)" || score.fault_queries.empty()) continue;
-    const auto file = std::find_if(files.begin(), files.end(), [&](const datasets::QueryFile& f) { return f.path.string() == score.file; });
-    if (file == files.end()) continue;
-    const std::filesystem::path folder = options.faults / safe_path_component(score.method.substr(0, 120));
-    std::vector<datasets::QueryFile> kept(1);
-    kept[0].kind = file->kind;
-    std::string notes;
-    for (const QueryScore::Fault& fault : score.fault_queries) {
-      kept[0].queries.push_back(file->queries.at(fault.index));
-      notes += score.file + " query " + std::to_string(fault.index + 1) + " (index " + std::to_string(fault.index) + ", line " +
-               std::to_string(fault.line) + "; query " + std::to_string(kept[0].queries.size()) + " of WRITTEN): " + fault.message + "\n";
-    }
-    // Under MPI the files were scaled by the ranks that scored them: scale the copies alike.
-    if (options.scale_exponent != 0 && rank_info().size > 1) scale_query_files(kept, options.scale_exponent);
-    datasets::ContentHash path_hash;
-    path_hash.text(file->path.string());
-    const std::filesystem::path written =
-        folder / std::string(datasets::to_string(file->kind)) / (file->path.stem().string() + "-" + path_hash.hex().substr(0, 8) + ".csv");
-    datasets::write_query_file(written, kept[0].queries);
-    for (std::size_t at = notes.find("WRITTEN"); at != std::string::npos; at = notes.find("WRITTEN", at)) {
-      notes.replace(at, 7, written.string());
-      at += written.string().size();
-    }
-    notes_of_folder[folder] += notes;
-    out << score.method << ": " << score.faults << " of " << score.queries << " queries of " << score.file << " got no answer; first: query "
-        << score.fault_queries.front().index + 1 << " (line " << score.fault_queries.front().line << "): " << score.fault_queries.front().message
-        << "\n  written to " << written.string() << " (replay: ccdbench queries " << written.string() << " --allow-unlabelled)\n";
-  }
-  for (const auto& [folder, notes] : notes_of_folder) {
-    datasets::AtomicFile list(folder / "FAULTS.txt", std::ios::out);
-    list.stream() << notes;
-    list.commit();
-  }
-}
-
-}  // namespace
+namespace {}  // namespace
 
 namespace {
 
@@ -188,7 +144,8 @@ std::optional<std::vector<QueryScore>> score_over_ranks(const std::vector<datase
 void report_query_scores(const std::vector<QueryScore>& scores, const std::vector<datasets::QueryFile>& files, const QueriesOptions& options,
                          std::ostream& out) {
   print_query_scores(scores, out);
-  write_query_faults(scores, files, options, out);
+  // Under MPI the files were scaled by the ranks that scored them: the copies written are scaled alike.
+  write_query_faults(scores, files, options.faults, rank_info().size > 1 ? options.scale_exponent : 0, out);
   if (options.write_answers) {
     write_query_answers(*options.write_answers, scores);
     out << "answers: " << options.write_answers->string() << "\n";
@@ -197,9 +154,16 @@ void report_query_scores(const std::vector<QueryScore>& scores, const std::vecto
     out << "note: " << total.unlabeled << " of " << total.queries
         << " queries had no truth label: FN and FP count the labelled ones only ('-': none labelled).\n";
   }
-  if (options.thickness > 0) {
-    out << "note: the data's truth labels are for zero thickness; at thickness " << options.thickness
-        << " a method may rightly report more (counted as FP here), never fewer.\n";
+  // Labels are for thickness 0 unless a file says another (docs/DESIGN.md §7): scored at another δ, a method may
+  // rightly answer otherwise than a label.
+  const double scored = scaled_thickness(options);
+  std::map<double, std::size_t> other;
+  for (const datasets::QueryFile& file : files) other[file.labels_thickness] += file.labels_thickness != scored && file.labelled() > 0 ? 1 : 0;
+  for (const auto& [labels, count] : other) {
+    if (count == 0) continue;
+    out << "note: the labels of " << count << " file" << (count == 1 ? " are" : "s are") << " for thickness " << labels << ", scored at " << scored
+        << ": a method may rightly report " << (scored > labels ? "more (counted as FP here), never fewer" : "fewer (counted as FN here), never more")
+        << ".\n";
   }
   if (options.json) {
     nlohmann::json rows = nlohmann::json::array();

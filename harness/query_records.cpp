@@ -1,7 +1,9 @@
 // QueryScore as records leave the process: the message ranks exchange (to_message, from_message), the table, the
 // answer file --write-answers writes, and the report page. Scoring itself is query_scoring.cpp's.
 #include "datasets/atomic_file.hpp"
+#include "datasets/content_hash.hpp"
 #include "datasets/rational.hpp"
+#include "harness/cell_store.hpp"
 #include "harness/query_scoring.hpp"
 #include "harness/statistics.hpp"
 #include "harness/table.hpp"
@@ -9,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <iomanip>
 #include <map>
@@ -192,6 +195,53 @@ void write_query_answers(const std::filesystem::path& path, const std::vector<Qu
     }
   }
   file.commit();
+}
+
+void write_query_faults(const std::vector<QueryScore>& scores, const std::vector<datasets::QueryFile>& files, const std::filesystem::path& faults,
+                        int scale_exponent, std::ostream& out) {
+  std::map<std::filesystem::path, std::string> notes_of_folder;
+  for (const QueryScore& score : scores) {
+    if (score.file == "(all)" || score.fault_queries.empty()) continue;
+    const auto file = std::find_if(files.begin(), files.end(), [&](const datasets::QueryFile& f) { return f.path.string() == score.file; });
+    if (file == files.end()) continue;
+    // A method's folder: its name's start and a hash of the whole (two specs that differ late never share one).
+    datasets::ContentHash method_hash;
+    method_hash.text(score.method);
+    const std::filesystem::path folder = faults / (safe_path_component(score.method.substr(0, 100)) + "-" + method_hash.hex().substr(0, 8));
+    std::vector<datasets::QueryFile> kept(1);
+    kept[0].kind = file->kind;
+    kept[0].labels_thickness = file->labels_thickness;
+    std::string notes;
+    for (const QueryScore::Fault& fault : score.fault_queries) {
+      kept[0].queries.push_back(file->queries.at(fault.index));
+      notes += score.file + " query " + std::to_string(fault.index + 1) + " (index " + std::to_string(fault.index) + ", line " +
+               std::to_string(fault.line) + "; query " + std::to_string(kept[0].queries.size()) + " of WRITTEN): " + fault.message + "\n";
+    }
+    if (scale_exponent != 0) scale_query_files(kept, scale_exponent);
+    datasets::ContentHash path_hash;
+    path_hash.text(file->path.string());
+    const std::filesystem::path written =
+        folder / std::string(datasets::to_string(file->kind)) / (file->path.stem().string() + "-" + path_hash.hex().substr(0, 8) + ".csv");
+    datasets::write_query_file(written, kept[0].queries, kept[0].labels_thickness);
+    // The command that scores them again, as printed: the method as it ran, at the δ it was scored at.
+    char thickness[64];
+    const std::string replay = "ccdbench queries " + written.string() + " --method " + score.method + " --thickness " +
+                               std::string(thickness, std::to_chars(thickness, thickness + sizeof thickness, score.thickness).ptr) +
+                               (kept[0].has_truth() ? "" : " --allow-unlabelled");
+    for (std::size_t at = notes.find("WRITTEN"); at != std::string::npos; at = notes.find("WRITTEN", at)) {
+      notes.replace(at, 7, written.string());
+      at += written.string().size();
+    }
+    notes_of_folder[folder] += notes + "  replay: " + replay + "\n";
+    out << score.method << ": " << score.faults << " of " << score.queries << " queries of " << score.file << " got no answer; first: query "
+        << score.fault_queries.front().index + 1 << " (line " << score.fault_queries.front().line << "): " << score.fault_queries.front().message
+        << "\n  written to " << written.string() << " (replay: " << replay << ")\n";
+  }
+  for (const auto& [folder, notes] : notes_of_folder) {
+    datasets::AtomicFile list(folder / "FAULTS.txt", std::ios::out);
+    list.stream() << notes;
+    list.commit();
+  }
 }
 
 void write_query_report(const std::filesystem::path& directory, const std::vector<QueryScore>& scores, const std::string& command) {

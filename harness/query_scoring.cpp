@@ -433,14 +433,15 @@ std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int expon
         for (int r = 0; r < 8; ++r) {
           for (int k = 0; k < 3; ++k) query.exact[r][k] = mpq_class(query.rounded[r][k]);
         }
-        // Labels are for δ = 0 (docs/DESIGN.md §7), whatever δ the methods are scored at.
-        if (query.truth) query.truth = decide_exactly(query, file.kind, 0.0, false).collides;
+        // Labels are for the file's labels thickness (0 unless it says another; docs/DESIGN.md §7), scaled with it.
+        if (query.truth) query.truth = decide_exactly(query, file.kind, std::ldexp(file.labels_thickness, exponent), false).collides;
       } else {
         query.exactly_double = exact;
       }
       kept.push_back(std::move(query));
     }
     file.queries = std::move(kept);
+    file.labels_thickness = std::ldexp(file.labels_thickness, exponent);
   }
   return left_out;
 }

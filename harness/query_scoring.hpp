@@ -132,6 +132,13 @@ struct QueryScoringRequest {
 /// method's answer and TOI, the file's label and the exact TOI floor. Atomic.
 void write_query_answers(const std::filesystem::path& path, const std::vector<QueryScore>& scores);
 
+/// The queries each method gave no answer to, written as query files under FAULTS/METHOD-HASH/KIND/FILE-HASH.csv (the
+/// file's labels and the thickness they are for kept, scaled by 2^scale_exponent; HASH from the method's whole name and
+/// from the file's whole path, so that two methods or two inputs never share a file), with FAULTS.txt beside them
+/// saying which query, why, and the command that replays them; said on `out`.
+void write_query_faults(const std::vector<QueryScore>& scores, const std::vector<datasets::QueryFile>& files, const std::filesystem::path& faults,
+                        int scale_exponent, std::ostream& out);
+
 /// The files with every query multiplied by 2^exponent (δ is scaled by the caller). Exact on the rationals, so a
 /// labelled query keeps its label; a query whose doubles no longer equal its rationals (subnormal) takes the
 /// doubles as the question and is labelled again by the reference at δ = 0 (what labels mean); one that overflows

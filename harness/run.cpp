@@ -171,8 +171,8 @@ void Benchmark::cell_moved(int pass, std::size_t step, const std::string& strate
   const double fraction = (pass + static_cast<double>(step + 1) / static_cast<double>(steps)) / passes;
   const std::string label = data ? data->label : "";
   progress_->update(static_cast<double>(cells_finished_) + fraction, cell_total_,
-                    label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + ", step " + std::to_string(step + 1) +
-                        "/" + std::to_string(steps));
+                    label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + ", step " + std::to_string(step) +
+                        " of steps 0-" + std::to_string(steps - 1));
   if (!progress_->terminal() && step + 1 == steps) {
     say("run: " + label + " / " + strategies::short_label(strategy) + ": pass " + std::to_string(pass + 1) + " of " +
         std::to_string(options_.repeats) + " done");
@@ -323,7 +323,7 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
   PlannedItem& item = planned_.at(index);
   json result = json::parse(text);
   if (!item.cell) {
-    const std::string truth = item.label + ": truth of step " + std::to_string(item.step + 1) + "/" + std::to_string(item.steps) +
+    const std::string truth = item.label + ": truth of step " + std::to_string(item.step) + " of steps 0-" + std::to_string(item.steps - 1) +
                               (result.at("computed").get<bool>() ? " computed" : " cached") + on_rank(rank);
     // In a log only computed truth gets a line (read from the cache it is quick); the bar shows either.
     if (progress_->terminal()) {

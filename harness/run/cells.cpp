@@ -101,7 +101,7 @@ void time_pass(const CellContext& cell, Passes& passes, int repeat, const CellPr
   for (std::size_t k = 0; k < cell.steps; ++k) {
     const StepView view{&scene, k, cell.data.frames[k], cell.data.frames[k + 1]};
     plugin::set_activity("cell " + cell.data.label + " / " + cell.spec.label + ", pass " + std::to_string(repeat + 1) + ", step " +
-                         std::to_string(k + 1) + " of " + std::to_string(cell.steps));
+                         std::to_string(k) + " of steps 0-" + std::to_string(cell.steps - 1));
     std::optional<strategies::StepResult> answered;
     const auto start = std::chrono::steady_clock::now();
     {
@@ -161,7 +161,7 @@ void audit(const CellContext& cell, Passes& passes, Judgement& judgement) {
   strategy->name_scene(cell.data.label);
   strategy->init(scene, cell.data.frames[0]);
   for (std::size_t k = 0; k < cell.steps && !passes.nondeterministic_step; ++k) {
-    plugin::set_activity("cell " + cell.data.label + " / " + cell.spec.label + ", its audit pass, step " + std::to_string(k + 1));
+    plugin::set_activity("cell " + cell.data.label + " / " + cell.spec.label + ", its audit pass, step " + std::to_string(k));
     strategies::StepResult audit = strategy->step({&scene, k, cell.data.frames[k], cell.data.frames[k + 1]}, true);
 #if CCDBENCH_GUARD_REPEATS
     // The audit pass is one more run of the same steps: its answers are compared as a timed pass's are.
@@ -392,7 +392,7 @@ CellRecord run_cell(const SceneData& data, const strategies::StrategySpec& spec,
   const Judgement judgement = judge_passes(cell, passes);
   const std::filesystem::path fault_root = options.faults ? *options.faults : options.out / "faults";
   const json faults = record_faults(data.sequence.scene(), data.frames, passes.first,
-                                    fault_root / safe_path_component(data.label) / std::filesystem::path(cell_name).stem());
+                                    fault_root / safe_path_component(data.label) / std::filesystem::path(cell_name).stem(), spec.text);
   if (options.write_answers) write_cell_answers(cell, passes);
   CellRecord record;
   Totals totals;

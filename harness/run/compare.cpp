@@ -271,8 +271,10 @@ std::filesystem::path write_replay(const CellComparison& c, std::size_t number, 
     query.truth = true;
     (pair["kind"] == "vf" ? vertex_face : edge_edge).push_back(std::move(query));
   }
-  if (!vertex_face.empty()) datasets::write_query_file(folder / "vertex-face" / kReplayFile, vertex_face);
-  if (!edge_edge.empty()) datasets::write_query_file(folder / "edge-edge" / kReplayFile, edge_edge);
+  // Labelled at the cell's δ, which the files say (a replay at another δ is told its labels are not for it).
+  const double thickness = c.head["thickness"].get<double>();
+  if (!vertex_face.empty()) datasets::write_query_file(folder / "vertex-face" / kReplayFile, vertex_face, thickness);
+  if (!edge_edge.empty()) datasets::write_query_file(folder / "edge-edge" / kReplayFile, edge_edge, thickness);
   return folder;
 }
 

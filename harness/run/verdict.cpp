@@ -190,8 +190,9 @@ json record_misses(const Scene& scene, const std::vector<std::vector<Vec3>>& fra
     }
   }
   if (directory) {
-    for (const auto& [cause, queries] : vf) datasets::write_query_file(*directory / "vertex-face" / (cause + ".csv"), queries);
-    for (const auto& [cause, queries] : ee) datasets::write_query_file(*directory / "edge-edge" / (cause + ".csv"), queries);
+    // Every missed pair collides at the scene's δ: the files say their labels are for it.
+    for (const auto& [cause, queries] : vf) datasets::write_query_file(*directory / "vertex-face" / (cause + ".csv"), queries, scene.thickness());
+    for (const auto& [cause, queries] : ee) datasets::write_query_file(*directory / "edge-edge" / (cause + ".csv"), queries, scene.thickness());
   }
   json causes = json::object();
   for (const auto& [cause, count] : counts) causes[cause] = count;

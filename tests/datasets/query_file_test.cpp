@@ -67,6 +67,25 @@ TEST(QueryFile, WriteReadRoundTripKeepsExactValues) {
   EXPECT_EQ(back.queries[0].truth, true);
 }
 
+// Labels for another thickness than 0 (a run's misses at δ, a comparison's newly missed pairs) say so on the first
+// line, and read back exactly; any other comment, or this one elsewhere or on unlabelled rows, is bad input.
+TEST(QueryFile, LabelsForAThicknessSaySoOnTheFirstLine) {
+  TempDir dir;
+  write_text(dir / "in/edge-edge/q.csv", query_rows(1, "-7,3,1,7,0,1"));
+  const QueryFile file = read_query_file(dir / "in/edge-edge/q.csv");
+  EXPECT_EQ(file.labels_thickness, 0.0);
+  write_query_file(dir / "out/edge-edge/q.csv", file.queries, 0.1);
+  const QueryFile back = read_query_file(dir / "out/edge-edge/q.csv");
+  EXPECT_EQ(back.labels_thickness, 0.1);
+  EXPECT_EQ(back.queries[0].exact, file.queries[0].exact);
+  write_text(dir / "bad/edge-edge/second.csv", query_rows(1, "-7,3,1,7,0,1") + "# labels at thickness 0.1\n");
+  EXPECT_NE(error_of(dir / "bad/edge-edge/second.csv").find("the only comment a query file may hold is its first line"), std::string::npos);
+  write_text(dir / "bad/edge-edge/other.csv", "# a note\n" + query_rows(1, "-7,3,1,7,0,1"));
+  EXPECT_NE(error_of(dir / "bad/edge-edge/other.csv").find("other.csv:line 1"), std::string::npos);
+  write_text(dir / "bad/edge-edge/nan.csv", "# labels at thickness nan\n" + query_rows(1, "-7,3,1,7,0,1"));
+  EXPECT_NE(error_of(dir / "bad/edge-edge/nan.csv").find("is not a thickness"), std::string::npos);
+}
+
 TEST(QueryFile, SixColumnsTakeTruthFromMmaBoolFile) {
   TempDir dir;
   write_text(dir / "queries/5vf.csv", query_rows() + query_rows());

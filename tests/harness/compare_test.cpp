@@ -433,6 +433,8 @@ TEST_F(GateRoundTrip, WrittenBaselinePassesAndARebuildMissingOneMorePairFailsIt)
   const auto replayed = run_ccdbench("queries " + quoted(replay) + " --method plugin:" + (dir_ / "libcandidate.so").string() +
                                      ",exact --thickness 0.001 --json " + quoted(dir_ / "replayed.json"));
   EXPECT_EQ(replayed.exit_code, 0) << replayed.output;
+  // Labelled at the cell's δ, which the files say: replayed there, no note that the labels are for another δ.
+  EXPECT_EQ(replayed.output.find("labels of"), std::string::npos) << replayed.output;
   bool regressed_missed = false, exact_found = false;
   for (const nlohmann::json& row : read_json(dir_ / "replayed.json")) {
     if (row.value("method", "").rfind("plugin:", 0) == 0) regressed_missed = row.value("false_negatives", 0) == 1;

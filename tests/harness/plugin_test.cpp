@@ -209,6 +209,32 @@ TEST_F(Plugins, ACrashUnderIsolationIsTheQuerysErrorWrittenOut) {
   EXPECT_EQ(cell_of(summaries, "full")["missed"], 0);
   EXPECT_NE(crashed["strategy"].get<std::string>().find(":isolate=on:timeout="), std::string::npos);
   EXPECT_NE(steps.output.find("/FAULTS.txt"), std::string::npos) << steps.output;
+  // FAULTS.txt says how to replay its queries, and the command runs as printed: labelled files (at the scene's δ,
+  // which they say), no --allow-unlabelled (this plugin crashes on the 17th query of a child: alone, they pass).
+  std::string replay_command;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir_ / "out" / "faults")) {
+    if (entry.path().filename() != "FAULTS.txt") continue;
+    std::ifstream notes(entry.path());
+    for (std::string line; std::getline(notes, line) && replay_command.empty();) {
+      if (const std::size_t at = line.find("replay: ccdbench queries "); at != std::string::npos) replay_command = line.substr(at + 17);
+    }
+  }
+  ASSERT_FALSE(replay_command.empty()) << "no replay command in FAULTS.txt";
+  EXPECT_EQ(replay_command.find("--allow-unlabelled"), std::string::npos) << replay_command;
+  const auto replayed = run_ccdbench(replay_command.substr(replay_command.find("queries")));
+  EXPECT_EQ(replayed.exit_code, 0) << replay_command << "\n" << replayed.output;
+  EXPECT_NE(replayed.output.find("(all)"), std::string::npos) << replayed.output;
+  EXPECT_EQ(replayed.output.find("labels of"), std::string::npos) << "replayed at the δ its labels are for: " << replayed.output;
+  // Two specs whose names differ only past their first 100 characters write their faults apart (a plugin in a deep
+  // folder, so that its resolved name is long wherever the build is).
+  const std::filesystem::path deep = dir_ / std::string(100, 'd') / "libcrash.so";
+  std::filesystem::create_directories(deep.parent_path());
+  std::filesystem::copy_file(plugin("broken_crash_on_17"), deep);
+  const std::string both = "plugin:" + deep.string() + ":batch=64,plugin:" + deep.string() + ":batch=128";
+  ASSERT_EQ(run_ccdbench("queries " + quoted(twenty) + " --faults " + quoted(dir_ / "apart") + " --method " + both).exit_code, 0);
+  std::size_t folders = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir_ / "apart")) folders += entry.is_directory() ? 1 : 0;
+  EXPECT_EQ(folders, 2u) << "two methods' faults in one folder";
 }
 
 TEST_F(Plugins, AHangIsStoppedByItsTimeout) {
