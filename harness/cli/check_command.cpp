@@ -124,6 +124,12 @@ Command add_compare(CLI::App& app) {
                       "BASE_SPEC HEAD_SPEC: compare the cells of BASE_SPEC in BASE with those of HEAD_SPEC in HEAD (two builds\n"
                       "of a plugin run in one invocation: BASE and HEAD may then be one file); repeatable");
   compare->add_option("--alpha", options->alpha, "a time change counts when its p-value is below this (default 0.05)")->check(CLI::Range(1e-9, 0.5));
+  compare
+      ->add_option("--noise-band", options->noise_band,
+                   "a time change counts only beyond this fraction too, besides p < alpha (default 0.1: head/base above\n"
+                   "1.1 or below 1/1.1): the drift of a machine between two runs, which the rank test over one run's passes\n"
+                   "cannot see (docs/ci-regression.md, Time verdicts)")
+      ->check(CLI::Range(0.0, 10.0));
   compare->add_flag("--fail-on-slower", options->fail_on_slower,
                     "also exit 1 when a cell got slower beyond the noise (a cell's passes run one after another, base's\n"
                     "before head's: a machine that slows down between them looks like a slower head; for quiet machines)");

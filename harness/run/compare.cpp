@@ -74,7 +74,7 @@ double smallest_p(std::size_t n, std::size_t m) {
 struct CellComparison {
   std::string name;
   json base, head;
-  bool worse = false, slower = false;
+  bool worse = false, slower = false, faster = false;
   /// Why its verdicts (inputs_differ) or its times (times_differ) cannot be compared, "" when they can.
   std::string inputs_differ, times_differ;
   std::vector<std::string> notes;
@@ -167,7 +167,8 @@ CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set
                            " and " + std::to_string(head_times.size()) + " passes (run both with --repeat 5 or more)");
     }
     cell.ratio = base["ms_per_step"].get<double>() > 0 ? head["ms_per_step"].get<double>() / base["ms_per_step"].get<double>() : 0;
-    cell.slower = cell.time_test->p < options.alpha && cell.ratio > 1;
+    cell.slower = cell.time_test->p < options.alpha && cell.ratio > 1 + options.noise_band;
+    cell.faster = cell.time_test->p < options.alpha && cell.ratio < 1 / (1 + options.noise_band);
   } else {
     cell.notes.push_back("times not tested: a side has no per-repeat times (records of schema 1)");
   }
@@ -196,7 +197,7 @@ Table comparison_table(const std::vector<CellComparison>& cells) {
     } else if (!c.times_differ.empty()) {
       verdict += ", times not comparable: " + c.times_differ;
     } else if (c.time_test) {
-      verdict += c.slower ? ", slower beyond noise" : c.time_test->p < 0.05 && c.ratio < 1 ? ", faster beyond noise" : ", time within noise";
+      verdict += c.slower ? ", slower beyond noise" : c.faster ? ", faster beyond noise" : ", time within noise";
     }
     table.add_row({c.name, change(number(c.base, "missed"), number(c.head, "missed")), change(number(c.base, "errors"), number(c.head, "errors")),
                    change(number(c.base, "false_alarms"), number(c.head, "false_alarms")),
@@ -299,6 +300,7 @@ void write_comparison_json(const std::filesystem::path& path, const std::vector<
     json row = {{"cell", c.name},
                 {"worse", c.worse},
                 {"slower_beyond_noise", c.slower},
+                {"faster_beyond_noise", c.faster},
                 {"verdicts_not_comparable", c.inputs_differ.empty() ? json() : json(c.inputs_differ)},
                 {"times_not_comparable", c.times_differ.empty() ? json() : json(c.times_differ)},
                 {"notes", c.notes},
