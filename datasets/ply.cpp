@@ -310,71 +310,66 @@ void check_elements_have_properties(const std::filesystem::path& path, const Ply
   }
 }
 
-}  // namespace
-
-MeshFrame read_ply(const std::filesystem::path& path) {
-  std::ifstream in = open_input_file(path, "PLY file", std::ios::in | std::ios::binary);
-  const PlyHeader header = parse_header(path, in);
-  const MeshLayout layout = find_mesh_layout(path, header);
-  check_elements_have_properties(path, header);
-
-  MeshFrame frame;
-  const PlyElement& vertex_element = header.elements[layout.vertex_element];
-  const PlyElement& face_element = header.elements[layout.face_element];
-  // Vertices and faces are appended as the body delivers them, never allocated from the header's counts: a
-  // header may declare 300000000 faces in a 200-byte file. What is read is then backed by the file's own bytes.
-  auto begin_element = [&](std::size_t e) {
-    if (e == layout.vertex_element) frame.positions.emplace_back(0.0, 0.0, 0.0);
-    if (e == layout.face_element) frame.faces.push_back(Face{});
-  };
-
-  std::vector<std::size_t> vertex_lines, face_lines;  // ASCII only: where each element was, for messages
-  if (header.encoding == PlyEncoding::ascii) {
-    frame.format = "PLY ascii";
-    AsciiCursor cursor(path, in, header.body_first_line);
-    for (std::size_t e = 0; e < header.elements.size(); ++e) {
-      const PlyElement& element = header.elements[e];
-      for (std::size_t i = 0; i < element.count; ++i) {
-        if (!cursor.next_line()) {
-          throw InputError(path, line_at(cursor.line_number()), "file ends at " + element_where(element, i) + " of " + std::to_string(element.count));
+/// One entry (number i) of element `e`, its values read through `read(type)`: a vertex's coordinates or a face's
+/// corner indices go into `frame`, appended as the body delivers them (never allocated from the header's counts: a
+/// header may declare 300000000 faces in a 200-byte file); other properties are read past.
+template <class Read>
+void read_entry(const std::filesystem::path& path, const MeshLayout& layout, const PlyElement& element, std::size_t e, std::size_t i,
+                const std::string& where, Read&& read, MeshFrame& frame) {
+  if (e == layout.vertex_element) frame.positions.emplace_back(0.0, 0.0, 0.0);
+  if (e == layout.face_element) frame.faces.push_back(Face{});
+  for (std::size_t p = 0; p < element.properties.size(); ++p) {
+    const PlyProperty& property = element.properties[p];
+    if (!property.is_list) {
+      const double value = read(property.type);
+      if (e == layout.vertex_element) {
+        for (int k = 0; k < 3; ++k) {
+          if (static_cast<int>(p) == layout.axis_property[k]) frame.positions[i][k] = value;
         }
-        const std::string where = line_at(cursor.line_number());
-        begin_element(e);
-        for (std::size_t p = 0; p < element.properties.size(); ++p) {
-          const PlyProperty& property = element.properties[p];
-          if (!property.is_list) {
-            const double value = cursor.read(property.type);
-            if (e == layout.vertex_element) {
-              for (int k = 0; k < 3; ++k) {
-                if (static_cast<int>(p) == layout.axis_property[k]) frame.positions[i][k] = value;
-              }
-            }
-            continue;
-          }
-          const double count = cursor.read(property.count_type);
-          const bool is_index = e == layout.face_element && static_cast<int>(p) == layout.index_property;
-          if (is_index) check_face_count(path, where, count, i);
-          if (count < 0.0) throw InputError(path, where, "negative list length");
-          for (std::size_t k = 0; k < static_cast<std::size_t>(count); ++k) {
-            const double value = cursor.read(property.type);
-            if (is_index) frame.faces[i][k] = to_vertex_index(path, where, value);
-          }
-        }
-        cursor.expect_line_end();
-        if (e == layout.vertex_element) vertex_lines.push_back(cursor.line_number());
-        if (e == layout.face_element) face_lines.push_back(cursor.line_number());
       }
+      continue;
     }
-    if (cursor.next_line()) {
-      throw InputError(path, line_at(cursor.line_number()),
-                       "more lines than the header declares (" + std::to_string(vertex_element.count) + " vertices, " +
-                           std::to_string(face_element.count) + " faces, " + std::to_string(header.elements.size()) + " elements in all)");
+    const double count = read(property.count_type);
+    const bool is_index = e == layout.face_element && static_cast<int>(p) == layout.index_property;
+    if (is_index) check_face_count(path, where, count, i);
+    if (count < 0.0) throw InputError(path, where, "negative list length");
+    for (std::size_t k = 0; k < static_cast<std::size_t>(count); ++k) {
+      const double value = read(property.type);
+      if (is_index) frame.faces[i][k] = to_vertex_index(path, where, value);
     }
-    validate_mesh_frame(
-        path, frame, [&](std::size_t i) { return line_at(vertex_lines[i]); }, [&](std::size_t i) { return line_at(face_lines[i]); });
-    return frame;
   }
+}
 
+MeshFrame read_ascii_body(const std::filesystem::path& path, std::ifstream& in, const PlyHeader& header, const MeshLayout& layout) {
+  MeshFrame frame;
+  frame.format = "PLY ascii";
+  std::vector<std::size_t> vertex_lines, face_lines;  // where each element was, for messages
+  AsciiCursor cursor(path, in, header.body_first_line);
+  for (std::size_t e = 0; e < header.elements.size(); ++e) {
+    const PlyElement& element = header.elements[e];
+    for (std::size_t i = 0; i < element.count; ++i) {
+      if (!cursor.next_line()) {
+        throw InputError(path, line_at(cursor.line_number()), "file ends at " + element_where(element, i) + " of " + std::to_string(element.count));
+      }
+      read_entry(path, layout, element, e, i, line_at(cursor.line_number()), [&](PlyType type) { return cursor.read(type); }, frame);
+      cursor.expect_line_end();
+      if (e == layout.vertex_element) vertex_lines.push_back(cursor.line_number());
+      if (e == layout.face_element) face_lines.push_back(cursor.line_number());
+    }
+  }
+  if (cursor.next_line()) {
+    throw InputError(path, line_at(cursor.line_number()),
+                     "more lines than the header declares (" + std::to_string(header.elements[layout.vertex_element].count) + " vertices, " +
+                         std::to_string(header.elements[layout.face_element].count) + " faces, " + std::to_string(header.elements.size()) +
+                         " elements in all)");
+  }
+  validate_mesh_frame(
+      path, frame, [&](std::size_t i) { return line_at(vertex_lines[i]); }, [&](std::size_t i) { return line_at(face_lines[i]); });
+  return frame;
+}
+
+MeshFrame read_binary_body(const std::filesystem::path& path, std::ifstream& in, const PlyHeader& header, const MeshLayout& layout) {
+  MeshFrame frame;
   const bool big_endian = header.encoding == PlyEncoding::binary_big_endian;
   frame.format = big_endian ? "PLY binary_big_endian" : "PLY binary_little_endian";
   in.seekg(static_cast<std::streamoff>(header.body_offset));
@@ -393,36 +388,27 @@ MeshFrame read_ply(const std::filesystem::path& path) {
         }
         return value;
       };
-      begin_element(e);
-      for (std::size_t p = 0; p < element.properties.size(); ++p) {
-        const PlyProperty& property = element.properties[p];
-        if (!property.is_list) {
-          const double value = read(property.type);
-          if (e == layout.vertex_element) {
-            for (int k = 0; k < 3; ++k) {
-              if (static_cast<int>(p) == layout.axis_property[k]) frame.positions[i][k] = value;
-            }
-          }
-          continue;
-        }
-        const double count = read(property.count_type);
-        const bool is_index = e == layout.face_element && static_cast<int>(p) == layout.index_property;
-        if (is_index) check_face_count(path, where, count, i);
-        if (count < 0.0) throw InputError(path, where, "negative list length");
-        for (std::size_t k = 0; k < static_cast<std::size_t>(count); ++k) {
-          const double value = read(property.type);
-          if (is_index) frame.faces[i][k] = to_vertex_index(path, where, value);
-        }
-      }
+      read_entry(path, layout, element, e, i, where, read, frame);
     }
   }
   if (cursor.remaining() != 0) {
     throw InputError(path, "end of body", std::to_string(cursor.remaining()) + " bytes after the last element");
   }
+  const PlyElement& vertex_element = header.elements[layout.vertex_element];
   frame.format += vertex_element.properties[static_cast<std::size_t>(layout.axis_property[0])].type == PlyType::float32 ? " (float)" : " (double)";
   validate_mesh_frame(
       path, frame, [](std::size_t i) { return "vertex " + std::to_string(i); }, [](std::size_t i) { return "face " + std::to_string(i); });
   return frame;
+}
+
+}  // namespace
+
+MeshFrame read_ply(const std::filesystem::path& path) {
+  std::ifstream in = open_input_file(path, "PLY file", std::ios::in | std::ios::binary);
+  const PlyHeader header = parse_header(path, in);
+  const MeshLayout layout = find_mesh_layout(path, header);
+  check_elements_have_properties(path, header);
+  return header.encoding == PlyEncoding::ascii ? read_ascii_body(path, in, header, layout) : read_binary_body(path, in, header, layout);
 }
 
 void write_ply(const std::filesystem::path& path, const MeshFrame& frame, PlyEncoding encoding) {

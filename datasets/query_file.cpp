@@ -125,6 +125,33 @@ double labels_thickness_of(const std::filesystem::path& path, const std::string&
   return *thickness;
 }
 
+/// The queries of a file's rows, 8 rows each (the count checked by the caller): one truth per query, coordinates
+/// rounded to doubles. @throws InputError for a truth that changes within a query or a value beyond double's range.
+void assemble_queries(const std::filesystem::path& path, std::vector<Row>& rows, QueryFile& file) {
+  file.queries.resize(rows.size() / kRowsPerQuery);
+  for (std::size_t q = 0; q < file.queries.size(); ++q) {
+    Query& query = file.queries[q];
+    query.first_line = rows[q * kRowsPerQuery].line;
+    query.truth = rows[q * kRowsPerQuery].truth;
+    for (std::size_t r = 0; r < kRowsPerQuery; ++r) {
+      Row& row = rows[q * kRowsPerQuery + r];
+      if (row.truth != query.truth) {
+        throw InputError(path, line_at(row.line), "truth changes within query " + std::to_string(q) + " (it must repeat on all 8 rows)");
+      }
+      for (int k = 0; k < 3; ++k) {
+        const RoundedRational rounded = round_to_double(row.point[k]);
+        if (!std::isfinite(rounded.value)) {
+          throw InputError(path, line_at(row.line), "coordinate beyond the range of double");
+        }
+        query.rounded[r][k] = rounded.value;
+        query.exactly_double = query.exactly_double && rounded.exact;
+      }
+      query.exact[r] = std::move(row.point);
+    }
+  }
+
+}
+
 }  // namespace
 
 QueryFile read_query_file(const std::filesystem::path& path, std::optional<QueryKind> kind) {
@@ -194,28 +221,7 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
   }
   file.path = path;
   file.kind = *kind;
-  file.queries.resize(rows.size() / kRowsPerQuery);
-  for (std::size_t q = 0; q < file.queries.size(); ++q) {
-    Query& query = file.queries[q];
-    query.first_line = rows[q * kRowsPerQuery].line;
-    query.truth = rows[q * kRowsPerQuery].truth;
-    for (std::size_t r = 0; r < kRowsPerQuery; ++r) {
-      Row& row = rows[q * kRowsPerQuery + r];
-      if (row.truth != query.truth) {
-        throw InputError(path, line_at(row.line), "truth changes within query " + std::to_string(q) + " (it must repeat on all 8 rows)");
-      }
-      for (int k = 0; k < 3; ++k) {
-        const RoundedRational rounded = round_to_double(row.point[k]);
-        if (!std::isfinite(rounded.value)) {
-          throw InputError(path, line_at(row.line), "coordinate beyond the range of double");
-        }
-        query.rounded[r][k] = rounded.value;
-        query.exactly_double = query.exactly_double && rounded.exact;
-      }
-      query.exact[r] = std::move(row.point);
-    }
-  }
-
+  assemble_queries(path, rows, file);
   if (columns_expected != 7) {
     const auto truth_path = truth_file_for(path);
     if (truth_path && std::filesystem::exists(*truth_path)) {

@@ -180,7 +180,10 @@ void register_python_method(const std::string& name, py::function f, std::size_t
 
 }  // namespace
 
-PYBIND11_MODULE(_ccdbench, m) {
+namespace {
+
+/// The version and the exact oracle on arrays.
+void bind_oracle(py::module_& m) {
   m.doc() = "ccdbench's C++ API (ccdbench.hpp) for Python; use the ccdbench package, which wraps it";
 
   m.def("version", [] {
@@ -198,7 +201,10 @@ PYBIND11_MODULE(_ccdbench, m) {
         return answers_dict(without_gil([&] { return ccdbench::exact_oracle(k, rows, count, delta, toi); }));
       },
       py::arg("kind"), py::arg("queries"), py::arg("delta") = 0.0, py::arg("toi") = true);
+}
 
+/// Query files: read, written, decided on their rationals.
+void bind_query_files(py::module_& m) {
   py::class_<ccdbench::QueryFile>(m, "QueryFile")
       .def_readonly("path", &ccdbench::QueryFile::path)
       .def_property_readonly("kind", [](const ccdbench::QueryFile& f) { return std::string(kind_name(f.kind)); })
@@ -240,7 +246,10 @@ PYBIND11_MODULE(_ccdbench, m) {
         return answers_dict(answers);
       },
       py::arg("file"), py::arg("delta") = "0", py::arg("toi") = true);
+}
 
+/// Python methods registered for scoring, and methods scored on query files.
+void bind_methods(py::module_& m) {
   m.def("register_method", &register_python_method, py::arg("name"), py::arg("f"), py::arg("batch") = 0);
   m.def("unregister_method", [](const std::string& name) {
     py::gil_scoped_release released;  // a run on another thread may hold the registry's lock while it waits for the GIL
@@ -273,7 +282,10 @@ PYBIND11_MODULE(_ccdbench, m) {
     }
     return rows;
   });
+}
 
+/// Scenes: built-in, generated, loaded; their frames as arrays.
+void bind_scenes(py::module_& m) {
   py::class_<ccdbench::Scene>(m, "Scene")
       .def_property_readonly("label", &ccdbench::Scene::label)
       .def_property_readonly("file", &ccdbench::Scene::file)
@@ -311,6 +323,10 @@ PYBIND11_MODULE(_ccdbench, m) {
     py::gil_scoped_release released;
     return ccdbench::load_scene(path);
   });
+}
+
+/// Strategies, runs of cells verified against the exact truth, and the gate.
+void bind_runs(py::module_& m) {
   m.def("strategy_names", &ccdbench::strategy_names);
   m.def("validate_strategy", &ccdbench::validate_strategy);
 
@@ -349,4 +365,13 @@ PYBIND11_MODULE(_ccdbench, m) {
     }
     return py::make_tuple(result.passed, result.lines);
   });
+}
+}  // namespace
+
+PYBIND11_MODULE(_ccdbench, m) {
+  bind_oracle(m);
+  bind_query_files(m);
+  bind_methods(m);
+  bind_scenes(m);
+  bind_runs(m);
 }

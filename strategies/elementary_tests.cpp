@@ -81,6 +81,100 @@ void for_each_elementary_pair(const MeshTopology& topology, std::span<const Assi
   }
 }
 
+/// The swept boxes of every vertex (widened by δ/2, so that two boxes apart means the primitives stay farther than δ),
+/// edge and face of a step, in parallel.
+PrimitiveBoxes primitive_boxes(const MeshTopology& topology, std::span<const Vec3> x0, std::span<const Vec3> x1, double thickness) {
+  PrimitiveBoxes boxes;
+  boxes.vertex.resize(x0.size());
+  tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
+    Box3 box(x0[v]);
+    box.extend(x1[v]);
+    boxes.vertex[v] = bvh::widened(box, thickness / 2);
+  });
+  boxes.edge.resize(topology.num_edges());
+  tbb::parallel_for(std::size_t{0}, topology.num_edges(), [&](std::size_t e) {
+    const Edge edge = topology.edge(static_cast<EdgeId>(e));
+    boxes.edge[e] = boxes.vertex[edge.v0].merged(boxes.vertex[edge.v1]);
+  });
+  boxes.face.resize(topology.num_faces());
+  tbb::parallel_for(std::size_t{0}, topology.num_faces(), [&](std::size_t f) {
+    const Face& face = topology.face(static_cast<FaceId>(f));
+    boxes.face[f] = boxes.vertex[face[0]].merged(boxes.vertex[face[1]]).merged(boxes.vertex[face[2]]);
+  });
+  return boxes;
+}
+
+/// The narrow phase's answer `r` on one elementary pair (VertexFacePair or EdgeEdgePair), recorded in a thread's list.
+template <typename Pair>
+void record_answer(Local& local, const Pair& pair, const narrowphase::PairRows& rows, const narrowphase::NarrowPhaseResult& r, bool audit) {
+  constexpr bool vertex_face = std::is_same_v<Pair, VertexFacePair>;
+  ++local.tests;
+  if (audit) list_of<vertex_face>(local.tested).push_back(pair);
+  if (r.collides) local.collisions.add(pair, r.toi);
+  if (!r.fault.empty()) {
+    ++local.fault_count;
+    local.faults.push_back({order_key(pair), Fault{r.fault, rows, vertex_face}});
+    // A thread keeps its first faults in pair order only: the step keeps kKeptFaults of every thread's.
+    if (local.faults.size() > 4 * kKeptFaults) {
+      std::sort(local.faults.begin(), local.faults.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      local.faults.resize(kKeptFaults);
+    }
+  }
+}
+
+/// `pairs` asked of `narrow_phase` in batches of its preferred size, in order, from this thread; answers recorded.
+template <typename Pair>
+void ask_in_batches(const narrowphase::NarrowPhase& narrow_phase, const MeshTopology& topology, const StepView& step, double thickness,
+                    const std::vector<Pair>& pairs, Local& local, bool audit) {
+  constexpr bool vertex_face = std::is_same_v<Pair, VertexFacePair>;
+  const std::size_t batch = narrow_phase.preferred_batch();
+  std::vector<narrowphase::PairRows> rows;
+  std::vector<narrowphase::NarrowPhase::BatchPair> asked;
+  std::vector<narrowphase::NarrowPhaseResult> results;
+  for (std::size_t first = 0; first < pairs.size(); first += batch) {
+    const std::size_t count = std::min(batch, pairs.size() - first);
+    rows.resize(count);
+    asked.resize(count);
+    results.assign(count, {});
+    for (std::size_t i = 0; i < count; ++i) {
+      rows[i] = pair_rows(topology, step.x0, step.x1, pairs[first + i]);
+      asked[i] = {&rows[i], vertex_face, thickness};
+    }
+    narrow_phase.answer_batch(asked, results);
+    for (std::size_t i = 0; i < count; ++i) record_answer(local, pairs[first + i], rows[i], results[i], audit);
+  }
+}
+
+/// Every thread's answers as the step's outcome: the collision set in order, counts added up, the first faults in pair
+/// order whatever thread met them (the same for any thread count), the tested pairs sorted; the thread lists freed.
+ElementaryOutcome assemble_outcome(tbb::enumerable_thread_specific<Local>& locals, bool audit) {
+  ElementaryOutcome outcome;
+  if (audit) outcome.tested.emplace();
+  std::vector<std::pair<std::array<std::uint32_t, 5>, Fault>> faults;
+  std::vector<CollisionSet*> sets;
+  for (Local& local : locals) sets.push_back(&local.collisions);
+  outcome.collisions = normalize_in_parallel(std::move(sets));
+  for (Local& local : locals) {
+    outcome.tests += local.tests;
+    outcome.filtered += local.filtered;
+    outcome.fault_count += local.fault_count;
+    for (auto& fault : local.faults) faults.push_back(std::move(fault));
+    if (audit) {
+      outcome.tested->vertex_face.insert(outcome.tested->vertex_face.end(), local.tested.vertex_face.begin(), local.tested.vertex_face.end());
+      outcome.tested->edge_edge.insert(outcome.tested->edge_edge.end(), local.tested.edge_edge.begin(), local.tested.edge_edge.end());
+    }
+  }
+  locals.clear();
+  // The first faults in pair order, whatever thread met them: the same for any thread count.
+  std::sort(faults.begin(), faults.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (std::size_t i = 0; i < std::min(faults.size(), kKeptFaults); ++i) outcome.faults.push_back(std::move(faults[i].second));
+  if (audit) {
+    tbb::parallel_sort(outcome.tested->vertex_face.begin(), outcome.tested->vertex_face.end());
+    tbb::parallel_sort(outcome.tested->edge_edge.begin(), outcome.tested->edge_edge.end());
+  }
+  return outcome;
+}
+
 }  // namespace
 
 ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const AssignmentMask> masks, std::span<const bvh::TrianglePair> candidates,
@@ -90,47 +184,16 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   const auto& x1 = step.x1;
   PrimitiveBoxes boxes;
   tbb::enumerable_thread_specific<Local> locals;
-  // The narrow phase's answer `r` on one elementary pair (VertexFacePair or EdgeEdgePair), recorded.
-  auto record = [&](Local& local, const auto& pair, const narrowphase::PairRows& rows, const narrowphase::NarrowPhaseResult& r) {
-    constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
-    ++local.tests;
-    if (audit) list_of<vertex_face>(local.tested).push_back(pair);
-    if (r.collides) local.collisions.add(pair, r.toi);
-    if (!r.fault.empty()) {
-      ++local.fault_count;
-      local.faults.push_back({order_key(pair), Fault{r.fault, rows, vertex_face}});
-      // A thread keeps its first faults in pair order only: the step keeps kKeptFaults of every thread's.
-      if (local.faults.size() > 4 * kKeptFaults) {
-        std::sort(local.faults.begin(), local.faults.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-        local.faults.resize(kKeptFaults);
-      }
-    }
-  };
   // The narrow phase on one elementary pair.
   auto test = [&](Local& local, const auto& pair) {
     constexpr bool vertex_face = std::is_same_v<std::decay_t<decltype(pair)>, VertexFacePair>;
     const narrowphase::PairRows rows = pair_rows(topology, x0, x1, pair);
-    record(local, pair, rows, vertex_face ? narrow_phase.vertex_face(rows, thickness) : narrow_phase.edge_edge(rows, thickness));
+    record_answer(local, pair, rows, vertex_face ? narrow_phase.vertex_face(rows, thickness) : narrow_phase.edge_edge(rows, thickness), audit);
   };
   // The primitives' swept boxes, then every elementary pair of every candidate handed to visit(local, pair), in
   // parallel.
   auto visit_candidates = [&](auto&& visit) {
-    boxes.vertex.resize(x0.size());
-    tbb::parallel_for(std::size_t{0}, x0.size(), [&](std::size_t v) {
-      Box3 box(x0[v]);
-      box.extend(x1[v]);
-      boxes.vertex[v] = bvh::widened(box, thickness / 2);
-    });
-    boxes.edge.resize(topology.num_edges());
-    tbb::parallel_for(std::size_t{0}, topology.num_edges(), [&](std::size_t e) {
-      const Edge edge = topology.edge(static_cast<EdgeId>(e));
-      boxes.edge[e] = boxes.vertex[edge.v0].merged(boxes.vertex[edge.v1]);
-    });
-    boxes.face.resize(topology.num_faces());
-    tbb::parallel_for(std::size_t{0}, topology.num_faces(), [&](std::size_t f) {
-      const Face& face = topology.face(static_cast<FaceId>(f));
-      boxes.face[f] = boxes.vertex[face[0]].merged(boxes.vertex[face[1]]).merged(boxes.vertex[face[2]]);
-    });
+    boxes = primitive_boxes(topology, x0, x1, thickness);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
       Local& local = locals.local();
       auto one = [&](const auto& pair) { visit(local, pair); };
@@ -171,26 +234,8 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
     }
     ScopedStageTimer timer(stages, narrow_stage);
     Local& local = locals.local();
-    auto batches = [&](const auto& pairs, bool vertex_face) {
-      const std::size_t batch = narrow_phase.preferred_batch();
-      std::vector<narrowphase::PairRows> rows;
-      std::vector<narrowphase::NarrowPhase::BatchPair> asked;
-      std::vector<narrowphase::NarrowPhaseResult> results;
-      for (std::size_t first = 0; first < pairs.size(); first += batch) {
-        const std::size_t count = std::min(batch, pairs.size() - first);
-        rows.resize(count);
-        asked.resize(count);
-        results.assign(count, {});
-        for (std::size_t i = 0; i < count; ++i) {
-          rows[i] = pair_rows(topology, x0, x1, pairs[first + i]);
-          asked[i] = {&rows[i], vertex_face, thickness};
-        }
-        narrow_phase.answer_batch(asked, results);
-        for (std::size_t i = 0; i < count; ++i) record(local, pairs[first + i], rows[i], results[i]);
-      }
-    };
-    batches(kept.vertex_face, true);
-    batches(kept.edge_edge, false);
+    ask_in_batches(narrow_phase, topology, step, thickness, kept.vertex_face, local, audit);
+    ask_in_batches(narrow_phase, topology, step, thickness, kept.edge_edge, local, audit);
   } else if (!separation_filter) {
     ScopedStageTimer timer(stages, narrow_stage);
     visit_candidates(test);
@@ -216,31 +261,7 @@ ElementaryOutcome test_candidates(const MeshTopology& topology, std::span<const 
   // The strategy's collision set, assembled from every thread's and put in order: the strategy's own work, timed
   // as its "output" stage (with the thread lists freed), so that no part of the step is in no stage.
   ScopedStageTimer output_timer(stages, "output");
-  ElementaryOutcome outcome;
-  if (audit) outcome.tested.emplace();
-  std::vector<std::pair<std::array<std::uint32_t, 5>, Fault>> faults;
-  std::vector<CollisionSet*> sets;
-  for (Local& local : locals) sets.push_back(&local.collisions);
-  outcome.collisions = normalize_in_parallel(std::move(sets));
-  for (Local& local : locals) {
-    outcome.tests += local.tests;
-    outcome.filtered += local.filtered;
-    outcome.fault_count += local.fault_count;
-    for (auto& fault : local.faults) faults.push_back(std::move(fault));
-    if (audit) {
-      outcome.tested->vertex_face.insert(outcome.tested->vertex_face.end(), local.tested.vertex_face.begin(), local.tested.vertex_face.end());
-      outcome.tested->edge_edge.insert(outcome.tested->edge_edge.end(), local.tested.edge_edge.begin(), local.tested.edge_edge.end());
-    }
-  }
-  locals.clear();
-  // The first faults in pair order, whatever thread met them: the same for any thread count.
-  std::sort(faults.begin(), faults.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (std::size_t i = 0; i < std::min(faults.size(), kKeptFaults); ++i) outcome.faults.push_back(std::move(faults[i].second));
-  if (audit) {
-    tbb::parallel_sort(outcome.tested->vertex_face.begin(), outcome.tested->vertex_face.end());
-    tbb::parallel_sort(outcome.tested->edge_edge.begin(), outcome.tested->edge_edge.end());
-  }
-  return outcome;
+  return assemble_outcome(locals, audit);
 }
 
 CollisionSet normalize_in_parallel(std::vector<CollisionSet*> sets) {

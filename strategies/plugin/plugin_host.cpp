@@ -121,6 +121,153 @@ ccdbench_answer answer_query(const Library& library, void* context, bool vertex_
   return answer;
 }
 
+/// A call's fault as its status and message: 1 and the fault where there is one.
+void take_fault(const std::string& fault, int& status, char* message) {
+  if (fault.empty()) return;
+  status = 1;
+  std::snprintf(message, CCDBENCH_MESSAGE_SIZE, "%s", fault.c_str());
+}
+
+/// The child's requests served, one at a time, until the parent closes the pipe: each reply carries the number of the
+/// request it answers, in one write with the reply.
+class Server {
+ public:
+  Server(const Library& library, void* context) : library_(library), context_(context) {}
+
+  /// Serves until the requests end (0) or one cannot be read or answered (1); destroys the context at the end.
+  int run() {
+    for (char kind = 0; read_all(kRequestFd, &kind, 1);) {
+      if (!read_all(kRequestFd, reinterpret_cast<char*>(&sequence_), sizeof sequence_)) return 1;
+      const bool served = kind == kBatch   ? batch()
+                          : kind == kQuery ? query()
+                          : kind == kBegin ? begin()
+                          : kind == kStep  ? step()
+                                           : kind == kEnd && end();
+      if (!served) return 1;
+    }
+    child_call(library_, [&] { library_.table().destroy(context_); });
+    return 0;
+  }
+
+ private:
+  bool reply(const std::vector<char>& reply) {
+    std::vector<char> numbered;
+    put(numbered, sequence_);
+    numbered.insert(numbered.end(), reply.begin(), reply.end());
+    return write_all(kReplyFd, numbered.data(), numbered.size());
+  }
+
+  /// Queries in the shared memory: each answer stamped with the batch's number and counted done as it is written.
+  bool batch() {
+    std::uint64_t count = 0;
+    if (!read_all(kRequestFd, reinterpret_cast<char*>(&count), sizeof count) || count > kBatchCapacity) return false;
+    if (!region_) region_.emplace(BatchRegion::open(kBatchFd));
+    for (std::uint64_t k = 0; k < count; ++k) {
+      const BatchQuery query = region_->queries()[k];
+      const ccdbench_answer answer = answer_query(library_, context_, query.vertex_face != 0, query.rows, query.thickness);
+      BatchAnswer& out = region_->answers()[k];
+      out.outcome = answer.outcome;
+      out.batch = static_cast<std::uint32_t>(sequence_);
+      out.toi = answer.toi;
+      std::memcpy(out.message, answer.message, CCDBENCH_MESSAGE_SIZE);
+      region_->set_done(k + 1);
+    }
+    return reply({kBatchDone});
+  }
+
+  bool query() {
+    char payload[1 + 25 * sizeof(double)];
+    if (!read_all(kRequestFd, payload, sizeof payload)) return false;
+    const char* at = payload;
+    const bool vertex_face = take<std::uint8_t>(at) != 0;
+    double rows[24];
+    std::memcpy(rows, at, sizeof rows);
+    at += sizeof rows;
+    const double thickness = take<double>(at);
+    const ccdbench_answer answer = answer_query(library_, context_, vertex_face, rows, thickness);
+    std::vector<char> answered = status_reply(answer.outcome, answer.message);
+    put(answered, answer.toi);
+    return reply(answered);
+  }
+
+  /// The scene, kept for the step calls.
+  bool begin() {
+    auto read_array = [&](auto& out) {
+      std::uint64_t count = 0;
+      if (!read_all(kRequestFd, reinterpret_cast<char*>(&count), sizeof count)) return false;
+      out.resize(count);
+      return read_all(kRequestFd, reinterpret_cast<char*>(out.data()), count * sizeof(out[0]));
+    };
+    std::uint64_t vertices = 0;
+    if (!read_all(kRequestFd, reinterpret_cast<char*>(&vertices), sizeof vertices) || !read_array(faces_) || !read_array(edges_) ||
+        !read_array(face_object_) || !read_array(self_) || !read_array(collidable_)) {
+      return false;
+    }
+    scene_ = {vertices,     faces_.size() / 3,   faces_.data(), edges_.size() / 2,      edges_.data(),
+              self_.size(), face_object_.data(), self_.data(),  collidable_.size() / 2, collidable_.data()};
+    char message[CCDBENCH_MESSAGE_SIZE] = {};
+    int status = 0;
+    if (library_.table().begin)
+      take_fault(child_call(library_, [&] { status = library_.table().begin(context_, &scene_, message); }), status, message);
+    message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
+    return reply(status_reply(status, message));
+  }
+
+  bool step() {
+    std::uint64_t index = 0, vertices = 0;
+    double thickness = 0;
+    if (!read_all(kRequestFd, reinterpret_cast<char*>(&index), sizeof index) ||
+        !read_all(kRequestFd, reinterpret_cast<char*>(&thickness), sizeof thickness) ||
+        !read_all(kRequestFd, reinterpret_cast<char*>(&vertices), sizeof vertices)) {
+      return false;
+    }
+    std::vector<double> x0(3 * vertices), x1(3 * vertices);
+    if (!read_all(kRequestFd, reinterpret_cast<char*>(x0.data()), x0.size() * sizeof(double)) ||
+        !read_all(kRequestFd, reinterpret_cast<char*>(x1.data()), x1.size() * sizeof(double))) {
+      return false;
+    }
+    StepReply collected;
+    ccdbench_contacts contacts{&collected,
+                               [](void* host, std::uint32_t v, std::uint32_t f, double toi) {
+                                 auto* out = static_cast<StepReply*>(host);
+                                 put(out->vertex_face, v);
+                                 put(out->vertex_face, f);
+                                 put(out->vertex_face, toi);
+                                 ++out->vertex_face_count;
+                               },
+                               [](void* host, std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1, double toi) {
+                                 auto* out = static_cast<StepReply*>(host);
+                                 for (std::uint32_t v : {a0, a1, b0, b1}) put(out->edge_edge, v);
+                                 put(out->edge_edge, toi);
+                                 ++out->edge_edge_count;
+                               }};
+    const ccdbench_step request{index, x0.data(), x1.data(), thickness};
+    char message[CCDBENCH_MESSAGE_SIZE] = {};
+    int status = 0;
+    take_fault(child_call(library_, [&] { status = library_.table().step(context_, &request, &contacts, message); }), status, message);
+    message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
+    std::vector<char> answered = status_reply(status, message);
+    put(answered, collected.vertex_face_count);
+    answered.insert(answered.end(), collected.vertex_face.begin(), collected.vertex_face.end());
+    put(answered, collected.edge_edge_count);
+    answered.insert(answered.end(), collected.edge_edge.begin(), collected.edge_edge.end());
+    return reply(answered);
+  }
+
+  bool end() {
+    if (library_.table().end) child_call(library_, [&] { library_.table().end(context_); });
+    return reply(status_reply(0, ""));
+  }
+
+  const Library& library_;
+  void* context_;
+  std::vector<std::uint32_t> faces_, edges_, face_object_, collidable_;
+  std::vector<std::uint8_t> self_;
+  ccdbench_scene scene_{};
+  std::optional<BatchRegion> region_;
+  std::uint64_t sequence_ = 0;
+};
+
 }  // namespace
 
 int serve_plugin(int argc, char** argv) {
@@ -187,126 +334,7 @@ int serve_plugin(int argc, char** argv) {
   }
   error[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
   if (!greet(context != nullptr ? 0 : 1, context != nullptr ? "" : error, digest) || context == nullptr) return 1;
-  // The scene of `begin`, kept for the step calls.
-  std::vector<std::uint32_t> faces, edges, face_object, collidable;
-  std::vector<std::uint8_t> self;
-  ccdbench_scene scene{};
-  std::optional<BatchRegion> region;
-  std::uint64_t sequence = 0;
-  // Each reply carries the number of the request it answers, in one write with the reply.
-  auto reply_to_request = [&](const std::vector<char>& reply) {
-    std::vector<char> numbered;
-    put(numbered, sequence);
-    numbered.insert(numbered.end(), reply.begin(), reply.end());
-    return write_all(kReplyFd, numbered.data(), numbered.size());
-  };
-  for (char kind = 0; read_all(kRequestFd, &kind, 1);) {
-    if (!read_all(kRequestFd, reinterpret_cast<char*>(&sequence), sizeof sequence)) return 1;
-    if (kind == kBatch) {
-      std::uint64_t count = 0;
-      if (!read_all(kRequestFd, reinterpret_cast<char*>(&count), sizeof count) || count > kBatchCapacity) return 1;
-      if (!region) region.emplace(BatchRegion::open(kBatchFd));
-      for (std::uint64_t k = 0; k < count; ++k) {
-        const BatchQuery query = region->queries()[k];
-        const ccdbench_answer answer = answer_query(library, context, query.vertex_face != 0, query.rows, query.thickness);
-        BatchAnswer& out = region->answers()[k];
-        out.outcome = answer.outcome;
-        out.batch = static_cast<std::uint32_t>(sequence);
-        out.toi = answer.toi;
-        std::memcpy(out.message, answer.message, CCDBENCH_MESSAGE_SIZE);
-        region->set_done(k + 1);
-      }
-      if (!reply_to_request({kBatchDone})) return 1;
-    } else if (kind == kQuery) {
-      char payload[1 + 25 * sizeof(double)];
-      if (!read_all(kRequestFd, payload, sizeof payload)) return 1;
-      const char* at = payload;
-      const bool vertex_face = take<std::uint8_t>(at) != 0;
-      double rows[24];
-      std::memcpy(rows, at, sizeof rows);
-      at += sizeof rows;
-      const double thickness = take<double>(at);
-      const ccdbench_answer answer = answer_query(library, context, vertex_face, rows, thickness);
-      std::vector<char> reply = status_reply(answer.outcome, answer.message);
-      put(reply, answer.toi);
-      if (!reply_to_request(reply)) return 1;
-    } else if (kind == kBegin) {
-      auto read_array = [&](auto& out) {
-        std::uint64_t count = 0;
-        if (!read_all(kRequestFd, reinterpret_cast<char*>(&count), sizeof count)) return false;
-        out.resize(count);
-        return read_all(kRequestFd, reinterpret_cast<char*>(out.data()), count * sizeof(out[0]));
-      };
-      std::uint64_t vertices = 0;
-      if (!read_all(kRequestFd, reinterpret_cast<char*>(&vertices), sizeof vertices) || !read_array(faces) || !read_array(edges) ||
-          !read_array(face_object) || !read_array(self) || !read_array(collidable)) {
-        return 1;
-      }
-      scene = {vertices,    faces.size() / 3,   faces.data(), edges.size() / 2,      edges.data(),
-               self.size(), face_object.data(), self.data(),  collidable.size() / 2, collidable.data()};
-      char message[CCDBENCH_MESSAGE_SIZE] = {};
-      int status = 0;
-      if (library.table().begin) {
-        const std::string fault = child_call(library, [&] { status = library.table().begin(context, &scene, message); });
-        if (!fault.empty()) {
-          status = 1;
-          std::snprintf(message, CCDBENCH_MESSAGE_SIZE, "%s", fault.c_str());
-        }
-      }
-      message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-      if (!reply_to_request(status_reply(status, message))) return 1;
-    } else if (kind == kStep) {
-      std::uint64_t index = 0, vertices = 0;
-      double thickness = 0;
-      if (!read_all(kRequestFd, reinterpret_cast<char*>(&index), sizeof index) ||
-          !read_all(kRequestFd, reinterpret_cast<char*>(&thickness), sizeof thickness) ||
-          !read_all(kRequestFd, reinterpret_cast<char*>(&vertices), sizeof vertices)) {
-        return 1;
-      }
-      std::vector<double> x0(3 * vertices), x1(3 * vertices);
-      if (!read_all(kRequestFd, reinterpret_cast<char*>(x0.data()), x0.size() * sizeof(double)) ||
-          !read_all(kRequestFd, reinterpret_cast<char*>(x1.data()), x1.size() * sizeof(double))) {
-        return 1;
-      }
-      StepReply collected;
-      ccdbench_contacts contacts{&collected,
-                                 [](void* host, std::uint32_t v, std::uint32_t f, double toi) {
-                                   auto* out = static_cast<StepReply*>(host);
-                                   put(out->vertex_face, v);
-                                   put(out->vertex_face, f);
-                                   put(out->vertex_face, toi);
-                                   ++out->vertex_face_count;
-                                 },
-                                 [](void* host, std::uint32_t a0, std::uint32_t a1, std::uint32_t b0, std::uint32_t b1, double toi) {
-                                   auto* out = static_cast<StepReply*>(host);
-                                   for (std::uint32_t v : {a0, a1, b0, b1}) put(out->edge_edge, v);
-                                   put(out->edge_edge, toi);
-                                   ++out->edge_edge_count;
-                                 }};
-      const ccdbench_step step{index, x0.data(), x1.data(), thickness};
-      char message[CCDBENCH_MESSAGE_SIZE] = {};
-      int status = 0;
-      const std::string fault = child_call(library, [&] { status = library.table().step(context, &step, &contacts, message); });
-      if (!fault.empty()) {
-        status = 1;
-        std::snprintf(message, CCDBENCH_MESSAGE_SIZE, "%s", fault.c_str());
-      }
-      message[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
-      std::vector<char> reply = status_reply(status, message);
-      put(reply, collected.vertex_face_count);
-      reply.insert(reply.end(), collected.vertex_face.begin(), collected.vertex_face.end());
-      put(reply, collected.edge_edge_count);
-      reply.insert(reply.end(), collected.edge_edge.begin(), collected.edge_edge.end());
-      if (!reply_to_request(reply)) return 1;
-    } else if (kind == kEnd) {
-      if (library.table().end) child_call(library, [&] { library.table().end(context); });
-      if (!reply_to_request(status_reply(0, ""))) return 1;
-    } else {
-      return 1;
-    }
-  }
-  child_call(library, [&] { library.table().destroy(context); });
-  return 0;
+  return Server(library, context).run();
 }
 
 }  // namespace ccd::plugin

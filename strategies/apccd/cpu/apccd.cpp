@@ -43,6 +43,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -107,66 +108,15 @@ class Apccd final : public Strategy {
     if (session_start) {
       start_session(result);
     } else {
-      // Dangling vertices: beyond their budget around the session's anchor, in their object's frame, at either end
-      // of the step. A vertex coming back within its budget still moves outside it during the step, on a segment
-      // that its enlarged leaf holds but that no earlier partial traversal searched from.
-      std::vector<FaceId> dangling_faces;
-      {
-        ScopedStageTimer timer(result.stages, "dangling collection");
-        std::vector<char> dangling(topology.num_vertices(), 0);
-        auto outside = [&](const Vec3& relative, std::size_t v) { return (relative - anchor_[v]).cwiseAbs().maxCoeff() > budget_[v]; };
-        tbb::parallel_for(std::size_t{0}, topology.num_vertices(),
-                          [&](std::size_t v) { dangling[v] = outside(relative0_[v], v) || outside(relative1_[v], v) ? 1 : 0; });
-        std::vector<char> face_dangles(topology.num_faces(), 0);
-        for (std::size_t v = 0; v < dangling.size(); ++v) {
-          if (!dangling[v]) continue;
-          ++dangling_vertices;
-          for (FaceId f : topology.vertex_faces(static_cast<VertexId>(v))) face_dangles[f] = 1;
-        }
-        for (FaceId f = 0; f < topology.num_faces(); ++f) {
-          if (face_dangles[f]) dangling_faces.push_back(f);
-        }
-        dangling_triangles = dangling_faces.size();
-      }
+      const std::vector<FaceId> dangling_faces = collect_dangling(result, dangling_vertices);
+      dangling_triangles = dangling_faces.size();
       {
         ScopedStageTimer timer(result.stages, "partial traversal");
         partial_traversal(dangling_faces, half);
       }
     }
-    std::vector<bvh::TrianglePair> across;
-    {
-      // Pairs across objects, every step: each tree holds its object's relative positions, so it is swept by the
-      // range its object's centroid covers during this step (centroids move linearly, as vertices do).
-      ScopedStageTimer timer(result.stages, "object pairs");
-      if (!scene_->collidable_pairs().empty()) {
-        if (settings_.fresh_object_pairs) {
-          // The session's budgets bound motion relative to an object's centroid, which a turning object (the
-          // spinning ball) exceeds everywhere: its inflated tree then overlaps far too much. A refit of tight
-          // world-frame trees and their traversal, as `full` does, costs less there.
-          fresh_.refit(step, half);
-          across = fresh_.pair_candidates([](ObjectId, ObjectId) { return Box3(Vec3::Zero(), Vec3::Zero()); });
-        } else {
-          across = hierarchies_.pair_candidates([&](ObjectId a, ObjectId b) { return session_.pair_offset(a, b); });
-        }
-      }
-    }
-    std::vector<bvh::TrianglePair> admissible;
-    {
-      ScopedStageTimer timer(result.stages, "front end");
-      if (settings_.front_end != FrontEnd::off) {
-        // Admissible: the two triangles' fresh swept boxes, widened by δ/2, overlap this step. Each face's box is
-        // computed once per step; candidate pairs then only compare two boxes.
-        std::vector<Box3> face_boxes(topology.num_faces());
-        tbb::parallel_for(std::size_t{0}, topology.num_faces(),
-                          [&](std::size_t f) { face_boxes[f] = bvh::swept_face_box(topology.face(static_cast<FaceId>(f)), step.x0, step.x1, half); });
-        // The pending list and this step's object pairs are filtered in place of a merged copy: the back end's
-        // answer does not depend on the order of its candidates.
-        const auto overlapping = [&](const bvh::TrianglePair& pair) { return boxes_overlap(face_boxes[pair.first], face_boxes[pair.second]); };
-        for (const auto* list : {&pending_, &found_, &across}) append_kept(*list, overlapping, admissible);
-      } else {
-        for (const auto* list : {&pending_, &found_, &across}) admissible.insert(admissible.end(), list->begin(), list->end());
-      }
-    }
+    const std::vector<bvh::TrianglePair> across = object_pairs(step, half, result);
+    const std::vector<bvh::TrianglePair> admissible = admissible_pairs(step, half, across, result);
     ElementaryOutcome outcome;
     std::size_t history_catches = 0;
     // The front end's distance heuristic at the elementary level ("distance heuristic", timed on its own as on the
@@ -209,6 +159,76 @@ class Apccd final : public Strategy {
   }
 
  private:
+  /// Dangling vertices: beyond their budget around the session's anchor, in their object's frame, at either end of
+  /// the step (a vertex coming back within its budget still moves outside it during the step, on a segment that its
+  /// enlarged leaf holds but that no earlier partial traversal searched from); returns their faces, counts them.
+  std::vector<FaceId> collect_dangling(StepResult& result, std::size_t& dangling_vertices) {
+    const MeshTopology& topology = scene_->topology();
+    std::vector<FaceId> dangling_faces;
+    ScopedStageTimer timer(result.stages, "dangling collection");
+    std::vector<char> dangling(topology.num_vertices(), 0);
+    auto outside = [&](const Vec3& relative, std::size_t v) { return (relative - anchor_[v]).cwiseAbs().maxCoeff() > budget_[v]; };
+    tbb::parallel_for(std::size_t{0}, topology.num_vertices(),
+                      [&](std::size_t v) { dangling[v] = outside(relative0_[v], v) || outside(relative1_[v], v) ? 1 : 0; });
+    std::vector<char> face_dangles(topology.num_faces(), 0);
+    for (std::size_t v = 0; v < dangling.size(); ++v) {
+      if (!dangling[v]) continue;
+      ++dangling_vertices;
+      for (FaceId f : topology.vertex_faces(static_cast<VertexId>(v))) face_dangles[f] = 1;
+    }
+    for (FaceId f = 0; f < topology.num_faces(); ++f) {
+      if (face_dangles[f]) dangling_faces.push_back(f);
+    }
+    return dangling_faces;
+  }
+
+  /// Pairs across objects, every step: each tree holds its object's relative positions, so it is swept by the range
+  /// its object's centroid covers during this step (centroids move linearly, as vertices do).
+  std::vector<bvh::TrianglePair> object_pairs(const StepView& step, double half, StepResult& result) {
+    std::vector<bvh::TrianglePair> across;
+    {
+      ScopedStageTimer timer(result.stages, "object pairs");
+      if (!scene_->collidable_pairs().empty()) {
+        if (settings_.fresh_object_pairs) {
+          // The session's budgets bound motion relative to an object's centroid, which a turning object (the
+          // spinning ball) exceeds everywhere: its inflated tree then overlaps far too much. A refit of tight
+          // world-frame trees and their traversal, as `full` does, costs less there.
+          fresh_.refit(step, half);
+          across = fresh_.pair_candidates([](ObjectId, ObjectId) { return Box3(Vec3::Zero(), Vec3::Zero()); });
+        } else {
+          across = hierarchies_.pair_candidates([&](ObjectId a, ObjectId b) { return session_.pair_offset(a, b); });
+        }
+      }
+    }
+    return across;
+  }
+
+  /// The front end: the pending list's, this session's found and this step's object pairs whose fresh swept boxes
+  /// overlap (all of them with the front end off).
+  std::vector<bvh::TrianglePair> admissible_pairs(const StepView& step, double half, const std::vector<bvh::TrianglePair>& across,
+                                                  StepResult& result) {
+    const MeshTopology& topology = scene_->topology();
+    std::vector<bvh::TrianglePair> admissible;
+    const std::array<const std::vector<bvh::TrianglePair>*, 3> lists = {&pending_, &found_, &across};
+    {
+      ScopedStageTimer timer(result.stages, "front end");
+      if (settings_.front_end != FrontEnd::off) {
+        // Admissible: the two triangles' fresh swept boxes, widened by δ/2, overlap this step. Each face's box is
+        // computed once per step; candidate pairs then only compare two boxes.
+        std::vector<Box3> face_boxes(topology.num_faces());
+        tbb::parallel_for(std::size_t{0}, topology.num_faces(),
+                          [&](std::size_t f) { face_boxes[f] = bvh::swept_face_box(topology.face(static_cast<FaceId>(f)), step.x0, step.x1, half); });
+        // The pending list and this step's object pairs are filtered in place of a merged copy: the back end's
+        // answer does not depend on the order of its candidates.
+        const auto overlapping = [&](const bvh::TrianglePair& pair) { return boxes_overlap(face_boxes[pair.first], face_boxes[pair.second]); };
+        for (const auto* list : lists) append_kept(*list, overlapping, admissible);
+      } else {
+        for (const auto* list : lists) admissible.insert(admissible.end(), list->begin(), list->end());
+      }
+    }
+    return admissible;
+  }
+
   /// First frame of a session: budgets, inflated refit, full self traversal into the pending list.
   void start_session(StepResult& result) {
     const MeshTopology& topology = scene_->topology();

@@ -120,25 +120,7 @@ class ApccdOpenCl final : public Strategy {
       dangling_triangles = dangling_faces_.count;
       partial_traversal(events);
     }
-    // Pairs across objects, every step.
-    DeviceList* across = nullptr;
-    if (objects_with_pairs_) {
-      if (settings_.fresh_object_pairs) {
-        pipeline_.refit(pipeline_.moving_nodes(), x0, x1, half, nullptr, world_boxes_, &events);
-        pipeline_.traverse(pair_queries_, world_boxes_, nullptr, across_, events, "object pairs");
-      } else {
-        std::vector<double>& offsets = host_offsets_;  // read by the device after this call returns
-        offsets.clear();
-        for (const auto& [a, b] : scene_->collidable_pairs()) {
-          const Box3 offset = session_.pair_offset(a, b);
-          for (int k = 0; k < 3; ++k) offsets.push_back(offset.min()[k]);
-          for (int k = 0; k < 3; ++k) offsets.push_back(offset.max()[k]);
-        }
-        upload(context, offsets_, offsets.data(), offsets.size(), events.add("object pairs"));
-        pipeline_.traverse(pair_queries_, session_boxes_, &offsets_, across_, events, "object pairs");
-      }
-      across = &across_;
-    }
+    const DeviceList* across = object_pairs(x0, x1, half, events);
     // The front end: candidates whose fresh swept boxes overlap.
     const bool box_filter = settings_.front_end != FrontEnd::off;
     if (box_filter) {
@@ -184,14 +166,7 @@ class ApccdOpenCl final : public Strategy {
     positions_.finish(step);
     result.counters.candidate_triangle_pairs = admissible;
     result.counters.elementary_tests = tests;
-    const std::size_t device = device_bytes();
-    if (device > memory_budget_) {
-      // apccd's lists carry over from step to step (pending pairs, sessions): it does not run a step in pieces.
-      throw std::runtime_error(pipeline_.label() + ": step " + std::to_string(step.index + 1) + " needed " + std::to_string(device) +
-                               " bytes of device memory, more than memory=" + pipeline_.backend().memory.text() + " allows (" +
-                               std::to_string(memory_budget_) +
-                               " bytes): apccd holds a step's lists whole; full:backend=opencl runs such a step in chunks, or give a larger memory=");
-    }
+    const std::size_t device = checked_device_bytes(step);
     result.counters.device_bytes = device;
     result.counters.history_bytes = history_.bytes();
     result.counters.kept_bytes = history_.bytes();
@@ -220,6 +195,40 @@ class ApccdOpenCl final : public Strategy {
   }
 
  private:
+  /// The device memory this step's lists hold, refused (std::runtime_error) over memory=.
+  std::size_t checked_device_bytes(const StepView& step) const {
+    const std::size_t device = device_bytes();
+    if (device > memory_budget_) {
+      // apccd's lists carry over from step to step (pending pairs, sessions): it does not run a step in pieces.
+      throw std::runtime_error(pipeline_.label() + ": step " + std::to_string(step.index) + " needed " + std::to_string(device) +
+                               " bytes of device memory, more than memory=" + pipeline_.backend().memory.text() + " allows (" +
+                               std::to_string(memory_budget_) +
+                               " bytes): apccd holds a step's lists whole; full:backend=opencl runs such a step in chunks, or give a larger memory=");
+    }
+    return device;
+  }
+
+  /// Pairs across objects, every step: a fresh traversal of the world boxes, or of the session's boxes moved by each
+  /// object pair's offset; nullptr when the scene has no object pairs.
+  const DeviceList* object_pairs(const Buffer& x0, const Buffer& x1, double half, opencl::StageEvents& events) {
+    if (!objects_with_pairs_) return nullptr;
+    if (settings_.fresh_object_pairs) {
+      pipeline_.refit(pipeline_.moving_nodes(), x0, x1, half, nullptr, world_boxes_, &events);
+      pipeline_.traverse(pair_queries_, world_boxes_, nullptr, across_, events, "object pairs");
+    } else {
+      std::vector<double>& offsets = host_offsets_;  // read by the device after this call returns
+      offsets.clear();
+      for (const auto& [a, b] : scene_->collidable_pairs()) {
+        const Box3 offset = session_.pair_offset(a, b);
+        for (int k = 0; k < 3; ++k) offsets.push_back(offset.min()[k]);
+        for (int k = 0; k < 3; ++k) offsets.push_back(offset.max()[k]);
+      }
+      upload(pipeline_.context(), offsets_, offsets.data(), offsets.size(), events.add("object pairs"));
+      pipeline_.traverse(pair_queries_, session_boxes_, &offsets_, across_, events, "object pairs");
+    }
+    return &across_;
+  }
+
   /// Positions relative to the objects' centroids (uploaded, as the host summed them).
   /// Host data uploaded without waiting (host_centroids_, host_budget_) is rewritten only in a later step, after
   /// this step's blocking reads have drained the in-order queue.
