@@ -12,7 +12,7 @@
 
 #include "reference/face_shape.hpp"
 #include "strategies/face_shape.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 
 #include <benchmark/benchmark.h>
 

@@ -6,7 +6,7 @@
 #include "datasets/data_dir.hpp"
 #include "datasets/query_file.hpp"
 #include "datasets/sample_step.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/separation_filter.hpp"
 
 #include <benchmark/benchmark.h>

@@ -14,7 +14,7 @@ function(ccd_add_library name)
   target_link_libraries(ccd_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ccd::warnings ${ARG_PRIVATE_DEPS})
 endfunction()
 
-# Helper: a registry whose list is the build's (strategies/narrowphase/registry.hpp, strategies/registry.hpp).
+# Helper: a registry whose list is the build's (strategies/narrowphase_registry.hpp, strategies/registry.hpp).
 # Compiles FILE.cpp for each FILE into `target` and writes generated/ccd/<list_name>.inc, one line
 # `CCD_<LIST_NAME in capitals, without its final S>(BASENAME)` per file, which the registry includes to call each
 # file's entries function; so adding an entry is one new file and one line in its folder's CMakeLists.txt.

@@ -8,7 +8,7 @@
 #include "harness/table.hpp"
 #include "harness/timed_region.hpp"
 #include "reference/elementary_pair.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/registry.hpp"
 
 #include <nlohmann/json.hpp>

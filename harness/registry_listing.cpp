@@ -1,7 +1,7 @@
 #include "harness/registry_listing.hpp"
 
 #include "harness/table.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/plugin/isolation.hpp"
 #include "strategies/plugin/library.hpp"
 #include "strategies/registry.hpp"

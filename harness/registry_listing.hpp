@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// `ccdbench strategies`: what the registries hold (strategies/registry.hpp, strategies/narrowphase/registry.hpp),
+/// `ccdbench strategies`: what the registries hold (strategies/registry.hpp, strategies/narrowphase_registry.hpp),
 /// for people and for scripts.
 
 #include <nlohmann/json.hpp>

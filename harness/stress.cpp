@@ -3,7 +3,7 @@
 #include "harness/query_scoring.hpp"
 #include "harness/table.hpp"
 #include "reference/elementary_pair.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/plugin/call_guard.hpp"
 
 #include <nlohmann/json.hpp>

@@ -1,7 +1,7 @@
 #include "strategies/registry.hpp"
 
 #include "strategies/narrowphase/entry_list.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/plugin/plugin_narrow_phase.hpp"
 #include "strategies/plugin/plugin_strategy.hpp"
 

@@ -2,7 +2,7 @@
 #include "harness/cli/cli.hpp"
 #include "harness/commands.hpp"
 #include "harness/query_scoring.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 
 #include <iostream>
 #include <limits>

@@ -3,7 +3,7 @@
 #include "datasets/scene_file.hpp"
 #include "harness/cli/cli.hpp"
 #include "harness/run.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/registry.hpp"
 
 #include <cmath>

@@ -2,7 +2,7 @@
 
 #include "datasets/atomic_file.hpp"
 #include "harness/run/provenance.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/registry.hpp"
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// What the two registries (strategies/registry.hpp, strategies/narrowphase/registry.hpp) do alike: gather the
+/// What the two registries (strategies/registry.hpp, strategies/narrowphase_registry.hpp) do alike: gather the
 /// entries of every file of the build's list, in order, and find one by name.
 
 #include <initializer_list>

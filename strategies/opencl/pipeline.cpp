@@ -3,7 +3,7 @@
 #include "core/assignment.hpp"
 #include "strategies/bvh/bvh.hpp"
 #include "strategies/elementary_tests.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/opencl/self_test.hpp"
 
 #include <tbb/parallel_for.h>

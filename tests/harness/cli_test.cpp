@@ -3,7 +3,7 @@
 #include "tests/support/cli.hpp"
 #include "ccd/config.hpp"
 #include "datasets/procedural_scenes.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/registry.hpp"
 #include "tests/support/test_support.hpp"
 

@@ -5,7 +5,7 @@
 
 #include "reference/face_shape.hpp"
 #include "strategies/face_shape.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>

@@ -5,7 +5,7 @@
 #include "reference/elementary_pair.hpp"
 #include "reference/step_truth.hpp"
 #include "strategies/fcl/fcl_elementary.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "strategies/registry.hpp"
 #include "tests/support/strategy_runs.hpp"
 #include "tests/support/test_support.hpp"

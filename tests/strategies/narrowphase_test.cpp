@@ -4,7 +4,7 @@
 #include "datasets/extremes_suite.hpp"
 #include "datasets/query_file.hpp"
 #include "reference/elementary_pair.hpp"
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "tests/support/rational_rows.hpp"
 #include "tests/support/scale_pairs.hpp"
 #include "tests/support/test_support.hpp"

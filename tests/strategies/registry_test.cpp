@@ -1,10 +1,10 @@
 // The registries of strategies and narrow phases: every entry's keys and their defaults, resolved names, and the
 // cell keys made from them.
 
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/registry.hpp"
 #include "ccd/config.hpp"
 #include "harness/cell_store.hpp"
-#include "strategies/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-#include "strategies/narrowphase/registry.hpp"
+#include "strategies/narrowphase_registry.hpp"
 
 #include "strategies/narrowphase/entry_list.hpp"
 #include "strategies/plugin/host_method.hpp"
