@@ -28,5 +28,6 @@ function(ccd_add_registry target list_name)
     string(APPEND lines "CCD_${macro}(${base})\n")
   endforeach()
   file(CONFIGURE OUTPUT ${PROJECT_BINARY_DIR}/generated/ccd/${list_name}.inc CONTENT "${lines}")
+  set_property(GLOBAL PROPERTY ccd_registry_${list_name} ${ARGN})  # the list, for a test that adds an entry to it
   target_link_libraries(${target} PRIVATE ccd::config)
 endfunction()

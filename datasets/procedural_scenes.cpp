@@ -33,12 +33,7 @@ using procedural::Setup;
 /// Bumped whenever the simulator or a scene changes what it generates, so old caches are not reused.
 constexpr int kGeneratorVersion = 3;
 
-const std::vector<SceneDefinition>& definitions() {
-  static const std::vector<SceneDefinition> scenes = {procedural::spinning_ball_scene(), procedural::drape_scene(),  procedural::flag_scene(),
-                                                      procedural::twist_scene(),         procedural::funnel_scene(), procedural::pile_scene(),
-                                                      procedural::fold_scene()};
-  return scenes;
-}
+const std::vector<SceneDefinition>& definitions() { return procedural::scene_definitions(); }
 
 const SceneDefinition& find_definition(const std::string& name) {
   for (const SceneDefinition& d : definitions()) {

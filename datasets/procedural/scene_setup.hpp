@@ -59,14 +59,10 @@ struct SceneDefinition {
   Setup (*build)(CommonParameters&, const SceneParameters&);
 };
 
-/// The scenes, one per file, in the order `ccdbench scenes` lists them.
-SceneDefinition spinning_ball_scene();
-SceneDefinition drape_scene();
-SceneDefinition flag_scene();
-SceneDefinition twist_scene();
-SceneDefinition funnel_scene();
-SceneDefinition pile_scene();
-SceneDefinition fold_scene();
+/// Every built-in scene, in the order `ccdbench scenes` lists them (scene_list.cpp). The list is the build's:
+/// datasets/CMakeLists.txt names one file per line, and each file procedural/FILE.cpp defines
+/// `SceneDefinition FILE_scene()` in this namespace. A new built-in scene is its file and its line there.
+const std::vector<SceneDefinition>& scene_definitions();
 
 /// resolution, frames, seed and steps_per_frame, then a scene's `own` parameters.
 std::vector<SceneParameter> with_common(std::vector<SceneParameter> own);
