@@ -351,7 +351,8 @@ MeshFrame read_ascii_body(const std::filesystem::path& path, std::ifstream& in, 
       if (!cursor.next_line()) {
         throw InputError(path, line_at(cursor.line_number()), "file ends at " + element_where(element, i) + " of " + std::to_string(element.count));
       }
-      read_entry(path, layout, element, e, i, line_at(cursor.line_number()), [&](PlyType type) { return cursor.read(type); }, frame);
+      read_entry(
+          path, layout, element, e, i, line_at(cursor.line_number()), [&](PlyType type) { return cursor.read(type); }, frame);
       cursor.expect_line_end();
       if (e == layout.vertex_element) vertex_lines.push_back(cursor.line_number());
       if (e == layout.face_element) face_lines.push_back(cursor.line_number());

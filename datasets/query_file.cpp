@@ -149,7 +149,6 @@ void assemble_queries(const std::filesystem::path& path, std::vector<Row>& rows,
       query.exact[r] = std::move(row.point);
     }
   }
-
 }
 
 }  // namespace
