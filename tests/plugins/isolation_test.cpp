@@ -103,7 +103,7 @@ TEST_F(Isolation, APluginWhoseForkReturnsGivesNoOtherQuerysAnswer) {
   const auto clean = run_ccdbench(score + quoted(dir_ / "clean.csv"));
   ASSERT_EQ(clean.exit_code, 0) << clean.output;
   const ScopedVariable forking("CCDBENCH_TEST_FORK_ON", "5");
-  const auto forked = run_ccdbench(score + quoted(dir_ / "forked.csv"));
+  const auto forked = run_ccdbench(score + quoted(dir_ / "forked.csv") + " --json " + quoted(dir_ / "forked.json"));
   ASSERT_EQ(forked.exit_code, 0) << forked.output;
   const std::map<std::string, std::string> expected = answers_of(dir_ / "clean.csv"), got = answers_of(dir_ / "forked.csv");
   ASSERT_EQ(got.size(), expected.size());
@@ -115,7 +115,11 @@ TEST_F(Isolation, APluginWhoseForkReturnsGivesNoOtherQuerysAnswer) {
     }
     EXPECT_EQ(answer, expected.at(query)) << query << ": another query's answer";
   }
-  EXPECT_GT(errors, 0u) << "the fork was never noticed: this proves nothing\n" << forked.output;
+  // The second process may answer late: on a loaded machine it can sleep through the scored pass and write its
+  // reply during the audit pass, which then counts the answers that changed. Either way the fork is noticed.
+  const nlohmann::json scored = read_json(dir_ / "forked.json");
+  const std::size_t changed = scored.back().value("changed_between_passes", std::size_t{0});
+  EXPECT_GT(errors + changed, 0u) << "the fork was never noticed: this proves nothing\n" << forked.output;
 
   // In a run: what it misses beyond the clean run is its errors (errors=miss), and it raises no false alarm more.
   const std::string run = "run --scene " + quoted(fold()) + " --thickness 0 --strategy full+" + p + " --out " + quoted(dir_ / "out");
@@ -128,7 +132,9 @@ TEST_F(Isolation, APluginWhoseForkReturnsGivesNoOtherQuerysAnswer) {
   ASSERT_EQ(forked_run.exit_code, 0) << forked_run.output;
   const nlohmann::json after = cell_of(forked_cells, "full+" + p);
   ASSERT_GT(before["colliding"].get<int>(), 0);
-  EXPECT_GT(after["errors"].get<int>(), 0) << forked_run.output;
+  // Noticed in the scored pass (its errors) or, when the second process slept through that pass, in the audit pass
+  // (the cell is marked nondeterministic, which check fails).
+  EXPECT_TRUE(after["errors"].get<int>() > 0 || after.contains("nondeterministic_at_step")) << forked_run.output;
   EXPECT_LE(after["missed"].get<int>(), before["missed"].get<int>() + after["errors"].get<int>()) << forked_run.output;
   EXPECT_LE(after["false_alarms"].get<int>(), before["false_alarms"].get<int>()) << forked_run.output;
 }
