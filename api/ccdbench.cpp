@@ -10,7 +10,7 @@
 #include "datasets/procedural_scenes.hpp"
 #include "datasets/query_file.hpp"
 #include "datasets/scene_file.hpp"
-#include "harness/query_scoring.hpp"
+#include "harness/queries/scoring.hpp"
 #include "harness/run.hpp"
 #include "harness/run/records.hpp"
 #include "reference/elementary_pair.hpp"

@@ -1,7 +1,7 @@
 // ccdbench queries and ccdbench stress: methods scored on query files, and on the extremes suite.
 #include "harness/cli/cli.hpp"
 #include "harness/commands.hpp"
-#include "harness/query_scoring.hpp"
+#include "harness/queries/scoring.hpp"
 #include "strategies/narrowphase_registry.hpp"
 
 #include <iostream>

@@ -1,7 +1,8 @@
-#include "harness/query_answers.hpp"
+#include "harness/queries/answer_files.hpp"
 
 #include "core/error.hpp"
 #include "datasets/content_hash.hpp"
+#include "strategies/narrowphase/spec.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -225,5 +226,7 @@ void bind_answers(AnswerTable& table, const std::vector<datasets::QueryFile>& fi
     }
   }
 }
+
+bool names_answers(const std::string& spec) { return spec.rfind(std::string(narrowphase::kAnswersHead) + ":", 0) == 0; }
 
 }  // namespace ccd::harness

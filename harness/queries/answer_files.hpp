@@ -56,6 +56,9 @@ AnswerTable read_answer_table(const std::filesystem::path& path, const std::stri
 /// @throws InputError (the answer file, line N or the query without an answer, reason).
 void bind_answers(AnswerTable& table, const std::vector<datasets::QueryFile>& files);
 
+/// Whether a method spec names an answer file (`answers:FILE[:method=NAME]`).
+bool names_answers(const std::string& spec);
+
 /// A double as the answer files write it: the shortest text that reads back as the same double.
 std::string answer_number(double value);
 

@@ -1,12 +1,14 @@
 // QueryScore as records leave the process: the message ranks exchange (to_message, from_message), the table, the
-// answer file --write-answers writes, and the report page. Scoring itself is query_scoring.cpp's.
+// answer file --write-answers writes, and the report page. Scoring itself is scoring.cpp's.
 #include "datasets/atomic_file.hpp"
 #include "datasets/content_hash.hpp"
 #include "datasets/rational.hpp"
 #include "harness/cell_store.hpp"
-#include "harness/query_scoring.hpp"
+#include "harness/queries/answer_files.hpp"
+#include "harness/queries/scoring.hpp"
 #include "harness/statistics.hpp"
 #include "harness/table.hpp"
+#include "strategies/plugin/plugin_narrow_phase.hpp"
 
 #include <nlohmann/json.hpp>
 

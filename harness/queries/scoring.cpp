@@ -1,9 +1,9 @@
-#include "harness/query_scoring.hpp"
+#include "harness/queries/scoring.hpp"
 
 #include "ccd/config.hpp"
 #include "datasets/atomic_file.hpp"
 #include "datasets/rational.hpp"
-#include "harness/query_answers.hpp"
+#include "harness/queries/answer_files.hpp"
 #include "harness/statistics.hpp"
 #include "harness/table.hpp"
 #include "harness/timed_region.hpp"
@@ -27,185 +27,6 @@
 #include <stdexcept>
 
 namespace ccd::harness {
-namespace {
-
-/// The reference on the query's exact rationals (with its exact TOI floor when asked).
-reference::Decision decide_exactly(const datasets::Query& query, datasets::QueryKind kind, double thickness, bool toi) {
-  reference::ExactPair pair;
-  pair.kind = kind == datasets::QueryKind::vertex_face ? reference::PairKind::vertex_face : reference::PairKind::edge_edge;
-  pair.rows = query.exact;
-  return reference::decide(pair, mpq_class(thickness), {true, toi, 64});
-}
-
-/// The reference on the query's exact rationals: the harness calling the oracle, not a strategy's narrow phase.
-class ExactQueryMethod final : public QueryMethod {
- public:
-  std::string name() const override { return kExactMethod; }
-  QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const override {
-    return {decide_exactly(file.queries[index], file.kind, thickness, false).collides, std::numeric_limits<double>::quiet_NaN(), {}};
-  }
-};
-
-/// A narrow phase's result as a query's answer.
-QueryAnswer query_answer(narrowphase::NarrowPhaseResult result) {
-  return {result.collides, result.collides ? result.toi : std::numeric_limits<double>::quiet_NaN(), std::move(result.fault)};
-}
-
-/// A narrow-phase variant on the doubles the query's rationals round to (what a simulator would hand it).
-class NarrowPhaseQueryMethod final : public QueryMethod {
- public:
-  explicit NarrowPhaseQueryMethod(std::unique_ptr<narrowphase::NarrowPhase> narrow_phase) : narrow_phase_(std::move(narrow_phase)) {}
-  std::string name() const override { return narrow_phase_->name(); }
-  QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const override {
-    const datasets::Query& query = file.queries[index];
-    return query_answer(file.kind == datasets::QueryKind::vertex_face ? narrow_phase_->vertex_face(query.rounded, thickness)
-                                                                      : narrow_phase_->edge_edge(query.rounded, thickness));
-  }
-  std::vector<QueryAnswer> answer_all(const datasets::QueryFile& file, double thickness,
-                                      const std::function<void(std::size_t)>& answered) const override {
-    if (!narrow_phase_->prefers_batches()) return QueryMethod::answer_all(file, thickness, answered);
-    std::vector<narrowphase::NarrowPhase::BatchPair> pairs;
-    pairs.reserve(file.queries.size());
-    for (const datasets::Query& query : file.queries) pairs.push_back({&query.rounded, file.kind == datasets::QueryKind::vertex_face, thickness});
-    std::vector<narrowphase::NarrowPhaseResult> results(pairs.size());
-    // A batch at a time, so that progress moves on a long file (one batch of an isolated plugin each).
-    for (std::size_t first = 0; first < pairs.size(); first += kProgressQueries) {
-      const std::size_t count = std::min(kProgressQueries, pairs.size() - first);
-      narrow_phase_->answer_batch(std::span(pairs).subspan(first, count), std::span(results).subspan(first, count));
-      if (answered) answered(first + count);
-    }
-    std::vector<QueryAnswer> answers;
-    answers.reserve(results.size());
-    for (narrowphase::NarrowPhaseResult& result : results) answers.push_back(query_answer(std::move(result)));
-    return answers;
-  }
-
- private:
-  std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
-};
-
-/// A strategy's elementary tests of its own (fcl's, StrategyEntry::elementary_test), at δ = 0 only.
-class OwnTestsQueryMethod final : public QueryMethod {
- public:
-  explicit OwnTestsQueryMethod(const strategies::StrategyEntry& strategy) : strategy_(strategy) {}
-  std::string name() const override { return strategy_.name; }
-  QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double thickness) const override {
-    if (thickness > 0) throw std::invalid_argument("method " + strategy_.name + " has no thickness: run it with --thickness 0");
-    // No time: such tests answer yes or no.
-    return {strategy_.elementary_test(file.queries[index].rounded, file.kind == datasets::QueryKind::vertex_face),
-            std::numeric_limits<double>::quiet_NaN(),
-            {}};
-  }
-
- private:
-  const strategies::StrategyEntry& strategy_;
-};
-
-/// The answer files named by `answers:FILE[:method=NAME]` specs, read once per process (every rank reads its own).
-std::map<std::string, AnswerTable>& answer_tables() {
-  static std::map<std::string, AnswerTable> tables;
-  return tables;
-}
-
-bool names_answers(const std::string& spec) { return spec.rfind(std::string(narrowphase::kAnswersHead) + ":", 0) == 0; }
-
-AnswerTable& answer_table(const std::string& spec) {
-  auto it = answer_tables().find(spec);
-  if (it != answer_tables().end()) return it->second;
-  const auto [head, parameters] = narrowphase::split_spec(spec);
-  const std::vector<narrowphase::KeySpec> keys{
-      narrowphase::KeySpec::text("method", "which method's answers, when the file holds several (its name, or its name's head)"),
-      narrowphase::KeySpec::text("digest", "the file's digest (filled in; checked when given)")};
-  const narrowphase::SpecReader reader(head, keys, parameters);
-  const std::filesystem::path path = head.substr(std::strlen(narrowphase::kAnswersHead) + 1);
-  AnswerTable table = read_answer_table(path, reader.text("method"));
-#if !CCDBENCH_GUARD_READ_ONCE
-  table.digest = plugin::content_digest(path);  // without the guard: a second read, apart from the one scored
-#endif
-  if (reader.given("digest") && reader.text("digest") != table.digest) {
-    throw std::invalid_argument(spec + ": the file changed (digest " + table.digest + ")");
-  }
-  return answer_tables().emplace(spec, std::move(table)).first->second;
-}
-
-/// Answers read from a file (query_answers.hpp): a method whose code ran elsewhere, judged like the others.
-class AnswerFileMethod final : public QueryMethod {
- public:
-  explicit AnswerFileMethod(const AnswerTable& table) : table_(table) {}
-  std::string name() const override {
-    // method= last: it takes the rest of a spec, ':' included (split_spec), so the name reads back as itself.
-    std::string name = std::string(narrowphase::kAnswersHead) + ":" + std::filesystem::absolute(table_.path).lexically_normal().string() +
-                       ":digest=" + table_.digest;
-    if (!table_.method.empty()) name += ":method=" + table_.method;
-    return name;
-  }
-  QueryAnswer answer(const datasets::QueryFile& file, std::size_t index, double) const override {
-    const auto it = table_.by_file.find(file.path.string());
-    if (it == table_.by_file.end() || index >= it->second.size() || it->second[index] == nullptr) {
-      throw std::logic_error("answers " + table_.path.string() + " were not matched to " + file.path.string() + " (bind_answer_files)");
-    }
-    const AnswerLine& line = *it->second[index];
-    if (line.hit < 0)
-      return {false, std::numeric_limits<double>::quiet_NaN(), "error (" + table_.path.string() + " line " + std::to_string(line.line) + ")"};
-    return {line.hit == 1, line.hit == 1 ? line.toi : std::numeric_limits<double>::quiet_NaN(), {}};
-  }
-
- private:
-  const AnswerTable& table_;
-};
-
-}  // namespace
-
-std::vector<QueryAnswer> QueryMethod::answer_all(const datasets::QueryFile& file, double thickness,
-                                                 const std::function<void(std::size_t)>& answered) const {
-  std::vector<QueryAnswer> answers(file.queries.size());
-  for (std::size_t q = 0; q < file.queries.size(); ++q) {
-    plugin::set_activity_item(q + 1);  // which query a plugin that ends the process was answering
-    answers[q] = answer(file, q, thickness);
-    if (answered && (q + 1) % kProgressQueries == 0) answered(q + 1);
-  }
-  return answers;
-}
-
-QueryMethods make_query_methods(const std::vector<std::string>& specs) {
-  QueryMethods methods;
-  for (const std::string& spec : specs) methods.push_back(make_query_method(spec));
-  return methods;
-}
-
-void bind_answer_files(const std::vector<std::string>& methods, const std::vector<datasets::QueryFile>& files) {
-  for (const std::string& spec : methods) {
-    if (names_answers(spec)) bind_answers(answer_table(spec), files);
-  }
-}
-
-reference::PairKind reference_kind(datasets::QueryKind kind) {
-  return kind == datasets::QueryKind::vertex_face ? reference::PairKind::vertex_face : reference::PairKind::edge_edge;
-}
-
-std::unique_ptr<QueryMethod> make_query_method(const std::string& spec) {
-  if (spec == kExactMethod) return std::make_unique<ExactQueryMethod>();
-  if (names_answers(spec)) return std::make_unique<AnswerFileMethod>(answer_table(spec));
-  const std::string name = narrowphase::split_spec(spec).first;
-  if (narrowphase::is_narrow_phase(name)) return std::make_unique<NarrowPhaseQueryMethod>(narrowphase::make_narrow_phase_from_spec(spec));
-  for (const strategies::StrategyEntry& strategy : strategies::strategy_entries()) {
-    if (strategy.name == spec && strategy.elementary_test) return std::make_unique<OwnTestsQueryMethod>(strategy);
-  }
-  std::string known;
-  for (const std::string& n : query_method_names()) known += (known.empty() ? "" : ", ") + n;
-  throw std::invalid_argument("unknown method '" + spec + "' (known: " + known + ")");
-}
-
-std::vector<std::string> query_method_names() {
-  std::vector<std::string> names;
-  for (const narrowphase::NarrowPhaseEntry& entry : narrowphase::narrow_phases()) names.push_back(entry.name);
-  names.push_back(kExactMethod);
-  for (const strategies::StrategyEntry& strategy : strategies::strategy_entries()) {
-    if (strategy.elementary_test) names.push_back(strategy.name);
-  }
-  return names;
-}
-
 namespace {
 
 /// How many answers of `again` differ from `first`'s: outcome, TOI bits, or whether it was an error.
@@ -434,7 +255,7 @@ std::size_t scale_query_files(std::vector<datasets::QueryFile>& files, int expon
           for (int k = 0; k < 3; ++k) query.exact[r][k] = mpq_class(query.rounded[r][k]);
         }
         // Labels are for the file's labels thickness (0 unless it says another; docs/DESIGN.md §7), scaled with it.
-        if (query.truth) query.truth = decide_exactly(query, file.kind, std::ldexp(file.labels_thickness, exponent), false).collides;
+        if (query.truth) query.truth = decide_query_exactly(query, file.kind, std::ldexp(file.labels_thickness, exponent), false).collides;
       } else {
         query.exactly_double = exact;
       }

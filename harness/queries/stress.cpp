@@ -1,6 +1,6 @@
-#include "harness/stress.hpp"
+#include "harness/queries/stress.hpp"
 
-#include "harness/query_scoring.hpp"
+#include "harness/queries/scoring.hpp"
 #include "harness/table.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/narrowphase_registry.hpp"

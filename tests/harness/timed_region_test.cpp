@@ -4,7 +4,7 @@
 
 #include "harness/timed_region.hpp"
 #include "datasets/query_file.hpp"
-#include "harness/query_scoring.hpp"
+#include "harness/queries/scoring.hpp"
 #include "harness/run.hpp"
 #include "tests/support/test_support.hpp"
 
