@@ -6,20 +6,21 @@
 // the time to close the distance and stops at the first time the distance (less δ) is below the gap, a tenth of the
 // pair's initial distance (less δ): a contact is reported where the pair comes within that gap, and its TOI is that
 // time, earlier than the contact by design. A pair already within δ at t = 0 is a contact at 0. ipc-toolkit says it
-// is not provably conservative (its header); the table counts what it misses. ipc-toolkit's logger is set to print
-// errors only: its warnings (a gap below machine epsilon, an initial distance within δ) change no answer.
+// is not provably conservative (its header); the table counts what it misses. ipc-toolkit's and Tight-Inclusion's
+// loggers are the plugin's own (private_loggers.hpp): ipc-toolkit's prints errors only (its warnings, a gap below
+// machine epsilon or an initial distance within δ, change no answer).
 #include "field_adapter.hpp"
+#include "private_loggers.hpp"
 
 #include <ccdbench/ccdbench_plugin.hpp>
 
 #include <ipc/ccd/additive_ccd.hpp>
-#include <ipc/utils/logger.hpp>
 
 namespace {
 
 class IpcAdditive {
  public:
-  IpcAdditive() { ipc::logger().set_level(spdlog::level::err); }
+  IpcAdditive() { field::use_private_loggers(); }
   bool point_triangle_ccd(const Eigen::Vector3d& p_t0, const Eigen::Vector3d& t0_t0, const Eigen::Vector3d& t1_t0, const Eigen::Vector3d& t2_t0,
                           const Eigen::Vector3d& p_t1, const Eigen::Vector3d& t0_t1, const Eigen::Vector3d& t1_t1, const Eigen::Vector3d& t2_t1,
                           double& toi, double min_distance, double tmax) const {

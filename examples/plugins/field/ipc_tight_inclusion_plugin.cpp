@@ -8,19 +8,20 @@
 // 1e-4 (a fifth of the gap, at most), so its TOI is earlier than the contact by design, and where that TOI is below
 // 1e-6 it asks again at δ with no iteration cap and returns 0.8 of that TOI. A pair already within δ at t = 0 is a
 // contact at 0. That is the TOI a simulation gets; the table judges it against the exact contact like any other.
-// ipc-toolkit's logger is set to print errors only: its trace lines (an iteration cap reached) change no answer.
+// ipc-toolkit's and Tight-Inclusion's loggers are the plugin's own (private_loggers.hpp): ipc-toolkit's prints errors
+// only (its trace lines, an iteration cap reached, change no answer).
 #include "field_adapter.hpp"
+#include "private_loggers.hpp"
 
 #include <ccdbench/ccdbench_plugin.hpp>
 
 #include <ipc/ccd/tight_inclusion_ccd.hpp>
-#include <ipc/utils/logger.hpp>
 
 namespace {
 
 class IpcTightInclusion {
  public:
-  IpcTightInclusion() { ipc::logger().set_level(spdlog::level::err); }
+  IpcTightInclusion() { field::use_private_loggers(); }
   bool point_triangle_ccd(const Eigen::Vector3d& p_t0, const Eigen::Vector3d& t0_t0, const Eigen::Vector3d& t1_t0, const Eigen::Vector3d& t2_t0,
                           const Eigen::Vector3d& p_t1, const Eigen::Vector3d& t0_t1, const Eigen::Vector3d& t1_t1, const Eigen::Vector3d& t2_t1,
                           double& toi, double min_distance, double tmax) const {

@@ -7,12 +7,18 @@
 // floating-point filters per query, ms = the thickness δ (its minimum separation), tolerance 1e-6 and at most 1e6
 // iterations (the values both recommend), t_max = 1, breadth-first search. A contact is reported with the library's
 // TOI. The library answers "contact" when it stops at max_itr undecided, as a conservative method does; it has no
-// error outcome, so none is reported.
+// error outcome, so none is reported. Its logger is the plugin's own, on stderr and in no registry: the library's
+// default one registers its name process-wide in spdlog (a shared library on Debian), which a second plugin built on
+// the library (ipc-toolkit's, reports/field/) would find taken in one process.
 #include <ccdbench/ccdbench_plugin.hpp>
 
+#include <spdlog/sinks/stdout_sinks.h>
 #include <tight_inclusion/ccd.hpp>
+#include <tight_inclusion/logger.hpp>
 
 #include <Eigen/Core>
+
+#include <memory>
 
 namespace {
 
@@ -23,6 +29,7 @@ constexpr long kMaxIterations = 1000000;
 
 class TightInclusion {
  public:
+  TightInclusion() { ticcd::set_logger(std::make_shared<spdlog::logger>("ticcd", std::make_shared<spdlog::sinks::stderr_sink_mt>())); }
   bool point_triangle_ccd(const Eigen::Vector3d& p_t0, const Eigen::Vector3d& t0_t0, const Eigen::Vector3d& t1_t0, const Eigen::Vector3d& t2_t0,
                           const Eigen::Vector3d& p_t1, const Eigen::Vector3d& t0_t1, const Eigen::Vector3d& t1_t1, const Eigen::Vector3d& t2_t1,
                           double& toi, double min_distance, double tmax) const {
