@@ -186,9 +186,13 @@ while read -r library repo pinned paths files; do
 
   src=$work/src/$library build=$work/build/$library log=$work/logs/$library.log
   mkdir -p "$work/logs"
-  stamp="$described $paths $(cat "$0" | sha256sum | cut -c1-16)"
+  # Extracted again only for another commit or other patches (a checkout: every time).
+  stamp="$described $paths $(declare -f patch_library | sha256sum | cut -c1-16)"
   if [ "$(cat "$src.stamp" 2>/dev/null)" != "$stamp" ] || [ "$commit" = checkout ]; then
     extract "$git_dir" "$commit" "$paths" "$src"
+    if [ "$library" = ipc ]; then
+      extract "$(repository Continuous-Collision-Detection/Tight-Inclusion)" "$ipc_tight_inclusion" . "$work/src/ipc-tight-inclusion"
+    fi
     patches=$(patch_library "$library" "$src")
     echo "$patches" >"$src.patches"
     echo "$stamp" >"$src.stamp"
@@ -199,10 +203,7 @@ while read -r library repo pinned paths files; do
   else
     args=(-S "$root/examples/plugins/field" -DFIELD_LIBRARY="$library" -DFIELD_LIBRARY_DIR="$src" -DFIELD_LIBRARY_COMMIT="${described:0:12}")
   fi
-  if [ "$library" = ipc ]; then
-    extract "$(repository Continuous-Collision-Detection/Tight-Inclusion)" "$ipc_tight_inclusion" . "$work/src/ipc-tight-inclusion"
-    args+=(-DTIGHT_INCLUSION_DIR="$work/src/ipc-tight-inclusion")
-  fi
+  [ "$library" = ipc ] && args+=(-DTIGHT_INCLUSION_DIR="$work/src/ipc-tight-inclusion")
   if ! { cmake "${args[@]}" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" &&
     nice -n 5 cmake --build "$build" -j "${CCDBENCH_FIELD_JOBS:-2}"; } >"$log" 2>&1; then
     say "$library" "FAILED to build ${described:0:7}: see $log"
