@@ -19,8 +19,8 @@
 #                           $CCDBENCH_FIELD_WORK/ccdbench)
 # Prints one line per library: built (its plugins), or why not. Exit status: 0 every library with sources was built
 # (a library whose dependency Debian 12 lacks is named and not counted); 3 some library's sources are missing (each
-# named; the rest built); 1 a build failed (its log named). Dependencies are Debian 12 packages only
-# (scripts/setup.sh; libspdlog-dev and libboost-dev besides ccdbench's); nothing else is downloaded.
+# named; the rest built); 1 a build failed (its log named). Dependencies are Debian 12 packages only, installed where
+# missing by scripts/setup.sh (libspdlog-dev and libboost-dev besides ccdbench's); nothing else is downloaded.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 work=${CCDBENCH_FIELD_WORK:-$root/build/field}
@@ -130,6 +130,9 @@ done
 
 prefix=""
 if [ "$sources_only" = 0 ]; then
+  # The libraries' dependencies beyond ccdbench's: Debian 12's spdlog (Tight-Inclusion, ipc-toolkit) and Boost
+  # (Interval-Based), installed only where missing.
+  "$root/scripts/setup.sh" libspdlog-dev libboost-dev >&2
   mkdir -p "$work" "$plugins"
   prefix=$(install_ccdbench)
 fi
