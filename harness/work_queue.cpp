@@ -2,6 +2,7 @@
 
 #include "ccd/config.hpp"
 #include "core/error.hpp"
+#include "strategies/backend.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -296,6 +297,13 @@ RankSession::RankSession(int& argc, char**& argv) {
   g_mpi_started = true;
   MPI_Comm_rank(MPI_COMM_WORLD, &g_ranks.rank);
   MPI_Comm_size(MPI_COMM_WORLD, &g_ranks.size);
+  // The ranks of one node, from MPI itself (not a launcher's variable): they take the node's GPUs in turn.
+  MPI_Comm node = MPI_COMM_NULL;
+  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, g_ranks.rank, MPI_INFO_NULL, &node);
+  MPI_Comm_rank(node, &g_ranks.node_rank);
+  MPI_Comm_size(node, &g_ranks.node_size);
+  MPI_Comm_free(&node);
+  strategies::set_device_turn({g_ranks.node_rank, g_ranks.node_size});
   if (provided < MPI_THREAD_FUNNELED) {
     std::cerr << "ccdbench: error: this MPI library gives no thread support (MPI_THREAD_FUNNELED): rank 0's worker "
                  "thread could not run beside the thread that hands out work\n";

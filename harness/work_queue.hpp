@@ -24,6 +24,10 @@ namespace ccd::harness {
 struct RankInfo {
   int rank = 0;
   int size = 1;
+  /// Among the ranks on this rank's node (MPI_COMM_TYPE_SHARED): which one, and how many. They take the node's GPUs
+  /// in turn (strategies::DeviceTurn).
+  int node_rank = 0;
+  int node_size = 1;
 };
 
 /// Starts MPI when built with it and launched by mpirun (OpenMPI's or a PMI launcher's environment); otherwise

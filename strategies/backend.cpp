@@ -95,4 +95,12 @@ std::string BackendChoice::resolved(const std::string& device_name, bool conserv
   return text;
 }
 
+namespace {
+DeviceTurn g_device_turn;
+}  // namespace
+
+void set_device_turn(DeviceTurn turn) { g_device_turn = turn; }
+
+DeviceTurn device_turn() { return g_device_turn; }
+
 }  // namespace ccd::strategies

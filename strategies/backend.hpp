@@ -56,4 +56,16 @@ std::vector<narrowphase::KeySpec> backend_keys();
 /// The backend keys of a strategy's reader. @throws std::invalid_argument for a device key without backend=opencl.
 BackendChoice read_backend(const narrowphase::SpecReader& keys);
 
+/// This process's turn among the processes of one node that share its OpenCL devices: an MPI job's node-local rank
+/// and how many ranks the node runs (0 of 1 otherwise). A spec that names no device takes the node's GPUs (its
+/// devices, where it has no GPU) in turn by it, so that the ranks of a node use every GPU (docs/mpi.md).
+struct DeviceTurn {
+  int turn = 0;
+  int of = 1;
+};
+
+/// Set once by the harness when MPI has started, before any strategy is made.
+void set_device_turn(DeviceTurn turn);
+DeviceTurn device_turn();
+
 }  // namespace ccd::strategies

@@ -151,10 +151,12 @@ class DevicePipeline {
   const std::string& label() const { return label_; }
   const NarrowPhaseChoice& narrow_phase() const { return narrow_phase_; }
   const DeviceInfo& device() const { return device_; }
-  /// The device as results record it: platform, device, its OpenCL version and driver.
+  /// The device as results record it: platform, device and its index (`ccdbench devices`: which of two alike GPUs
+  /// a rank took), its OpenCL version and driver.
   std::vector<std::pair<std::string, std::string>> provenance() const {
     return {{"opencl_platform", device_.platform},
             {"opencl_device", device_.name},
+            {"opencl_device_index", std::to_string(device_.index)},
             {"opencl_version", device_.version},
             {"opencl_driver", device_.driver}};
   }

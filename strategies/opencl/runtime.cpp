@@ -137,11 +137,26 @@ std::string listing(const std::vector<DeviceInfo>& devices) {
 
 }  // namespace
 
-DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector) {
+DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector, strategies::DeviceTurn turn) {
   if (devices.empty()) throw std::invalid_argument("no OpenCL device: " + listing(devices));
   if (selector.empty()) {
-    const auto gpu = std::find_if(devices.begin(), devices.end(), [](const DeviceInfo& d) { return d.is_gpu; });
-    return gpu != devices.end() ? *gpu : devices.front();
+    std::vector<const DeviceInfo*> turns;
+    for (const DeviceInfo& d : devices) {
+      if (d.is_gpu) turns.push_back(&d);
+    }
+    if (turns.empty()) {
+      for (const DeviceInfo& d : devices) turns.push_back(&d);
+    }
+    const DeviceInfo& chosen = *turns[static_cast<std::size_t>(std::max(turn.turn, 0)) % turns.size()];
+    if (turn.of > static_cast<int>(turns.size())) {
+      static std::once_flag said;
+      std::call_once(said, [&] {
+        std::cerr << "ccdbench: " << turn.of << " processes on this node take " << turns.size() << (turns[0]->is_gpu ? " GPU" : " OpenCL device")
+                  << (turns.size() == 1 ? "" : "s") << " in turn: this one (turn " << turn.turn << ") shares device " << chosen.index << " ("
+                  << chosen.name << "); name one per process with device=INDEX, or start fewer ranks a node\n";
+      });
+    }
+    return chosen;
   }
   if (std::all_of(selector.begin(), selector.end(), [](char c) { return c >= '0' && c <= '9'; }) && selector.size() < 6) {
     const std::size_t index = std::stoul(selector);

@@ -9,6 +9,8 @@
 /// carries the build log.
 
 #define CL_TARGET_OPENCL_VERSION 120
+#include "strategies/backend.hpp"
+
 #include <CL/cl.h>
 
 #include <cstdint>
@@ -49,10 +51,13 @@ struct DeviceInfo {
 /// Every device of every platform (empty when there is no platform, e.g. no ICD installed).
 std::vector<DeviceInfo> list_devices();
 
-/// The device `selector` names: "" for the first GPU, else the first device; a number for that index; otherwise the
-/// first device whose name contains the text (case-sensitive).
+/// The device `selector` names: "" for the node's GPUs taken in turn (`turn.turn` modulo their count: the first GPU
+/// for a process alone), else its devices so; a number for that index; otherwise the first device whose name
+/// contains the text (case-sensitive). When a node runs more processes than it has devices to take in turn, the
+/// first choice a process makes says on stderr which device it shares.
 /// @throws std::invalid_argument listing the devices when none matches, or when there are none.
-DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector);
+DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector,
+                         strategies::DeviceTurn turn = strategies::device_turn());
 
 /// Refuses a device that cannot run the backend: no fp64, or fp64 that flushes subnormals (the narrow phases'
 /// error bounds count subnormals). The seam where a device's capabilities are judged, so a test can hand it a

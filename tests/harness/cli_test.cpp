@@ -118,7 +118,7 @@ TEST(Cli, EveryRecordCarriesItsProvenance) {
       EXPECT_NE(verbose.output.find(std::string(item) + ": " + provenance[item].get<std::string>()), std::string::npos) << item;
     }
     const bool opencl_cell = record["strategy"].get<std::string>().find(":backend=opencl") != std::string::npos;
-    for (const char* item : {"opencl_platform", "opencl_device", "opencl_driver"}) {
+    for (const char* item : {"opencl_platform", "opencl_device", "opencl_device_index", "opencl_driver"}) {
       EXPECT_EQ(provenance.contains(item), opencl_cell) << item << " in " << record["strategy"];
     }
   }

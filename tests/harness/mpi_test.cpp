@@ -122,6 +122,34 @@ TEST_F(Mpi, TwoRanksGiveEveryVerdictAndCountOfOne) {
   EXPECT_EQ(ranks, (std::set<int>{0, 1})) << "the work was not spread over both ranks:\n" << two.output;
 }
 
+// The ranks of a node take its OpenCL devices in turn by their node-local rank (from MPI, not the launcher), and each
+// record names the device its cell ran on: PoCL asked for two CPU devices stands in for a node's two GPUs. Fails if
+// both ranks take device 0.
+TEST_F(Mpi, TheRanksOfANodeTakeItsDevicesInTurn) {
+  if (!CCDBENCH_WITH_OPENCL) GTEST_SKIP() << "built without OpenCL";
+  const std::string two_devices = "POCL_DEVICES='pthread pthread' ";
+  const auto listed = run_command(two_devices + CCDBENCH_EXECUTABLE " devices");
+  if (listed.exit_code != 0 || listed.output.find("\n1: ") == std::string::npos) GTEST_SKIP() << "PoCL gives no two devices here:\n" << listed.output;
+  const auto generated = run_command(std::string(CCDBENCH_EXECUTABLE) + " generate fold --resolution 6 --frames 8 --out " + quoted(dir_ / "fold"));
+  ASSERT_EQ(generated.exit_code, 0) << generated.output;
+  const std::string arguments = "run --scene " + quoted(dir_ / "fold") +
+                                " --thickness scene,0 --strategy full:backend=opencl,full+cubic64:backend=opencl --out " + quoted(dir_ / "two") +
+                                " --json " + quoted(dir_ / "two.json");
+  ::setenv("POCL_DEVICES", "pthread pthread", 1);
+  const auto two = mpirun(2, arguments);
+  ::unsetenv("POCL_DEVICES");
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  std::set<int> ranks;
+  for (const nlohmann::json& cell : summaries("two")) {
+    const int rank = cell["rank"].get<int>();
+    ranks.insert(rank);
+    // One node: a rank's node-local rank is its rank, and its turn the device of that index.
+    EXPECT_EQ(cell["provenance"]["opencl_device_index"], std::to_string(rank)) << cell["strategy"] << " on rank " << rank;
+  }
+  EXPECT_EQ(ranks, (std::set<int>{0, 1})) << "the work was not spread over both ranks: this proves nothing\n" << two.output;
+  EXPECT_EQ(two.output.find("in turn: this one"), std::string::npos) << "two ranks, two devices: none is shared\n" << two.output;
+}
+
 TEST_F(Mpi, PluginsGiveTheVerdictsOfOneProcess) {
   // The template plugin in both forms (its whole step, and its queries behind ccdbench's broad phase), one of them in
   // a child process: each rank loads the plugin itself, and the verdicts are those of one process.

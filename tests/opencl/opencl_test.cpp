@@ -524,6 +524,16 @@ TEST(OpenClDevice, ChoiceByIndexOrNameAndClearErrors) {
   EXPECT_THROW(opencl::choose_device(devices, "7"), std::invalid_argument);
   EXPECT_THROW(opencl::choose_device(devices, "Tiny"), std::invalid_argument);
   EXPECT_THROW(opencl::choose_device({}, ""), std::invalid_argument);
+  // The ranks of a node take its GPUs in turn (a second GPU for turn 1), its devices where it has no GPU; a named
+  // device is every rank's.
+  devices.push_back(devices[1]);
+  devices[2].index = 2;
+  EXPECT_EQ(opencl::choose_device(devices, "", {0, 2}).index, 1u);
+  EXPECT_EQ(opencl::choose_device(devices, "", {1, 2}).index, 2u);
+  EXPECT_EQ(opencl::choose_device(devices, "", {2, 3}).index, 1u);  // three ranks, two GPUs: the third shares the first
+  EXPECT_EQ(opencl::choose_device(devices, "0", {1, 2}).index, 0u);
+  devices[1].is_gpu = devices[2].is_gpu = false;
+  EXPECT_EQ(opencl::choose_device(devices, "", {1, 3}).index, 1u);
 }
 
 TEST(OpenClDevice, TheResolvedSpecNamesTheDeviceAndWrongKeysAreRefused) {

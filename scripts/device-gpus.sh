@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Every GPU of one node at work (issue 66; reports/gpus/): the paper suite with full and full+cubic64 on the OpenCL
+# backend (--verify none: times and answers only), as one process with every core and as one MPI rank per GPU with
+# the cores shared out, in one invocation. Prints the wall time of each, which device each rank's cells ran on (from
+# the records), each GPU's busiest 100 ms (nvidia-smi, sampled while the run ran), and whether every cell's answers
+# (reported pairs and elementary tests, step by step) are the same as one process's. Builds nothing: run
+# scripts/device-carry.sh first (the device machine has no OpenMPI of its own).
+# Usage: scripts/device-gpus.sh OUT_DIR   (SUITE=paper, RANKS="1 GPUS": the rank counts to run, STRATEGY: the specs,
+#        e.g. with device=0 to put every rank on one GPU as before)
+set -euo pipefail
+out=${1:?usage: device-gpus.sh OUT_DIR}
+root=$(cd "$(dirname "$0")/.." && pwd)
+if [[ -x "$root/device-carry/bin/ccdbench" ]]; then
+  source "$root/scripts/device-env.sh"
+  bin="$root/device-carry/bin/ccdbench"
+else
+  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+  bin="$root/build/release/bin/ccdbench"
+fi
+# The NVIDIA OpenCL driver is installed there but not registered.
+mkdir -p /tmp/icd && echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd && export OCL_ICD_VENDORS=/tmp/icd
+suite=${SUITE:-paper}
+cores=$(nproc)
+gpus=$(nvidia-smi -L | wc -l)
+strategy=${STRATEGY:-full:backend=opencl,full+cubic64:backend=opencl}
+export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-gpus-cache}
+mkdir -p "$out"
+echo "machine: $cores cores, $gpus GPUs ($(nvidia-smi --query-gpu=name --format=csv,noheader | sort | uniq -c | xargs)); $("$bin" --version)"
+"$bin" devices | grep -E '^[0-9]+:' || true
+# Warm: the suite's frames generated and the kernels compiled once, outside the timed runs.
+"$bin" --threads "$cores" run --suite "$suite" --strategy "$strategy" --verify none --max-steps 1 --fresh --out /tmp/gpus-warm > /dev/null 2>&1
+printf '%-6s %-8s %-10s %-24s %s\n' ranks threads wall_ms "devices by rank" "busiest 100 ms per GPU (%)"
+for ranks in ${RANKS:-1 $gpus}; do
+  threads=$((cores / ranks))
+  name=r$ranks-t$threads
+  if [[ $ranks == 1 ]]; then
+    launch=("$bin" --threads "$threads")
+  else
+    launch=(mpirun -n "$ranks" --oversubscribe --bind-to none "$bin" --threads "$threads")
+  fi
+  nvidia-smi --query-gpu=index,utilization.gpu --format=csv,noheader,nounits -lms 100 > "$out/$name.smi" &
+  sampler=$!
+  start=$(date +%s%N)
+  "${launch[@]}" run --suite "$suite" --strategy "$strategy" --verify none --fresh --out "/tmp/gpus-$name" --json "$out/$name.json" \
+    > "$out/$name.txt" 2> "$out/$name.log"
+  wall=$((($(date +%s%N) - start) / 1000000))
+  kill "$sampler" 2> /dev/null || true
+  wait "$sampler" 2> /dev/null || true
+  devices=$(python3 - "$out/$name.json" << 'EOF'
+import json, sys
+by_rank = {}
+for cell in json.load(open(sys.argv[1])):
+    by_rank.setdefault(cell["rank"], set()).add(cell["provenance"].get("opencl_device_index", "?"))
+print(" ".join("r%d:%s" % (r, "+".join(sorted(d))) for r, d in sorted(by_rank.items())))
+EOF
+  )
+  busiest=$(awk -F', *' '{ if ($2 > m[$1]) m[$1] = $2 } END { for (g in m) printf "gpu%s:%s ", g, m[g] }' "$out/$name.smi")
+  printf '%-6s %-8s %-10s %-24s %s\n' "$ranks" "$threads" "$wall" "$devices" "$busiest"
+done
+# The same answers whatever the rank count: each cell's reported pairs and elementary tests, step by step.
+python3 - "$out" ${RANKS:-1 $gpus} << 'EOF'
+import json, os, sys
+out, ranks = sys.argv[1], sys.argv[2:]
+def answers(path):
+    return {(c["scene"], c["strategy"], c["thickness"]): (c["reported"], c["elementary_tests"]) for c in json.load(open(path))}
+runs = {}
+for r in ranks:
+    name = [f for f in os.listdir(out) if f.startswith("r%s-" % r) and f.endswith(".json")][0]
+    runs[r] = answers(os.path.join(out, name))
+base = runs[ranks[0]]
+for r, cells in runs.items():
+    same = cells == base
+    print("answers with %s rank(s): %d cells, %s as one process's" % (r, len(cells), "the same" if same else "NOT the same"))
+EOF
