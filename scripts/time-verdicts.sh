@@ -6,7 +6,11 @@
 #              same file name as the template's, as a rebuild is): how many call its cells slower beyond the noise;
 # on the ci suite (full, apccd and the template in-process; the scene with analytic shapes is left out for the plugin,
 # which refuses it) and on the kinematic fold at resolution 16. Every run has REPEAT timed passes (--verify none: times
-# are what is judged). Prints one line per count and set, and each comparison's head/base ratios to a log.
+# are what is judged). Each count is taken two ways:
+#   apart   base and head in two runs, one after the other (what comparing two results folders of two builds is);
+#   paired  base and head in one run (the plugin twice, from two folders), `compare RUN RUN --pair BASE HEAD`: what
+#           a CCD's own CI does (examples/ci/regression.sh);
+# Prints one line per count, set and way, and each comparison's head/base ratios to a log.
 # Usage: scripts/time-verdicts.sh [COUNT] [REPEAT] [NOISE_BAND]   (after scripts/build.sh; 20, 9 and compare's default)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -29,30 +33,61 @@ run() {  # SET OUT (a fresh folder: a rebuilt plugin's cells must not meet the l
   "$R/bin/ccdbench" run ${sets[$1]} --repeat "$repeat" --verify none --fresh --out "$work/$2" > /dev/null 2>&1
 }
 
+declare -A paired=([ci]="--suite ci --thickness scene,0" [fold16]="--scene $work/fold16 --thickness scene,0")
+base_plugin=plugin:$work/base/libmy.so:isolate=off
+head_plugin=plugin:$work/head/libmy.so:isolate=off
+mkdir -p "$work/base" "$work/head"
+
+run_paired() {  # SET OUT: the base and head plugins' cells in one run
+  rm -rf "${work:?}/$2"
+  # shellcheck disable=SC2086  # the set's arguments are a list
+  "$R/bin/ccdbench" run ${paired[$1]} --strategy "$base_plugin,$head_plugin" --repeat "$repeat" --verify none --fresh --out "$work/$2" > /dev/null 2>&1
+}
+
+# Whether every row of the plugin's cells in a comparison (a table row: it holds "→") says slower beyond the noise.
+all_plugin_rows_slower() {
+  local rows slower
+  rows=$(grep '^[^ ].*libmy\.so.*→' "$1" | grep -c . || true)
+  slower=$(grep '^[^ ].*libmy\.so.*→' "$1" | grep -c 'slower beyond noise' || true)
+  ((rows > 0 && slower == rows))
+}
+
+compare() {  # OUT BASE HEAD [--pair ...]: compare --fail-on-slower into OUT; exit status as compare's
+  local out=$1
+  shift
+  # shellcheck disable=SC2086  # an empty band is no argument
+  "$R/bin/ccdbench" compare "$@" --fail-on-slower $band --replay "$work/replay" > "$out" 2>&1
+}
+
 for set in ci fold16; do
-  quiet=0
-  flagged=0
+  quiet=0 flagged=0 quiet_paired=0 flagged_paired=0
   for ((k = 0; k < count; ++k)); do
+    # Apart: two runs.
     cp "$R/plugins/libmy_ccd.so" "$work/libmy.so"
     run "$set" base
     run "$set" head
-    # shellcheck disable=SC2086  # an empty band is no argument
-    if "$R/bin/ccdbench" compare "$work/base" "$work/head" --fail-on-slower $band --replay "$work/replay" > "$work/identical.txt" 2>&1; then
-      quiet=$((quiet + 1))
-    fi
-    { echo "identical $set $k"; grep ' / ' "$work/identical.txt" | grep -v '^  ' || true; } >> "$log"
+    if compare "$work/identical.txt" "$work/base" "$work/head"; then quiet=$((quiet + 1)); fi
+    { echo "identical apart $set $k"; grep ' / ' "$work/identical.txt" | grep -v '^  ' || true; } >> "$log"
     cp "$R/plugins/libmy_ccd.so" "$work/libmy.so"
     run "$set" base
     cp "$R/plugins/libslowed_ccd.so" "$work/libmy.so"
     run "$set" head
-    # shellcheck disable=SC2086
-    "$R/bin/ccdbench" compare "$work/base" "$work/head" --fail-on-slower $band --replay "$work/replay" > "$work/slowdown.txt" 2>&1 || true
-    # Flagged: every cell of the slowed plugin called slower beyond the noise.
-    plugin_rows=$(grep -c '^[^ ].*libmy\.so' "$work/slowdown.txt" || true)
-    slower_rows=$(grep '^[^ ].*libmy\.so' "$work/slowdown.txt" | grep -c 'slower beyond noise' || true)
-    if ((plugin_rows > 0 && slower_rows == plugin_rows)); then flagged=$((flagged + 1)); fi
-    { echo "slowdown $set $k"; grep ' / ' "$work/slowdown.txt" | grep -v '^  ' || true; } >> "$log"
+    compare "$work/slowdown.txt" "$work/base" "$work/head" || true
+    if all_plugin_rows_slower "$work/slowdown.txt"; then flagged=$((flagged + 1)); fi
+    { echo "slowdown apart $set $k"; grep ' / ' "$work/slowdown.txt" | grep -v '^  ' || true; } >> "$log"
+    # Paired: one run.
+    cp "$R/plugins/libmy_ccd.so" "$work/base/libmy.so"
+    cp "$R/plugins/libmy_ccd.so" "$work/head/libmy.so"
+    run_paired "$set" pair
+    if compare "$work/identical.txt" "$work/pair" "$work/pair" --pair "$base_plugin" "$head_plugin"; then quiet_paired=$((quiet_paired + 1)); fi
+    { echo "identical paired $set $k"; grep ' / ' "$work/identical.txt" | grep -v '^  ' || true; } >> "$log"
+    cp "$R/plugins/libslowed_ccd.so" "$work/head/libmy.so"
+    run_paired "$set" pair
+    compare "$work/slowdown.txt" "$work/pair" "$work/pair" --pair "$base_plugin" "$head_plugin" || true
+    if all_plugin_rows_slower "$work/slowdown.txt"; then flagged_paired=$((flagged_paired + 1)); fi
+    { echo "slowdown paired $set $k"; grep ' / ' "$work/slowdown.txt" | grep -v '^  ' || true; } >> "$log"
   done
-  echo "time-verdicts: $set: identical runs: compare --fail-on-slower exited 0 in $quiet of $count; 1.25x slowdown flagged in $flagged of $count (--repeat $repeat${3:+, --noise-band $3})"
+  echo "time-verdicts: $set: apart (two runs): compare --fail-on-slower exited 0 in $quiet of $count identical pairs; 1.25x slowdown flagged in $flagged of $count (--repeat $repeat${3:+, --noise-band $3})"
+  echo "time-verdicts: $set: paired (one run): compare --fail-on-slower exited 0 in $quiet_paired of $count identical pairs; 1.25x slowdown flagged in $flagged_paired of $count"
 done
 echo "time-verdicts: each comparison's rows: $log"
