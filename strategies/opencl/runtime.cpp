@@ -147,8 +147,10 @@ DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::stri
     if (turns.empty()) {
       for (const DeviceInfo& d : devices) turns.push_back(&d);
     }
-    const DeviceInfo& chosen = *turns[static_cast<std::size_t>(std::max(turn.turn, 0)) % turns.size()];
-    if (turn.of > static_cast<int>(turns.size())) {
+    const std::size_t slot = static_cast<std::size_t>(std::max(turn.turn, 0)) % turns.size();
+    const DeviceInfo& chosen = *turns[slot];
+    // Another turn takes this device when one of this slot's next turns, slot + size, is below the count.
+    if (static_cast<long long>(slot + turns.size()) < turn.of) {
       static std::once_flag said;
       std::call_once(said, [&] {
         std::cerr << "ccdbench: " << turn.of << " processes on this node take " << turns.size() << (turns[0]->is_gpu ? " GPU" : " OpenCL device")
