@@ -32,7 +32,7 @@ out=$report/out
 ccdbench=$root/build/release/bin/ccdbench
 python=/usr/bin/python3
 
-# The budget: the whole report, on this project's 2-core machine, within an hour (measured: 50 minutes, the stages in
+# The budget: the whole report, on this project's 2-core machine, within an hour (measured: 48 minutes, the stages in
 # the README there; the δ > 0 queries and the whole steps are the most of it).
 budget_seconds=3600
 # Per-query timeouts: 1 s where a method's time is measured (the slowest method's slowest answered query of the
