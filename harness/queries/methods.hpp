@@ -69,8 +69,6 @@ std::vector<std::string> query_method_names();
 /// (docs/DESIGN.md §9): harness/queries/methods/FILE.cpp defines `std::vector<QueryMethodEntry> FILE_entries()`, and
 /// harness/CMakeLists.txt lists the file. A spec is made by the first entry, in the list's order, that takes it.
 struct QueryMethodEntry {
-  /// What the entry makes, for messages ("exact", "narrow phases", ...).
-  std::string kind;
   /// Whether `spec` names a method of this entry.
   std::function<bool(const std::string& spec)> takes;
   std::function<std::unique_ptr<QueryMethod>(const std::string& spec)> make;

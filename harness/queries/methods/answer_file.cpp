@@ -69,7 +69,7 @@ class AnswerFileMethod final : public QueryMethod {
 }  // namespace
 
 std::vector<QueryMethodEntry> answer_file_entries() {
-  return {{"answer files", names_answers,
+  return {{names_answers,
            [](const std::string& spec) -> std::unique_ptr<QueryMethod> { return std::make_unique<AnswerFileMethod>(answer_table(spec)); },
            [] { return std::vector<std::string>{}; },
            [](const std::vector<std::string>& methods, const std::vector<datasets::QueryFile>& files) {

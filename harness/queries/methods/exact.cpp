@@ -16,7 +16,7 @@ class ExactQueryMethod final : public QueryMethod {
 }  // namespace
 
 std::vector<QueryMethodEntry> exact_entries() {
-  return {{kExactMethod, [](const std::string& spec) { return spec == kExactMethod; },
+  return {{[](const std::string& spec) { return spec == kExactMethod; },
            [](const std::string&) -> std::unique_ptr<QueryMethod> { return std::make_unique<ExactQueryMethod>(); },
            [] { return std::vector<std::string>{kExactMethod}; }}};
 }

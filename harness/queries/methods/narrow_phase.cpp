@@ -51,7 +51,7 @@ class NarrowPhaseQueryMethod final : public QueryMethod {
 }  // namespace
 
 std::vector<QueryMethodEntry> narrow_phase_entries() {
-  return {{"narrow phases", [](const std::string& spec) { return narrowphase::is_narrow_phase(narrowphase::split_spec(spec).first); },
+  return {{[](const std::string& spec) { return narrowphase::is_narrow_phase(narrowphase::split_spec(spec).first); },
            [](const std::string& spec) -> std::unique_ptr<QueryMethod> {
              return std::make_unique<NarrowPhaseQueryMethod>(narrowphase::make_narrow_phase_from_spec(spec));
            },

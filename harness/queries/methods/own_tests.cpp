@@ -35,7 +35,7 @@ const strategies::StrategyEntry* own_tests(const std::string& spec) {
 }  // namespace
 
 std::vector<QueryMethodEntry> own_tests_entries() {
-  return {{"strategies' own tests", [](const std::string& spec) { return own_tests(spec) != nullptr; },
+  return {{[](const std::string& spec) { return own_tests(spec) != nullptr; },
            [](const std::string& spec) -> std::unique_ptr<QueryMethod> { return std::make_unique<OwnTestsQueryMethod>(*own_tests(spec)); },
            [] {
              std::vector<std::string> names;
