@@ -127,17 +127,15 @@ TEST_F(Mpi, TwoRanksGiveEveryVerdictAndCountOfOne) {
 // both ranks take device 0.
 TEST_F(Mpi, TheRanksOfANodeTakeItsDevicesInTurn) {
   if (!CCDBENCH_WITH_OPENCL) GTEST_SKIP() << "built without OpenCL";
-  const std::string two_devices = "POCL_DEVICES='pthread pthread' ";
-  const auto listed = run_command(two_devices + CCDBENCH_EXECUTABLE " devices");
+  const testing::ScopedVariable two_devices("POCL_DEVICES", "pthread pthread");  // for the listing and both ranks
+  const auto listed = run_command(CCDBENCH_EXECUTABLE " devices");
   if (listed.exit_code != 0 || listed.output.find("\n1: ") == std::string::npos) GTEST_SKIP() << "PoCL gives no two devices here:\n" << listed.output;
   const auto generated = run_command(std::string(CCDBENCH_EXECUTABLE) + " generate fold --resolution 6 --frames 8 --out " + quoted(dir_ / "fold"));
   ASSERT_EQ(generated.exit_code, 0) << generated.output;
   const std::string arguments = "run --scene " + quoted(dir_ / "fold") +
                                 " --thickness scene,0 --strategy full:backend=opencl,full+cubic64:backend=opencl --out " + quoted(dir_ / "two") +
                                 " --json " + quoted(dir_ / "two.json");
-  ::setenv("POCL_DEVICES", "pthread pthread", 1);
   const auto two = mpirun(2, arguments);
-  ::unsetenv("POCL_DEVICES");
   ASSERT_EQ(two.exit_code, 0) << two.output;
   std::set<int> ranks;
   for (const nlohmann::json& cell : summaries("two")) {

@@ -22,22 +22,6 @@ namespace ccd::testing {
 /// A plugin built with the project (tests/plugins/, examples/).
 inline std::filesystem::path plugin(const std::string& name) { return std::filesystem::path(CCDBENCH_PLUGIN_DIR) / ("lib" + name + ".so"); }
 
-/// An environment variable set for the scope (the ccdbench processes the test starts inherit it).
-class ScopedVariable {
- public:
-  ScopedVariable(const char* name, const std::string& value) : name_(name) {
-    if (const char* before = std::getenv(name)) before_ = before;
-    ::setenv(name, value.c_str(), 1);
-  }
-  ~ScopedVariable() { before_ ? (void)::setenv(name_, before_->c_str(), 1) : (void)::unsetenv(name_); }
-  ScopedVariable(const ScopedVariable&) = delete;
-  ScopedVariable& operator=(const ScopedVariable&) = delete;
-
- private:
-  const char* name_;
-  std::optional<std::string> before_;
-};
-
 /// ASAN_OPTIONS with handle_segv=0 added, for tests whose plugins crash on purpose: a child then dies by its signal,
 /// as in Release, instead of a sanitizer report (the sanitizer still watches everything else).
 inline std::string without_segv_reports() {

@@ -11,11 +11,29 @@
 
 #include <array>
 #include <cctype>
+#include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace ccd::testing {
+
+/// An environment variable set for the scope (the ccdbench processes the test starts inherit it).
+class ScopedVariable {
+ public:
+  ScopedVariable(const char* name, const std::string& value) : name_(name) {
+    if (const char* before = std::getenv(name)) before_ = before;
+    ::setenv(name, value.c_str(), 1);
+  }
+  ~ScopedVariable() { before_ ? (void)::setenv(name_, before_->c_str(), 1) : (void)::unsetenv(name_); }
+  ScopedVariable(const ScopedVariable&) = delete;
+  ScopedVariable& operator=(const ScopedVariable&) = delete;
+
+ private:
+  const char* name_;
+  std::optional<std::string> before_;
+};
 
 /// One of `count` parts of a test's inputs: item i belongs to part i % count. A test of many inputs that is too long
 /// for the sanitizer run (CI's second, on two cores, where the reference's exact path runs several times slower) is
