@@ -59,6 +59,11 @@ compare() {  # OUT BASE HEAD [--pair ...]: compare --fail-on-slower into OUT; ex
   "$R/bin/ccdbench" compare "$@" --fail-on-slower $band --replay "$work/replay" > "$out" 2>&1
 }
 
+# Appends a comparison's table rows to the log under LABEL.
+log_rows() {  # LABEL FILE
+  { echo "$1"; grep ' / ' "$2" | grep -v '^  ' || true; } >> "$log"
+}
+
 for set in ci fold16; do
   quiet=0 flagged=0 quiet_paired=0 flagged_paired=0
   for ((k = 0; k < count; ++k)); do
@@ -67,25 +72,25 @@ for set in ci fold16; do
     run "$set" base
     run "$set" head
     if compare "$work/identical.txt" "$work/base" "$work/head"; then quiet=$((quiet + 1)); fi
-    { echo "identical apart $set $k"; grep ' / ' "$work/identical.txt" | grep -v '^  ' || true; } >> "$log"
+    log_rows "identical apart $set $k" "$work/identical.txt"
     cp "$R/plugins/libmy_ccd.so" "$work/libmy.so"
     run "$set" base
     cp "$R/plugins/libslowed_ccd.so" "$work/libmy.so"
     run "$set" head
     compare "$work/slowdown.txt" "$work/base" "$work/head" || true
     if all_plugin_rows_slower "$work/slowdown.txt"; then flagged=$((flagged + 1)); fi
-    { echo "slowdown apart $set $k"; grep ' / ' "$work/slowdown.txt" | grep -v '^  ' || true; } >> "$log"
+    log_rows "slowdown apart $set $k" "$work/slowdown.txt"
     # Paired: one run.
     cp "$R/plugins/libmy_ccd.so" "$work/base/libmy.so"
     cp "$R/plugins/libmy_ccd.so" "$work/head/libmy.so"
     run_paired "$set" pair
     if compare "$work/identical.txt" "$work/pair" "$work/pair" --pair "$base_plugin" "$head_plugin"; then quiet_paired=$((quiet_paired + 1)); fi
-    { echo "identical paired $set $k"; grep ' / ' "$work/identical.txt" | grep -v '^  ' || true; } >> "$log"
+    log_rows "identical paired $set $k" "$work/identical.txt"
     cp "$R/plugins/libslowed_ccd.so" "$work/head/libmy.so"
     run_paired "$set" pair
     compare "$work/slowdown.txt" "$work/pair" "$work/pair" --pair "$base_plugin" "$head_plugin" || true
     if all_plugin_rows_slower "$work/slowdown.txt"; then flagged_paired=$((flagged_paired + 1)); fi
-    { echo "slowdown paired $set $k"; grep ' / ' "$work/slowdown.txt" | grep -v '^  ' || true; } >> "$log"
+    log_rows "slowdown paired $set $k" "$work/slowdown.txt"
   done
   echo "time-verdicts: $set: apart (two runs): compare --fail-on-slower exited 0 in $quiet of $count identical pairs; 1.25x slowdown flagged in $flagged of $count (--repeat $repeat${3:+, --noise-band $3})"
   echo "time-verdicts: $set: paired (one run): compare --fail-on-slower exited 0 in $quiet_paired of $count identical pairs; 1.25x slowdown flagged in $flagged_paired of $count"
