@@ -61,7 +61,8 @@ std::atomic<std::size_t>& children_peak() {
 }
 
 void close_descriptors(ChildProcess& child) {
-  for (int* fd : {&child.to_child, &child.from_child, &child.lifeline}) {
+  // The lifeline first: a child that sees its requests end then knows that its parent ended it (plugin_host.cpp).
+  for (int* fd : {&child.lifeline, &child.to_child, &child.from_child}) {
     if (*fd >= 0) ::close(*fd);
     *fd = -1;
   }

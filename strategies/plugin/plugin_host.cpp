@@ -32,11 +32,29 @@ struct StepReply {
 
 /// Ends this child's process group (itself and whatever the plugin started in it), when it leads one (the parent
 /// starts it so); else only itself. Async-signal-safe.
-void end_own_group() {
+void end_own_group(int status = 3) {
   if (::getpgrp() == ::getpid()) ::kill(0, SIGKILL);
   // The system call itself: the program's _exit is interposed, and a lookup there could wait for ever on the
   // loader's lock, which a plugin whose constructor hangs inside dlopen holds.
-  ::syscall(SYS_exit_group, 3);
+  ::syscall(SYS_exit_group, status);
+}
+
+/// Whether the parent is gone: the lifeline's only writer was the parent (its end is close-on-exec), which never
+/// writes, so the pipe is readable only once that end is closed. Async-signal-safe.
+bool parent_gone() {
+  pollfd lifeline{kLifelineFd, POLLIN, 0};
+  return ::poll(&lifeline, 1, 0) > 0;
+}
+
+/// Ends every other process of the group this child leads (what the plugin started), and leaves this one to end with
+/// its own status, which the parent reads: it moves into its parent's group first (the same session), then kills the
+/// group it led. Where it cannot move, the whole group ends, this process with it.
+void end_rest_of_group() {
+  const pid_t self = ::getpid();
+  if (::getpgrp() != self) return;
+  const pid_t parents_group = ::getpgid(::getppid());
+  if (parents_group < 0 || ::setpgid(0, parents_group) != 0) end_own_group();
+  ::kill(-self, SIGKILL);
 }
 
 /// The signal the kernel sends when the parent dies (PR_SET_PDEATHSIG): caught to end the whole group, where SIGKILL
@@ -52,6 +70,9 @@ void watch_the_parent() {
   ending.sa_handler = [](int) { end_own_group(); };
   ::sigaction(kParentDeathSignal, &ending, nullptr);
   ::prctl(PR_SET_PDEATHSIG, kParentDeathSignal);
+  // A parent that died before the line above sends no signal; the thread below would notice, but only when it is
+  // scheduled, and under load this process could load the plugin (whose constructor may fork) and end first.
+  if (parent_gone()) end_own_group();
   std::thread([] {
     pollfd lifeline{kLifelineFd, POLLIN, 0};
     while (::poll(&lifeline, 1, -1) < 0 && errno == EINTR) {
@@ -268,13 +289,8 @@ class Server {
   std::uint64_t sequence_ = 0;
 };
 
-}  // namespace
-
-int serve_plugin(int argc, char** argv) {
-  if (argc < 3) return 2;
-  // This process runs the plugin, and nothing here is ccdbench's own work to guard: its exits are its own.
-  set_plugin_host_process();
-  watch_the_parent();
+/// The child's work: describes the plugin, or loads it and serves the parent's requests. Its exit status.
+int serve(int argc, char** argv) {
   // Whatever the plugin prints goes to the standard error (never into ccdbench's own output, which a script may be
   // reading); its answers go to fd 4 alone.
   ::dup2(STDERR_FILENO, STDOUT_FILENO);
@@ -335,6 +351,24 @@ int serve_plugin(int argc, char** argv) {
   error[CCDBENCH_MESSAGE_SIZE - 1] = '\0';
   if (!greet(context != nullptr ? 0 : 1, context != nullptr ? "" : error, digest) || context == nullptr) return 1;
   return Server(library, context).run();
+}
+
+}  // namespace
+
+int serve_plugin(int argc, char** argv) {
+  if (argc < 3) return 2;
+  // This process runs the plugin, and nothing here is ccdbench's own work to guard: its exits are its own.
+  set_plugin_host_process();
+  watch_the_parent();
+  const int status = serve(argc, argv);
+#if CCDBENCH_GUARD_LIFELINE
+  // Whatever the plugin started in this group ends here, before this process does: the parent ends the group too
+  // once this process has ended (end_child), but a parent killed between the two (kill -9 of ccdbench, which may
+  // come just as it ends a child) would leave it running with nobody to end it.
+  if (parent_gone()) end_own_group(status);
+  end_rest_of_group();
+#endif
+  return status;
 }
 
 }  // namespace ccd::plugin
