@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# Builds the field's public CPU CCD libraries from pinned commits, and their ccdbench plugins (the adapters in
-# examples/plugins/field/ and examples/plugins/tight_inclusion/), into one folder (reports/field/README.md).
+# Builds the field's public CCD libraries from pinned commits, and their ccdbench plugins (the adapters in
+# examples/plugins/field/, examples/plugins/tight_inclusion/ and examples/plugins/scalable_ccd/), into one folder
+# (reports/field/README.md).
 #
 # Usage: scripts/field/build.sh [--sources-only] [LIBRARY...]
-#   LIBRARY: tight_inclusion ipc fprf msrf rp_bsc rrp tight_ccd interval exact_root_parity (default: all of them)
+#   LIBRARY: tight_inclusion ipc fprf msrf rp_bsc rrp tight_ccd interval exact_root_parity (the CPU ones, the default:
+#            all of them), scalable_ccd (the GPU part: CUDA, built only when named, on a machine with nvcc; its
+#            plugin runs where an NVIDIA GPU of compute capability 9.0 is, CCDBENCH_SCALABLE_CCD_ARCH for another)
 #   --sources-only: find and check each library's sources, build nothing (what CI runs).
 # Environment:
 #   CCDBENCH_FIELD_SOURCES  a folder of local copies, one git repository (clone or bare mirror) per library, named as
@@ -41,6 +44,7 @@ rrp Continuous-Collision-Detection/Rational-Root-Parity 812f8cc6bdd6768b4a70291f
 tight_ccd Continuous-Collision-Detection/TightCCD 366384bac36ed1549d265e90c180fdd1beab42c6 . libtight_ccd_plugin.so
 interval Continuous-Collision-Detection/Interval-Based 4237dfde4e3f0a757ac738d052423957e3c5d16b . libuirf_plugin.so,libirf_plugin.so
 exact_root_parity Continuous-Collision-Detection/Exact-Root-Parity-CCD ded6440dd454c57042fd54ced2f805c4b4b64137 . -
+scalable_ccd Continuous-Collision-Detection/Scalable-CCD 8f9347c1afc36f2dda17424c15ff5b68087fe8dc src,cmake,CMakeLists.txt,LICENSE libscalable_ccd_plugin.so
 EOF
 }
 # ipc-toolkit v1.5.0 pins Tight-Inclusion 1.0.6 (cmake/recipes/tight_inclusion.cmake): its classes are built on that one.
@@ -123,7 +127,10 @@ install_ccdbench() {
 }
 
 wanted=("$@")
-wants() { [ ${#wanted[@]} -eq 0 ] || printf '%s\n' "${wanted[@]}" | grep -qx "$1"; }
+# With no LIBRARY named, the CPU libraries; the GPU one only when named.
+wants() {
+  if [ ${#wanted[@]} -eq 0 ]; then [ "$1" != scalable_ccd ]; else printf '%s\n' "${wanted[@]}" | grep -qx "$1"; fi
+}
 for w in "${wanted[@]}"; do
   pins | awk '{print $1}' | grep -qx "$w" || { echo "field: $w: not a library (one of: $(pins | awk '{print $1}' | tr '\n' ' '))" >&2; exit 2; }
 done
@@ -182,6 +189,10 @@ while read -r library repo pinned paths files; do
     missing=1
     continue
   fi
+  if [ "$library" = scalable_ccd ] && [ "$sources_only" = 0 ] && ! command -v nvcc >/dev/null; then
+    say "$library" "NOT BUILT: no CUDA compiler (nvcc on PATH) on this machine (sources found: ${described:0:7})"
+    continue
+  fi
   if [ "$sources_only" = 1 ]; then
     say "$library" "sources found: ${described:0:12} in $git_dir"
     continue
@@ -203,6 +214,9 @@ while read -r library repo pinned paths files; do
   patches=$(cat "$src.patches")
   if [ "$library" = tight_inclusion ]; then
     args=(-S "$root/examples/plugins/tight_inclusion" -DTIGHT_INCLUSION_DIR="$src")
+  elif [ "$library" = scalable_ccd ]; then
+    args=(-S "$root/examples/plugins/scalable_ccd" -DSCALABLE_CCD_DIR="$src" -DSCALABLE_CCD_COMMIT="${described:0:12}"
+      -DSCALABLE_CCD_CUDA_ARCHITECTURES="${CCDBENCH_SCALABLE_CCD_ARCH:-90}")
   else
     args=(-S "$root/examples/plugins/field" -DFIELD_LIBRARY="$library" -DFIELD_LIBRARY_DIR="$src" -DFIELD_LIBRARY_COMMIT="${described:0:12}")
   fi
