@@ -9,6 +9,8 @@
 # OpenCL tests stay behind then, to keep the folder under run's 64 MiB.
 # CARRY_STAGES="NAME=PATH ..." adds builds of benchmarks/conservative_stages as bin/conservative_stages-NAME
 # (stripped), for the per-stage profile of each (device-opencl-scale.sh's part 'stages').
+# CARRY_PLUGINS="FILE ..." adds plugins as plugins/FILE, with the shared libraries they need in lib/ (a CUDA plugin's
+# libcudart: scripts/field/gpu.sh).
 # Usage: scripts/device-carry.sh   (after scripts/build.sh release)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -38,7 +40,11 @@ if [ -z "${CARRY_VARIANTS:-}" ]; then
     cp -rL "$tree" "$carry/root$tree"
   done
 fi
-for binary in "$carry"/bin/ccdbench "$carry"/bin/ccdbench-* "$carry"/bin/*_benchmark "$carry"/bin/conservative_stages-* "$carry"/bin/opencl_tests "$carry/bin/orterun" "$carry"/root/usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3/*.so \
+for plugin in ${CARRY_PLUGINS:-}; do
+  mkdir -p "$carry/plugins"
+  cp "$plugin" "$carry/plugins/"
+done
+for binary in "$carry"/plugins/*.so "$carry"/bin/ccdbench "$carry"/bin/ccdbench-* "$carry"/bin/*_benchmark "$carry"/bin/conservative_stages-* "$carry"/bin/opencl_tests "$carry/bin/orterun" "$carry"/root/usr/lib/x86_64-linux-gnu/openmpi/lib/openmpi3/*.so \
               "$carry"/root/usr/lib/x86_64-linux-gnu/pmix2/lib/pmix/*.so; do
   [ -e "$binary" ] || continue
   ldd "$binary" | awk '$3 ~ /^\// {print $3}'

@@ -4,6 +4,8 @@
   field.py sample DATA FIELD_QUERIES WORK   the query sets the report scores, sampled as the report says, into WORK
   field.py relabel ANSWERS WORK             WORK/queries/main labelled at δ by the exact reference's answers
   field.py collect WORK                     ccdbench's outputs in WORK condensed into reports/field/data/*.csv
+  field.py gpu OUT_DIR...                   scripts/field/gpu.sh's outputs (one folder per call on the GPU machine)
+                                            condensed into reports/field/data/gpu.csv and gpu.json
   field.py tables [--check]                 the Markdown tables of reports/field/README.md and README.md, from the
                                             committed data; --check writes nothing and exits 1 naming each table that
                                             differs from what the data gives (the CTest field.tables)
@@ -15,6 +17,7 @@ import json
 import math
 import os
 import re
+import shlex
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -267,6 +270,93 @@ def collect(work):
 
 
 # ---------------------------------------------------------------------------------------------------------------
+# gpu: scripts/field/gpu.sh's stages (Scalable CCD's whole step beside ccdbench's OpenCL full, one invocation each)
+
+GPU_COLUMNS = ["stage", "scene", "thickness", "method", "steps", "triangles", "colliding", "missed", "false_alarms", "errors",
+               "toi_checked", "toi_late", "toi_error_p99", "changed_at_step", "ms_per_step", "device_mib"]
+GPU_METHODS = (("full:backend=opencl", "opencl-conservative"), ("full+cubic64:backend=opencl", "opencl-cubic64"))
+GPU_LABELS = {"opencl-conservative": "ccdbench full (OpenCL), conservative", "opencl-cubic64": "ccdbench full (OpenCL), cubic64",
+              "scalable-ccd": "Scalable CCD (all pairs)"}
+
+
+def gpu_method(spec):
+    for given, key in GPU_METHODS:
+        if spec == given:
+            return key
+    if spec.startswith("plugin:") and "scalable_ccd" in spec:
+        return "scalable-ccd"
+    sys.exit("field: gpu: a cell of an unknown method: " + spec)
+
+
+def gpu_cells(folder, stage):
+    """A stage's summaries: its --json, or (a stage cut short) the cells its --out kept."""
+    path = os.path.join(folder, stage + ".json")
+    if os.path.exists(path):
+        return json.load(open(path)), True
+    with open(os.path.join(folder, stage + ".results.jsonl")) as f:
+        return [c for c in (json.loads(line) for line in f) if c.get("record") == "summary"], False
+
+
+def gpu_peaks(folder, stage):
+    """The most device memory (MiB, nvidia-smi every 100 ms) ccdbench's process and any other (the plugin's
+    children) held during the stage."""
+    main = int(open(os.path.join(folder, stage + ".pid")).read())
+    peaks = {"ccdbench": 0, "plugin": 0}
+    for line in open(os.path.join(folder, stage + ".smi")):
+        fields = [f.strip() for f in line.split(",")]
+        if len(fields) == 2 and fields[0].isdigit() and fields[1].isdigit():
+            role = "ccdbench" if int(fields[0]) == main else "plugin"
+            peaks[role] = max(peaks[role], int(fields[1]))
+    return peaks
+
+
+def shown_command(command):
+    words = shlex.split(command)
+    shown = []
+    for w in words:
+        w = re.sub(r"^/root/out/[a-z]+/gpu/", "OUT/", w)
+        w = w.replace("/work/main/device-carry/plugins/", "PLUGINS/").replace("/work/main/device-carry/data/", "$CCDBENCH_DATA_DIR/")
+        w = w.replace("/work/main/device-carry/bin/ccdbench", "device-carry/bin/ccdbench")
+        shown.append(w)
+    return shlex.join(shown)
+
+
+def gpu(folders):
+    rows, stages, meta = [], [], {}
+    for folder in folders:
+        with open(os.path.join(folder, "gpu.txt")) as f:
+            name, driver, memory = [x.strip() for x in f.read().strip().split(",")]
+        meta.setdefault("device", "%s (%s), driver %s" % (name, memory, driver))
+        with open(os.path.join(folder, "version.txt")) as f:
+            meta.setdefault("ccdbench", f.readline().strip())
+        order = ["cloth-funnel", "rod-twist", "default", "large"]  # gpu.sh's
+        present = {f.split(".")[0] for f in os.listdir(folder) if f.endswith(".smi")}
+        for stage in sorted(present, key=lambda n: (order.index(n) if n in order else len(order), n)):
+            cells, whole = gpu_cells(folder, stage)
+            peaks = gpu_peaks(folder, stage)
+            wall = os.path.join(folder, stage + ".wall_ms")
+            stages.append({"stage": stage, "whole": whole, "cells": len(cells),
+                           "seconds": round(int(open(wall).read()) / 1000.0, 1) if os.path.exists(wall) else None,
+                           "device_mib_smi": peaks, "command": shown_command(open(os.path.join(folder, stage + ".command")).read())})
+            for c in cells:
+                key = gpu_method(c["spec"])
+                scene = {"cloth-funnel": "cloth-funnel (public)", "rod-twist": "rod-twist (public)"}.get(stage, c["scene"])
+                device = c.get("device_bytes", 0) / 2.0 ** 20 if key != "scalable-ccd" else peaks["plugin"]
+                nd = c.get("nondeterministic_at_step")
+                rows.append({"stage": stage, "scene": scene, "thickness": number(c["thickness"]), "method": key, "steps": c["steps"],
+                             "triangles": c["triangles"], "colliding": c["colliding"], "missed": c["missed"], "false_alarms": c["false_alarms"],
+                             "errors": c.get("errors", 0), "toi_checked": c.get("toi_checked", 0), "toi_late": c.get("toi_late", 0),
+                             "toi_error_p99": "%.3g" % c["toi_error_p99"] if c.get("toi_checked") else "",
+                             "changed_at_step": "" if nd is None else nd, "ms_per_step": "%.4g" % c["ms_per_step"], "device_mib": "%.0f" % device})
+    write_csv("gpu.csv", rows, GPU_COLUMNS)
+    meta["stages"] = stages
+    with open(os.path.join(DATA, "gpu.json"), "w") as f:
+        json.dump(meta, f, indent=1, sort_keys=True)
+        f.write("\n")
+    print("field: GPU data written to " + os.path.relpath(DATA, ROOT))
+
+
+# ---------------------------------------------------------------------------------------------------------------
 # tables: Markdown from the committed data, between <!-- field-table: NAME --> and <!-- /field-table --> markers
 
 
@@ -448,6 +538,30 @@ def table_budget(methods, data):
     return markdown(["stage", "wall seconds"], rows)
 
 
+def table_gpu(methods, data):
+    rows = []
+    for r in data["gpu"]:
+        if int(r["colliding"]) == 0:
+            continue  # a cell with no colliding pair can miss nothing: not judged here (gpu.csv keeps it)
+        late = "%s of %s" % (r["toi_late"], r["toi_checked"]) if int(r["toi_checked"]) else "-"
+        changed = "step %s" % r["changed_at_step"] if r["changed_at_step"] != "" else "no"
+        rows.append([r["scene"], r["thickness"], GPU_LABELS[r["method"]], r["steps"], "{:,}".format(int(r["triangles"])), r["colliding"], r["missed"],
+                     r["false_alarms"], r["errors"], late, dash(r["toi_error_p99"]), changed, short(float(r["ms_per_step"])), r["device_mib"]])
+    return markdown(["scene", "δ", "method", "steps", "triangles", "colliding", "missed", "false alarms", "errors", "TOI late", "TOI error p99",
+                     "answers changed between passes", "ms/step", "device MiB"], rows, ["---", "---:", "---"] + ["---:"] * 11)
+
+
+def table_gpucommands(methods, data):
+    meta = data["gpumeta"]
+    lines = ["# %s; %s" % (meta.get("device", "?"), meta.get("ccdbench", "?"))]
+    for s in meta.get("stages", []):
+        took = "%.0f s" % s["seconds"] if s["seconds"] is not None else "cut short by the device time limit: %d cells kept" % s["cells"]
+        lines.append("# %s (%s; device MiB at most: ccdbench %d, Scalable CCD's child %d)" % (s["stage"], took, s["device_mib_smi"]["ccdbench"],
+                                                                                          s["device_mib_smi"]["plugin"]))
+        lines.append(s["command"])
+    return "```sh\n" + "\n".join(lines) + "\n```"
+
+
 TABLES = {
     "methods": table_methods,
     "headline": table_headline,
@@ -459,6 +573,8 @@ TABLES = {
     "wang": table_wang,
     "commands": table_commands,
     "budget": table_budget,
+    "gpu": table_gpu,
+    "gpucommands": table_gpucommands,
 }
 MARKER = re.compile(r"(<!-- field-table: ([a-z]+) -->\n)(.*?)(<!-- /field-table -->)", re.S)
 
@@ -477,7 +593,8 @@ def tables(check):
     methods = read_methods()
     run_path = os.path.join(DATA, "run.json")
     data = {"queries": read_csv("queries.csv"), "stress": read_csv("stress.csv"), "steps": read_csv("steps.csv"), "wang": read_csv("wang2021.csv"),
-            "run": json.load(open(run_path)) if os.path.exists(run_path) else {}}
+            "run": json.load(open(run_path)) if os.path.exists(run_path) else {}, "gpu": read_csv("gpu.csv"),
+            "gpumeta": json.load(open(os.path.join(DATA, "gpu.json"))) if os.path.exists(os.path.join(DATA, "gpu.json")) else {}}
     differ = []
     expected = {os.path.join(ROOT, "reports", "field", "README.md"): set(TABLES), os.path.join(ROOT, "README.md"): {"headline"}}
     for path, names in expected.items():
@@ -515,6 +632,8 @@ def main(argv):
         relabel(argv[1], argv[2])
     elif len(argv) == 2 and argv[0] == "collect":
         collect(argv[1])
+    elif len(argv) >= 2 and argv[0] == "gpu":
+        gpu(argv[1:])
     elif len(argv) >= 1 and argv[0] == "tables" and argv[1:] in ([], ["--check"]):
         tables(argv[1:] == ["--check"])
     else:
