@@ -57,7 +57,9 @@ std::vector<narrowphase::KeySpec> backend_keys() {
   using narrowphase::KeySpec;
   const BackendChoice defaults;
   return {KeySpec::choice("backend", {"cpu", "opencl"}, defaults.backend, "where every stage runs: TBB threads, or an OpenCL device"),
-          KeySpec::text("device", "backend=opencl: device INDEX or NAME-SUBSTRING (`ccdbench devices`); default the first GPU, else 0"),
+          KeySpec::text("device",
+                        "backend=opencl: device INDEX or NAME-SUBSTRING (`ccdbench devices`); default the first GPU, else 0; full also "
+                        "takes several for one step: all (every GPU) or INDEX+INDEX"),
           KeySpec::integer("device_iterations", defaults.device_iterations, kDeviceIterationRange,
                            "backend=opencl: iterations a work item spends on a conservative query before handing it on (0: never)"),
           KeySpec::integer("list_start", static_cast<long>(defaults.list_start), kListStartRange,

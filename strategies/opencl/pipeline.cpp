@@ -50,6 +50,10 @@ EdgeEdgePair edge_pair(const cl_uint4& p) { return {Edge{p.s[0], p.s[1]}, Edge{p
 }  // namespace
 
 DeviceInfo choose_checked_device(const std::string& strategy, const std::string& selector, bool int64_atomics) {
+  if (names_several_devices(selector)) {
+    throw std::invalid_argument(strategy + ":backend=opencl: device=" + selector + ": " + strategy +
+                                " runs on one device (full:backend=opencl runs a step over several)");
+  }
   DeviceInfo device = choose_device(list_devices(), selector);
   require_double_precision(device);
   if (int64_atomics && !device.int64_atomics) {
@@ -58,6 +62,18 @@ DeviceInfo choose_checked_device(const std::string& strategy, const std::string&
                                 "full:backend=opencl runs there");
   }
   return device;
+}
+
+std::vector<DeviceInfo> choose_checked_devices(const std::string& strategy, const std::string& selector) {
+  std::vector<DeviceInfo> devices = choose_devices(list_devices(), selector);
+  for (const DeviceInfo& device : devices) {
+    try {
+      require_double_precision(device);
+    } catch (const std::invalid_argument& refusal) {
+      throw std::invalid_argument(strategy + ":backend=opencl:device=" + selector + ": " + refusal.what());
+    }
+  }
+  return devices;
 }
 
 void refuse_host_narrow_phase(const std::string& strategy, const std::string& name) {

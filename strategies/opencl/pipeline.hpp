@@ -39,6 +39,8 @@ NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_p
 /// The device `selector` chooses (device=), checked for what `strategy`:backend=opencl needs: fp64 that keeps
 /// subnormals, and 64-bit atomics where `int64_atomics` (apccd's pending list). @throws std::invalid_argument.
 DeviceInfo choose_checked_device(const std::string& strategy, const std::string& selector, bool int64_atomics);
+/// The devices `selector` names (choose_devices), each checked so: `full` runs a step over several.
+std::vector<DeviceInfo> choose_checked_devices(const std::string& strategy, const std::string& selector);
 
 /// @throws std::invalid_argument: `strategy`:backend=opencl runs the narrow phases that have a device form, not `name`.
 [[noreturn]] void refuse_host_narrow_phase(const std::string& strategy, const std::string& name);

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <sstream>
 
 namespace ccd::opencl {
 namespace {
@@ -169,6 +170,32 @@ DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::stri
     if (d.name.find(selector) != std::string::npos) return d;
   }
   throw std::invalid_argument("device=" + selector + ": no device name contains it (devices: " + listing(devices) + ")");
+}
+
+bool names_several_devices(const std::string& selector) { return selector == "all" || selector.find('+') != std::string::npos; }
+
+std::vector<DeviceInfo> choose_devices(const std::vector<DeviceInfo>& devices, const std::string& selector) {
+  if (!names_several_devices(selector)) return {choose_device(devices, selector)};
+  if (devices.empty()) throw std::invalid_argument("no OpenCL device: " + listing(devices));
+  std::vector<DeviceInfo> chosen;
+  if (selector == "all") {
+    for (const DeviceInfo& d : devices) {
+      if (d.is_gpu) chosen.push_back(d);
+    }
+    if (chosen.empty()) chosen = devices;
+    return chosen;
+  }
+  std::stringstream parts(selector);
+  for (std::string part; std::getline(parts, part, '+');) {
+    const bool index = !part.empty() && part.size() < 6 && std::all_of(part.begin(), part.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (!index) throw std::invalid_argument("device=" + selector + ": '" + part + "' is not a device index (devices: " + listing(devices) + ")");
+    const DeviceInfo d = choose_device(devices, part);
+    for (const DeviceInfo& taken : chosen) {
+      if (taken.index == d.index) throw std::invalid_argument("device=" + selector + ": device " + part + " is named twice");
+    }
+    chosen.push_back(d);
+  }
+  return chosen;
 }
 
 void require_double_precision(const DeviceInfo& device) {

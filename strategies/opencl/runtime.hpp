@@ -59,6 +59,15 @@ std::vector<DeviceInfo> list_devices();
 DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector,
                          strategies::DeviceTurn turn = strategies::device_turn());
 
+/// Whether `selector` names several devices at once: "all", or indices joined by '+' ("0+1").
+bool names_several_devices(const std::string& selector);
+
+/// The devices a selector names: "all" for every GPU of this machine (every device where it has no GPU), "0+1" for
+/// those indices (each once), anything else the one device choose_device gives. MPI ranks' turns do not apply to
+/// "all": a process that takes every GPU shares them with the other ranks of its node.
+/// @throws std::invalid_argument as choose_device, or for an index named twice.
+std::vector<DeviceInfo> choose_devices(const std::vector<DeviceInfo>& devices, const std::string& selector);
+
 /// Refuses a device that cannot run the backend: no fp64, or fp64 that flushes subnormals (the narrow phases'
 /// error bounds count subnormals). The seam where a device's capabilities are judged, so a test can hand it a
 /// device without fp64.

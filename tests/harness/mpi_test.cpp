@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <map>
 #include <set>
 
 namespace ccd {
@@ -146,6 +147,47 @@ TEST_F(Mpi, TheRanksOfANodeTakeItsDevicesInTurn) {
   }
   EXPECT_EQ(ranks, (std::set<int>{0, 1})) << "the work was not spread over both ranks: this proves nothing\n" << two.output;
   EXPECT_EQ(two.output.find("in turn: this one"), std::string::npos) << "two ranks, two devices: none is shared\n" << two.output;
+}
+
+// One step over several devices in one process (full:backend=opencl:device=0+1, or device=all: a node's GPUs): each
+// device takes ranges of the step's queries, and the answers are those of one device, step by step (the digest of
+// the reported pairs and their TOIs, and the elementary tests). PoCL asked for two CPU devices stands in for two GPUs.
+// Fails if a device's part of a step is lost or counted twice, or if the split changes a pair's answer.
+TEST(OpenClDevices, AStepSplitOverTwoDevicesGivesTheAnswersOfOne) {
+  if (!CCDBENCH_WITH_OPENCL) GTEST_SKIP() << "built without OpenCL";
+  const testing::ScopedVariable two_devices("POCL_DEVICES", "pthread pthread");
+  const auto listed = run_command(CCDBENCH_EXECUTABLE " devices");
+  if (listed.exit_code != 0 || listed.output.find("\n1: ") == std::string::npos) GTEST_SKIP() << "PoCL gives no two devices here:\n" << listed.output;
+  const testing::TempDir dir;
+  const auto generated = run_command(std::string(CCDBENCH_EXECUTABLE) + " generate fold --resolution 12 --frames 6 --out " + quoted(dir / "fold"));
+  ASSERT_EQ(generated.exit_code, 0) << generated.output;
+  // Step records by (strategy without its device, δ, step): answers digest and elementary tests.
+  auto steps_of = [&](const std::string& device) {
+    const std::string out = "out-" + device;
+    const auto run =
+        run_command(std::string(CCDBENCH_EXECUTABLE) + " --threads 2 run --scene " + quoted(dir / "fold") +
+                    " --thickness scene,0 --strategy full:backend=opencl:device=" + device + ",full+cubic64:backend=opencl:device=" + device +
+                    " --out " + quoted(dir / out) + " --json " + quoted(dir / (out + ".json")));
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    std::map<std::string, std::string> steps;
+    for (const nlohmann::json& record : testing::read_json_lines(dir / out / "results.jsonl")) {
+      if (record.value("record", "") != "step") continue;
+      std::string strategy = record["strategy"].get<std::string>();
+      strategy = strategy.substr(0, strategy.find(":device="));
+      steps[strategy + " δ " + record["thickness"].dump() + " step " + record["step"].dump()] =
+          record["answers"].get<std::string>() + " " + record["elementary_tests"].dump();
+    }
+    for (const nlohmann::json& cell : read_json(dir / (out + ".json"))) {
+      EXPECT_EQ(cell["provenance"]["opencl_device_index"], device == "0" ? "0" : "0+1") << cell["strategy"];
+      EXPECT_GT(cell["colliding"].get<double>(), 0) << "a cell without a colliding pair proves nothing";
+    }
+    return steps;
+  };
+  const auto one = steps_of("0");
+  const auto two = steps_of("0+1");
+  ASSERT_EQ(one.size(), 2u * 2u * 5u) << "two strategies, two δ, five steps";
+  EXPECT_EQ(two, one);
+  EXPECT_EQ(steps_of("all"), one) << "device=all: every device of a machine without a GPU";
 }
 
 TEST_F(Mpi, PluginsGiveTheVerdictsOfOneProcess) {
