@@ -18,6 +18,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 extern char** environ;
 
@@ -61,8 +62,7 @@ std::atomic<std::size_t>& children_peak() {
 }
 
 void close_descriptors(ChildProcess& child) {
-  // The lifeline first: a child that sees its requests end then knows that its parent ended it (plugin_host.cpp).
-  for (int* fd : {&child.lifeline, &child.to_child, &child.from_child}) {
+  for (int* fd : {&child.to_child, &child.from_child, &child.lifeline}) {
     if (*fd >= 0) ::close(*fd);
     *fd = -1;
   }
@@ -186,21 +186,37 @@ ChildRead read_some_from_child(const ChildProcess& child, char* data, std::size_
 }
 
 std::string end_child(ChildProcess& child, bool kill_it, double grace_seconds) {
+  // Its requests end; the lifeline stays open until it has ended, so that it ends as a child whose parent is there
+  // (its plugin's destroy, then what the plugin started, then itself), not as one whose parent died.
+  const int lifeline = std::exchange(child.lifeline, -1);
   close_descriptors(child);
-  if (child.pid <= 0) return "it was not running";
+  const auto close_lifeline = [&] {
+    if (lifeline >= 0) ::close(lifeline);
+  };
+  if (child.pid <= 0) {
+    close_lifeline();
+    return "it was not running";
+  }
   const pid_t pid = child.pid;
   child.pid = -1;
-  if (kill_it) ::kill(-pid, SIGKILL);  // its process group: the child and what it started
+  // Its process group (the child and what it started), and the child itself, which may have left its group to end
+  // the rest of it (plugin_host.cpp): until it is reaped, its pid names it.
+  const auto kill_all = [pid] {
+    ::kill(-pid, SIGKILL);
+    ::kill(pid, SIGKILL);
+  };
+  if (kill_it) kill_all();
   // Its requests ended (the pipe closed): it ends by itself, or is killed after the grace.
   const double deadline = now_seconds() + grace_seconds;
   const ChildProcess watched{pid, -1, -1, -1};
   while (!child_ended(watched)) {
     if (now_seconds() >= deadline) {
-      ::kill(-pid, SIGKILL);
+      kill_all();
       break;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
+  close_lifeline();
   // The child ended but is not reaped yet: its group still names only what it started, which goes with it.
   ::kill(-pid, SIGKILL);
   int status = 0;

@@ -30,10 +30,11 @@ struct StepReply {
   std::uint64_t vertex_face_count = 0, edge_edge_count = 0;
 };
 
-/// Ends this child's process group (itself and whatever the plugin started in it), when it leads one (the parent
-/// starts it so); else only itself. Async-signal-safe.
+/// Ends the process group this child was started to lead (itself and whatever the plugin started in it), and
+/// itself. Async-signal-safe. The group is named by this process's id, never as "the caller's group" (kill(0)):
+/// another thread may just have moved this process into its parent's group (end_rest_of_group).
 void end_own_group(int status = 3) {
-  if (::getpgrp() == ::getpid()) ::kill(0, SIGKILL);
+  ::kill(-::getpid(), SIGKILL);
   // The system call itself: the program's _exit is interposed, and a lookup there could wait for ever on the
   // loader's lock, which a plugin whose constructor hangs inside dlopen holds.
   ::syscall(SYS_exit_group, status);
