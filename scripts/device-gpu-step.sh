@@ -2,8 +2,9 @@
 # One step on every GPU of a node (issue 66; reports/gpus/): the 1M-triangle contact-rich step of the large suite
 # (spinning-ball at resolution 708, frames 26-27, and the step after it), with full:backend=opencl on one GPU
 # (device=0) and on every GPU (device=all) in one invocation, at δ = 0 and the scene's δ, 3 passes, answers only
-# (--verify none); the CPU's full on the first step for the digests. Prints ms per step of each and whether every
-# step's answers digest is the CPU's. Builds nothing: scripts/device-carry.sh first.
+# (--verify none); the CPU's full on the first step for the digests. Prints ms per step of each, how many steps'
+# answers digests (the reported pairs and their TOIs) are one GPU's, and whether the first step's is the CPU's.
+# Writes OUT_DIR/{gpus,cpu}.json and their step records (*.results.jsonl). Builds nothing: scripts/device-carry.sh first.
 # Usage: scripts/device-gpu-step.sh OUT_DIR
 set -euo pipefail
 out=${1:?usage: device-gpu-step.sh OUT_DIR}
@@ -53,6 +54,8 @@ for c in cells:
     mine = {k: v for k, v in gpus.items() if k[0] == c["strategy"].split(":device=")[1].split(":")[0] and k[1] == c["thickness"]}
     same = all(cpu.get(("cpu", t, s)) in (None, v) for (_, t, s), v in mine.items())
     checked = sum(1 for (_, t, s) in mine if ("cpu", t, s) in cpu)
+    first = [k for k in gpus if k[1] == c["thickness"] and k[0] != "cpu" and "+" not in k[0] and k[0] != "all"]
+    as_one = sum(1 for (_, t, s), v in mine.items() if any(gpus[k] == v for k in first if k[2] == s))
     print("%-10s %-10.3g %-12.1f %-14s %s" % (device, c["thickness"], c["ms_per_step"], "%.2fx" % (one[c["thickness"]] / c["ms_per_step"]),
-                                             "%d step(s) as the CPU's full" % checked if same else "NOT the CPU's"))
+                                             "%d of %d steps as one GPU's; %s" % (as_one, len(mine), "%d step(s) as the CPU's full" % checked if same else "NOT the CPU's")))
 EOF

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The field on the GPU (reports/field/README.md, "On the GPU"): Scalable CCD's whole step, through its plugin
+# The field on the GPU (reports/field/README.md, "On the GPU: Scalable CCD"): Scalable CCD's whole step, through its plugin
 # (examples/plugins/scalable_ccd/, built by `scripts/field/build.sh scalable_ccd` on a machine with nvcc), beside
 # ccdbench's own OpenCL `full` with its conservative and cubic64 narrow phases, on the same GPU, in one ccdbench
 # invocation per source of steps: every step verified against the exact truth, TOIs checked, 3 passes (answers that

@@ -260,12 +260,16 @@ class FullOpenCl final : public Strategy {
         // A device that got no range has only its upload and refit queued: done before its events are read.
         worker.pipeline().context().finish();
       });
-      for (std::size_t k = 0; k < workers_.size(); ++k) merge(std::move(parts[k]), partial[k], chunks, result);
+      for (std::size_t k = 0; k < workers_.size(); ++k)
+        merge(std::move(parts[k]), partial[k], 1.0 / static_cast<double>(workers_.size()), chunks, result);
     }
     DeviceWorker& first = *workers_[0];
     first.pipeline().collect(chunks.decided, result);
+    // On several devices, a device stage's time is its mean over the devices (their sum would pass the step's wall
+    // time, which the stages add up to), as are the host stages each device's thread timed (merge).
+    const double share = 1.0 / static_cast<double>(workers_.size());
     for (opencl::StageEvents& device_events : events) {
-      for (const auto& [stage, milliseconds] : device_events.collect()) result.stages.add(stage, milliseconds);
+      for (const auto& [stage, milliseconds] : device_events.collect()) result.stages.add(stage, milliseconds * share);
     }
     double span = 0, idle = 0;
     for (const opencl::StageEvents& device_events : events) {
@@ -317,14 +321,20 @@ class FullOpenCl final : public Strategy {
   void run_on_every_device(Work&& work) {
     std::vector<std::exception_ptr> errors(workers_.size());
     std::vector<std::thread> threads;
-    for (std::size_t k = 0; k < workers_.size(); ++k) {
-      threads.emplace_back([&, k] {
-        try {
-          work(*workers_[k], k);
-        } catch (...) {
-          errors[k] = std::current_exception();
-        }
-      });
+    try {
+      for (std::size_t k = 0; k < workers_.size(); ++k) {
+        threads.emplace_back([&, k] {
+          try {
+            work(*workers_[k], k);
+          } catch (...) {
+            errors[k] = std::current_exception();
+          }
+        });
+      }
+    } catch (...) {
+      // A thread that could not be started: the started ones are waited for before the error goes on.
+      for (std::thread& thread : threads) thread.join();
+      throw;
     }
     for (std::thread& thread : threads) thread.join();
     for (const std::exception_ptr& error : errors) {
@@ -333,7 +343,7 @@ class FullOpenCl final : public Strategy {
   }
 
   /// One device's part of a step added to the whole.
-  static void merge(Chunks&& part, StepResult& partial, Chunks& into, StepResult& result) {
+  static void merge(Chunks&& part, StepResult& partial, double share, Chunks& into, StepResult& result) {
     opencl::Decided& d = into.decided;
     d.pairs.insert(d.pairs.end(), part.decided.pairs.begin(), part.decided.pairs.end());
     d.toi.insert(d.toi.end(), part.decided.toi.begin(), part.decided.toi.end());
@@ -352,7 +362,7 @@ class FullOpenCl final : public Strategy {
     into.elementary += part.elementary;
     into.tests += part.tests;
     into.count += part.count;
-    for (const auto& [stage, milliseconds] : partial.stages.entries()) result.stages.add(stage, milliseconds);
+    for (const auto& [stage, milliseconds] : partial.stages.entries()) result.stages.add(stage, milliseconds * share);
   }
 
   std::vector<std::unique_ptr<DeviceWorker>> workers_;

@@ -172,7 +172,12 @@ DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::stri
   throw std::invalid_argument("device=" + selector + ": no device name contains it (devices: " + listing(devices) + ")");
 }
 
-bool names_several_devices(const std::string& selector) { return selector == "all" || selector.find('+') != std::string::npos; }
+bool names_several_devices(const std::string& selector) {
+  // Indices joined by '+' only: a device name may hold a '+' (AMD's "gfx90a:sramecc+:xnack-"), and selects by its text.
+  if (selector == "all") return true;
+  if (selector.find('+') == std::string::npos || selector.front() == '+' || selector.back() == '+') return false;
+  return std::all_of(selector.begin(), selector.end(), [](char c) { return c == '+' || (c >= '0' && c <= '9'); });
+}
 
 std::vector<DeviceInfo> choose_devices(const std::vector<DeviceInfo>& devices, const std::string& selector) {
   if (!names_several_devices(selector)) return {choose_device(devices, selector)};

@@ -59,7 +59,8 @@ std::vector<DeviceInfo> list_devices();
 DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector,
                          strategies::DeviceTurn turn = strategies::device_turn());
 
-/// Whether `selector` names several devices at once: "all", or indices joined by '+' ("0+1").
+/// Whether `selector` names several devices at once: "all", or indices joined by '+' ("0+1"; any other text with a
+/// '+' is a name to look for).
 bool names_several_devices(const std::string& selector);
 
 /// The devices a selector names: "all" for every GPU of this machine (every device where it has no GPU), "0+1" for
