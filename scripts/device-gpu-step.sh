@@ -9,13 +9,8 @@
 set -euo pipefail
 out=${1:?usage: device-gpu-step.sh OUT_DIR}
 root=$(cd "$(dirname "$0")/.." && pwd)
-if [[ -x "$root/device-carry/bin/ccdbench" ]]; then
-  source "$root/scripts/device-env.sh"
-  bin="$root/device-carry/bin/ccdbench"
-else
-  bin="$root/build/release/bin/ccdbench"
-fi
-mkdir -p /tmp/icd && echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd && export OCL_ICD_VENDORS=/tmp/icd
+source "$root/scripts/device-ccdbench.sh"
+nvidia_opencl
 export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-gpu-step-cache}
 mkdir -p "$out"
 echo "machine: $(nproc) cores, $(nvidia-smi -L | wc -l) GPUs ($(nvidia-smi --query-gpu=name --format=csv,noheader | sort | uniq -c | xargs))"

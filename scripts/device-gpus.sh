@@ -10,15 +10,8 @@
 set -euo pipefail
 out=${1:?usage: device-gpus.sh OUT_DIR}
 root=$(cd "$(dirname "$0")/.." && pwd)
-if [[ -x "$root/device-carry/bin/ccdbench" ]]; then
-  source "$root/scripts/device-env.sh"
-  bin="$root/device-carry/bin/ccdbench"
-else
-  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-  bin="$root/build/release/bin/ccdbench"
-fi
-# The NVIDIA OpenCL driver is installed there but not registered.
-mkdir -p /tmp/icd && echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd && export OCL_ICD_VENDORS=/tmp/icd
+source "$root/scripts/device-ccdbench.sh"
+nvidia_opencl
 suite=${SUITE:-paper}
 cores=$(nproc)
 gpus=$(nvidia-smi -L | wc -l)

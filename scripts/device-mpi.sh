@@ -8,13 +8,7 @@
 set -euo pipefail
 out=${1:?usage: device-mpi.sh OUT_DIR}
 root=$(cd "$(dirname "$0")/.." && pwd)
-if [[ -x "$root/device-carry/bin/ccdbench" ]]; then
-  source "$root/scripts/device-env.sh"
-  bin="$root/device-carry/bin/ccdbench"
-else
-  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-  bin="$root/build/release/bin/ccdbench"
-fi
+source "$root/scripts/device-ccdbench.sh"
 steps=${STEPS:-20}
 resolution=${RESOLUTION:-100}
 cores=${CORES:-$(nproc)}

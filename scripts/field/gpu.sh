@@ -20,17 +20,11 @@ shift 2
 stages=("$@")
 [ ${#stages[@]} -gt 0 ] || stages=(cloth-funnel rod-twist default large)
 root=$(cd "$(dirname "$0")/../.." && pwd)
-if [[ -x "$root/device-carry/bin/ccdbench" ]]; then
-  source "$root/scripts/device-env.sh"
-  bin="$root/device-carry/bin/ccdbench"
-  [ -n "${CCDBENCH_DATA_DIR:-}" ] || [ ! -d "$root/device-carry/data" ] || export CCDBENCH_DATA_DIR=$root/device-carry/data
-else
-  bin="$root/build/release/bin/ccdbench"
-fi
+source "$root/scripts/device-ccdbench.sh"
+[ -n "${CCDBENCH_DATA_DIR:-}" ] || [ ! -d "$root/device-carry/data" ] || export CCDBENCH_DATA_DIR=$root/device-carry/data
 [ -n "${CCDBENCH_DATA_DIR:-}" ] || source "$root/scripts/data-dir.sh"
 data=${CCDBENCH_DATA_DIR:?"gpu: no public data (CCDBENCH_DATA_DIR)"}
-# The NVIDIA OpenCL driver is installed there but not registered.
-mkdir -p /tmp/icd && echo libnvidia-opencl.so.1 > /tmp/icd/nvidia.icd && export OCL_ICD_VENDORS=/tmp/icd
+nvidia_opencl
 export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-field-gpu-cache}
 mkdir -p "$out"
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader > "$out/gpu.txt"
