@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 namespace ccd::harness {
 namespace {
@@ -74,6 +75,71 @@ RankTest mann_whitney(const std::vector<double>& x, const std::vector<double>& y
   const double z = std::max(0.0, distance - 0.5) / std::sqrt(variance);
   result.p = std::min(1.0, std::erfc(z / std::sqrt(2.0)));
   return result;
+}
+
+RankTest wilcoxon_signed_rank(const std::vector<double>& x, const std::vector<double>& y) {
+  if (x.size() != y.size())
+    throw std::invalid_argument("a signed-rank test needs pairs: " + std::to_string(x.size()) + " and " + std::to_string(y.size()));
+  std::vector<double> differences;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (!(x[i] > 0) || !(y[i] > 0)) throw std::invalid_argument("a signed-rank test of ratios needs positive times");
+    const double d = std::log(y[i]) - std::log(x[i]);
+    if (d != 0) differences.push_back(d);
+  }
+  RankTest result;
+  const std::size_t n = differences.size();
+  if (n == 0) return result;
+  std::sort(differences.begin(), differences.end(), [](double a, double b) { return std::abs(a) < std::abs(b); });
+  // Ranks of the sizes, tied sizes sharing their mean rank.
+  bool ties = false;
+  double tie_term = 0;
+  for (std::size_t k = 0; k < n;) {
+    std::size_t j = k;
+    while (j < n && std::abs(differences[j]) == std::abs(differences[k])) ++j;
+    const double rank = (static_cast<double>(k + 1) + static_cast<double>(j)) / 2;
+    for (std::size_t i = k; i < j; ++i) result.u += differences[i] > 0 ? rank : 0.0;
+    const double t = static_cast<double>(j - k);
+    tie_term += t * t * t - t;
+    ties = ties || j - k > 1;
+    k = j;
+  }
+  const double mean = static_cast<double>(n * (n + 1)) / 4;
+  const double distance = std::abs(result.u - mean);
+  if (!ties && n <= 60) {
+    // counts[w]: the sign assignments of ranks 1..n whose positive ranks add up to w (each rank in or out).
+    std::vector<double> counts(n * (n + 1) / 2 + 1, 0.0);
+    counts[0] = 1;
+    for (std::size_t rank = 1; rank <= n; ++rank) {
+      for (std::size_t w = counts.size() - 1; w >= rank; --w) counts[w] += counts[w - rank];
+    }
+    const double total = std::ldexp(1.0, static_cast<int>(n));
+    double extreme = 0;
+    for (std::size_t w = 0; w < counts.size(); ++w) {
+      if (std::abs(static_cast<double>(w) - mean) >= distance - 1e-9) extreme += counts[w];
+    }
+    result.p = std::min(1.0, extreme / total);
+    return result;
+  }
+  const double variance = static_cast<double>(n * (n + 1) * (2 * n + 1)) / 24 - tie_term / 48;
+  if (variance <= 0) return result;
+  const double z = std::max(0.0, distance - 0.5) / std::sqrt(variance);
+  result.p = std::min(1.0, std::erfc(z / std::sqrt(2.0)));
+  return result;
+}
+
+double smallest_signed_rank_p(std::size_t n) { return std::min(1.0, 2.0 / std::ldexp(1.0, static_cast<int>(std::min<std::size_t>(n, 1000)))); }
+
+std::vector<double> holm_adjusted(const std::vector<double>& p) {
+  std::vector<std::size_t> order(p.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return p[a] < p[b]; });
+  std::vector<double> adjusted(p.size());
+  double running = 0;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    running = std::max(running, std::min(1.0, static_cast<double>(p.size() - k) * p[order[k]]));
+    adjusted[order[k]] = running;
+  }
+  return adjusted;
 }
 
 }  // namespace ccd::harness

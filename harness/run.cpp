@@ -12,6 +12,8 @@
 #include "harness/work_queue.hpp"
 #include "strategies/registry.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <iostream>
 #include <list>
@@ -78,14 +80,19 @@ class SceneStore {
   const SceneData* last() const { return loaded_.empty() ? nullptr : loaded_.front().second.get(); }
 };
 
-/// What rank 0 knows of a work item beside its payload: for whom it prints progress and where a cell goes.
+/// Where a finished cell goes: its place in the output, its file and key.
+struct PlannedCell {
+  std::size_t slot = 0;
+  std::filesystem::path file;
+  CellKey key;
+};
+
+/// What rank 0 knows of a work item beside its payload: for whom it prints progress and where its cells go (one, or
+/// with --interleave every pending cell of a scene at one δ; none for a truth step).
 struct PlannedItem {
   std::string label;
   std::size_t step = 0, steps = 0;
-  bool cell = false;
-  std::size_t slot = 0;  // the cell's place in the output
-  std::filesystem::path file;
-  CellKey key;
+  std::vector<PlannedCell> cells;
 };
 
 std::string on_rank(int rank) { return rank_info().size > 1 ? " (rank " + std::to_string(rank) + ")" : std::string(); }
@@ -154,6 +161,8 @@ class Benchmark {
   const std::vector<SceneVariant> variants_;
   SceneStore store_;
   std::size_t cell_total_, cells_finished_ = 0, cell_count_ = 0, cells_done_ = 0;
+  /// This run's id (rank 0's start time and process): what the interleaved cells of one of its scenes share.
+  const std::string run_id_ = utc_now() + "-" + std::to_string(::getpid());
   std::optional<Progress> progress_;
   std::vector<std::optional<json>> cells_;
   std::vector<std::string> cell_specs_;  // each cell's spec as --strategy gave it (the table's short name)
@@ -204,10 +213,14 @@ std::string Benchmark::work_on(const std::string& payload) {
     }
   }
   const CellProgress moved = [this](int pass, std::size_t step, const std::string& strategy) { cell_moved(pass, step, strategy); };
+  const CellProgress progress = planner_ ? moved : CellProgress{};
   // Sent to rank 0 as the cell file holds it (the records' one serializer, run/records.hpp).
-  return json(run_cell(data, spec_named(task.at("spec")), options_, data.steps, task.at("file"), planner_ ? moved : CellProgress{},
-                       task.at("strategy")))
-      .dump();
+  if (task.at("kind") == "cell") {
+    return json(run_cell(data, spec_named(task.at("spec")), options_, data.steps, task.at("file"), progress, task.at("strategy"))).dump();
+  }
+  std::vector<CellToRun> cells;
+  for (const json& cell : task.at("cells")) cells.push_back({&spec_named(cell.at("spec")), cell.at("file"), cell.at("strategy")});
+  return json(run_cells_interleaved(data, cells, options_, data.steps, progress, task.at("group"))).dump();
 }
 
 std::string Benchmark::why_not_kept(const std::string& spec, const json& summary) const {
@@ -302,27 +315,38 @@ void Benchmark::plan_scene(std::size_t s) {
     for (std::size_t k = 0; k < steps; ++k) {
       truth_items.push_back(items_.size());
       items_.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}, {"threads", worker_threads()}}.dump(), {}});
-      planned_.push_back({source.label, k, steps, false, 0, {}, {}});
+      planned_.push_back({source.label, k, steps, {}});
     }
   }
+  auto cell_task = [](const Pending& cell) {
+    return json{{"spec", cell.spec->text}, {"strategy", cell.key.strategy}, {"file", cell.file.filename().string()}};
+  };
+  if (options_.interleave && pending.size() > 1) {
+    // One work item: the cells' passes run in turn on one rank. The group's id is this run's alone (a kept cell of
+    // an earlier run has another), so compare pairs only passes that ran in turn.
+    json task = {
+        {"kind", "cells"}, {"scene", s}, {"cells", json::array()}, {"threads", worker_threads()}, {"group", run_id_ + "/" + std::to_string(s)}};
+    PlannedItem item{source.label, 0, steps, {}};
+    for (Pending& cell : pending) {
+      task["cells"].push_back(cell_task(cell));
+      item.cells.push_back({cell.slot, std::move(cell.file), std::move(cell.key)});
+    }
+    items_.push_back({task.dump(), truth_items});
+    planned_.push_back(std::move(item));
+    return;
+  }
   for (Pending& cell : pending) {
-    const std::string file = cell.file.filename().string();
-    items_.push_back({json{{"kind", "cell"},
-                           {"scene", s},
-                           {"spec", cell.spec->text},
-                           {"strategy", cell.key.strategy},
-                           {"file", file},
-                           {"threads", worker_threads()}}
-                          .dump(),
-                      truth_items});
-    planned_.push_back({source.label, 0, steps, true, cell.slot, std::move(cell.file), std::move(cell.key)});
+    json task = cell_task(cell);
+    task.update({{"kind", "cell"}, {"scene", s}, {"threads", worker_threads()}});
+    items_.push_back({task.dump(), truth_items});
+    planned_.push_back({source.label, 0, steps, {{cell.slot, std::move(cell.file), std::move(cell.key)}}});
   }
 }
 
 void Benchmark::item_done(std::size_t index, const std::string& text, int rank) {
   PlannedItem& item = planned_.at(index);
   json result = json::parse(text);
-  if (!item.cell) {
+  if (item.cells.empty()) {
     const std::string truth = item.label + ": truth of step " + std::to_string(item.step) + " of steps 0-" + std::to_string(item.steps - 1) +
                               (result.at("computed").get<bool>() ? " computed" : " cached") + on_rank(rank);
     // In a log only computed truth gets a line (read from the cache it is quick); the bar shows either.
@@ -333,19 +357,24 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
     }
     return;
   }
-  CellRecord cell = result.get<CellRecord>();
-  cell.summary.key = item.key.to_json();
-  result = cell;
-  write_cell(item.file, result);
-  rebuild_results_log(options_.out, std::cerr);
-  ++cells_done_;
-  ++cells_finished_;
-  progress_->update(static_cast<double>(cells_finished_), cell_total_, item.label + " / " + strategies::short_label(item.key.strategy) + " done");
-  if (rank_info().size > 1) {
-    say("run: " + item.label + " / " + item.key.strategy + ": cell " + std::to_string(cells_done_) + " of " + std::to_string(cell_count_) + " done" +
-        on_rank(rank));
+  if (!result.is_array()) result = json::array({std::move(result)});
+  for (std::size_t c = 0; c < item.cells.size(); ++c) {
+    PlannedCell& planned = item.cells[c];
+    CellRecord cell = result.at(c).get<CellRecord>();
+    cell.summary.key = planned.key.to_json();
+    json record = cell;
+    write_cell(planned.file, record);
+    rebuild_results_log(options_.out, std::cerr);
+    ++cells_done_;
+    ++cells_finished_;
+    progress_->update(static_cast<double>(cells_finished_), cell_total_,
+                      item.label + " / " + strategies::short_label(planned.key.strategy) + " done");
+    if (rank_info().size > 1) {
+      say("run: " + item.label + " / " + planned.key.strategy + ": cell " + std::to_string(cells_done_) + " of " + std::to_string(cell_count_) +
+          " done" + on_rank(rank));
+    }
+    cells_[planned.slot] = std::move(record);
   }
-  cells_[item.slot] = std::move(result);
 }
 
 void Benchmark::run_all() {
@@ -360,7 +389,8 @@ void Benchmark::run_all() {
     return;
   }
   for (std::size_t s = 0; s < variants_.size(); ++s) plan_scene(s);
-  cell_count_ = static_cast<std::size_t>(std::count_if(planned_.begin(), planned_.end(), [](const PlannedItem& p) { return p.cell; }));
+  cell_count_ = 0;
+  for (const PlannedItem& item : planned_) cell_count_ += item.cells.size();
   say_on_termination("run: stopped before every cell finished (a rank died, or the run was interrupted): finished cells are kept in " +
                      (options_.out / "cells").string() + "; the same command again, with any number of ranks, runs only the rest\n");
   distribute(items_, work(), done);

@@ -17,7 +17,9 @@
 #   BASELINE                 the gate's baseline; default: BASE_SOURCE/ccdbench-baseline.json (the branch the change
 #                            goes into decides what the change must meet), else HEAD_SOURCE's (the change that adds it)
 #   RUN_ARGS                 what to run; default: the kinematic fold (generated into WORK/scenes) at its δ and at
-#                            δ = 0, TOIs checked, REPEAT passes (default 5: fewer cannot show a time change at p < 0.05).
+#                            δ = 0, TOIs checked, REPEAT passes (default 9: base and head run in turn, pass by
+#                            pass, and fewer than 6 pairs cannot show a time change at p < 0.05; with two cells
+#                            compared, 9 can at 0.025 each).
 #                            Paths in it are relative to WORK. Plugins cannot take scenes with analytic shapes (the
 #                            ci suite has one).
 #   WRITE_BASELINE=1         write BASELINE (default HEAD_SOURCE/ccdbench-baseline.json) from the head's results
@@ -91,10 +93,12 @@ if ((with_base)); then specs=$base_spec,$head_spec; fi
 cd "$work"
 if [[ -z ${RUN_ARGS:-} ]]; then
   [[ -f scenes/fold/scene.json ]] || "$ccdbench" generate fold --out scenes/fold > /dev/null
-  RUN_ARGS="--scene scenes/fold --thickness scene,0 --toi --repeat ${REPEAT:-5}"
+  RUN_ARGS="--scene scenes/fold --thickness scene,0 --toi --repeat ${REPEAT:-9}"
 fi
+# --interleave: the base's and the head's passes run in turn, so that a machine that slows down meanwhile slows both
+# and compare tests their times pass by pass (docs/ci-regression.md, "Time verdicts").
 # shellcheck disable=SC2086  # RUN_ARGS is a list of arguments
-"$ccdbench" run $RUN_ARGS --strategy "$specs" --verify exact --json run.json --out run
+"$ccdbench" run $RUN_ARGS --strategy "$specs" --interleave --verify exact --json run.json --out run
 
 # 4. The gate, of the head alone; or its baseline written.
 if [[ ${WRITE_BASELINE:-0} == 1 ]]; then

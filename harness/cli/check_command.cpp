@@ -109,8 +109,11 @@ Command add_compare(CLI::App& app) {
       app.add_subcommand("compare",
                          "Compare two result sets of `run`, cell by cell (docs/ci-regression.md): missed, errors, false alarms, late TOIs,\n"
                          "the TOI error's median and 99th percentile, memory, and ms per step with the ratio and whether it is beyond the\n"
-                         "noise (a two-sided Mann-Whitney U test over the passes' times, exact for small samples; p printed: with --repeat\n"
-                         "R on both sides, p can go below 0.05 only from R = 4). With step records (an --out folder, or its results.jsonl)\n"
+                         "noise. Two cells whose passes ran in turn (one `run --interleave`) are tested pass by pass (Wilcoxon\n"
+                         "signed-rank, exact: with R passes p >= 2/2^R) and gated; cells of two runs apart by a Mann-Whitney U test,\n"
+                         "shown but never gated (their passes do not sample the machine's drift between the runs). Every tested cell's\n"
+                         "p is adjusted for the number tested (Holm), so that identical code is called slower or faster in at most\n"
+                         "alpha of comparisons. With step records (an --out folder, or its results.jsonl)\n"
                          "also the steps whose answers changed and the pairs the head newly misses, written as query files to replay.\n"
                          "Cells are matched by scene, δ and the strategy as given; verdicts are compared only between cells of the same\n"
                          "input (the scene's content, steps, δ), times only between records of one machine, thread count, build,\n"
@@ -123,16 +126,19 @@ Command add_compare(CLI::App& app) {
   compare->add_option("--pair", options->pairs,
                       "BASE_SPEC HEAD_SPEC: compare the cells of BASE_SPEC in BASE with those of HEAD_SPEC in HEAD (two builds\n"
                       "of a plugin run in one invocation: BASE and HEAD may then be one file); repeatable");
-  compare->add_option("--alpha", options->alpha, "a time change counts when its p-value is below this (default 0.05)")->check(CLI::Range(1e-9, 0.5));
+  compare
+      ->add_option("--alpha", options->alpha,
+                   "a time change counts when its p-value, adjusted for the cells tested (Holm), is below this (default\n0.05): the chance that a "
+                   "comparison of identical code calls any cell slower or faster")
+      ->check(CLI::Range(1e-9, 0.5));
   compare
       ->add_option("--noise-band", options->noise_band,
                    "a time change counts only beyond this fraction too, besides p < alpha (default 0.1: head/base above\n"
-                   "1.1 or below 1/1.1): the drift of a machine between two runs, which the rank test over one run's passes\n"
-                   "cannot see (docs/ci-regression.md, Time verdicts)")
+                   "1.1 or below 1/1.1): a change too small to matter is not called (docs/ci-regression.md, Time verdicts)")
       ->check(CLI::Range(0.0, 10.0));
   compare->add_flag("--fail-on-slower", options->fail_on_slower,
-                    "also exit 1 when a cell got slower beyond the noise (a cell's passes run one after another, base's\n"
-                    "before head's: a machine that slows down between them looks like a slower head; for quiet machines)");
+                    "also exit 1 when a cell whose passes ran in turn with the base's (run --interleave) got slower\n"
+                    "beyond the noise; times of two runs apart are shown, not gated");
   compare->add_flag("--allow-incomparable", options->allow_incomparable,
                     "exit 0, not 3, when a cell's verdicts (another input) or times (another machine, thread count, build,\n"
                     "executable or library) cannot be compared; they are still named on their rows and not judged");

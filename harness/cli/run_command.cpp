@@ -42,6 +42,10 @@ void add_run_options(CLI::App* run, RunCommandOptions& o, Shared& shared) {
       ->check(CLI::IsMember({"exact", "none"}))
       ->capture_default_str();
   run->add_option("--repeat", o.run.repeats, "timed passes (1 to 1000); ms per step is the median")->check(CLI::Range(1, kMaxRepeats));
+  run->add_flag("--interleave", o.run.interleave,
+                "run the timed passes of a scene's cells at each δ in turn (pass 1 of every cell, then pass 2, ...):\n"
+                "a machine that slows down meanwhile slows every cell alike, and compare then tests two cells' times\n"
+                "pass by pass (what a time verdict needs: docs/ci-regression.md, \"Time verdicts\")");
   run->add_option("--out", o.run.out,
                   "results folder: cells/ (one file per finished cell, reused by a later run only when its inputs,\n"
                   "steps, δ, strategy, repeats, threads and executable are all the same, and for a plugin's cell only\n"

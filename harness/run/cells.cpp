@@ -129,20 +129,25 @@ void time_pass(const CellContext& cell, Passes& passes, int repeat, const CellPr
   }
 }
 
-Passes time_passes(const CellContext& cell, const CellProgress& progress, const std::string& planned_name) {
+/// A cell's passes before the first: a time list for each step, the environment it runs in.
+Passes no_passes(const CellContext& cell) {
   Passes passes;
   passes.step_ms.resize(cell.steps);
   passes.environment = environment().get<RecordEnvironment>();
-  // The host's peak over the cell's timed passes: the strategy's memory and the frames it is given (the truth and
-  // verification come after).
-  passes.peak_of_cell = reset_peak_resident();
-  // An isolated plugin's memory is its child's: each pass's child is ended (and its peak kept) with its strategy.
-  plugin::reset_children_peak();
-  for (int repeat = 0; repeat < std::max(1, cell.options.repeats); ++repeat) time_pass(cell, passes, repeat, progress, planned_name);
-  plugin::set_activity({});
-  passes.child_peak = static_cast<double>(plugin::children_peak_bytes());
-  passes.host_peak = static_cast<double>(peak_resident_bytes()) + passes.child_peak;
+  passes.peak_of_cell = true;
   return passes;
+}
+
+/// One timed pass and the memory it took: the host's peak over the pass (the strategy's memory and the frames it is
+/// given; the truth and verification come after) and an isolated plugin's child's, ended with the pass's strategy.
+/// The cell's peaks are the largest of its passes'.
+void measured_pass(const CellContext& cell, Passes& passes, int repeat, const CellProgress& progress, const std::string& planned_name) {
+  passes.peak_of_cell = reset_peak_resident() && passes.peak_of_cell;
+  plugin::reset_children_peak();
+  time_pass(cell, passes, repeat, progress, planned_name);
+  const double child = static_cast<double>(plugin::children_peak_bytes());
+  passes.child_peak = std::max(passes.child_peak, child);
+  passes.host_peak = std::max(passes.host_peak, static_cast<double>(peak_resident_bytes()) + child);
 }
 
 /// Every step's verdict, and why each miss was missed.
@@ -385,20 +390,52 @@ CellSummary cell_summary(const CellContext& cell, const Passes& passes, const Ju
 
 }  // namespace
 
+namespace {
+
+/// A cell's record from its timed passes: judged against the truth (audited where it missed), its faults and
+/// answers written.
+CellRecord finish_cell(const CellContext& cell, Passes& passes) {
+  const Judgement judgement = judge_passes(cell, passes);
+  const std::filesystem::path fault_root = cell.options.faults ? *cell.options.faults : cell.options.out / "faults";
+  const json faults = record_faults(cell.data.sequence.scene(), cell.data.frames, passes.first,
+                                    fault_root / safe_path_component(cell.data.label) / std::filesystem::path(cell.cell_name).stem(), cell.spec.text);
+  if (cell.options.write_answers) write_cell_answers(cell, passes);
+  CellRecord record;
+  Totals totals;
+  for (std::size_t k = 0; k < cell.steps; ++k) record.steps.push_back(step_record(cell, passes, judgement.verdicts[k], k, totals));
+  record.summary = cell_summary(cell, passes, judgement, totals, faults);
+  return record;
+}
+
+}  // namespace
+
 CellRecord run_cell(const SceneData& data, const strategies::StrategySpec& spec, const RunOptions& options, std::size_t steps,
                     const std::string& cell_name, const CellProgress& progress, const std::string& planned_name) {
   const CellContext cell{data, spec, options, steps, cell_name, *spec.entry, spec.from_outside};
-  Passes passes = time_passes(cell, progress, planned_name);
-  const Judgement judgement = judge_passes(cell, passes);
-  const std::filesystem::path fault_root = options.faults ? *options.faults : options.out / "faults";
-  const json faults = record_faults(data.sequence.scene(), data.frames, passes.first,
-                                    fault_root / safe_path_component(data.label) / std::filesystem::path(cell_name).stem(), spec.text);
-  if (options.write_answers) write_cell_answers(cell, passes);
-  CellRecord record;
-  Totals totals;
-  for (std::size_t k = 0; k < steps; ++k) record.steps.push_back(step_record(cell, passes, judgement.verdicts[k], k, totals));
-  record.summary = cell_summary(cell, passes, judgement, totals, faults);
-  return record;
+  Passes passes = no_passes(cell);
+  for (int repeat = 0; repeat < std::max(1, options.repeats); ++repeat) measured_pass(cell, passes, repeat, progress, planned_name);
+  plugin::set_activity({});
+  return finish_cell(cell, passes);
+}
+
+std::vector<CellRecord> run_cells_interleaved(const SceneData& data, const std::vector<CellToRun>& cells, const RunOptions& options,
+                                              std::size_t steps, const CellProgress& progress, const std::string& group) {
+  std::vector<CellContext> contexts;
+  std::vector<Passes> passes;
+  for (const CellToRun& c : cells) {
+    contexts.push_back({data, *c.spec, options, steps, c.cell_name, *c.spec->entry, c.spec->from_outside});
+    passes.push_back(no_passes(contexts.back()));
+  }
+  for (int repeat = 0; repeat < std::max(1, options.repeats); ++repeat) {
+    for (std::size_t i = 0; i < cells.size(); ++i) measured_pass(contexts[i], passes[i], repeat, progress, cells[i].planned_name);
+  }
+  plugin::set_activity({});
+  std::vector<CellRecord> records;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    records.push_back(finish_cell(contexts[i], passes[i]));
+    records.back().summary.interleave_group = group;
+  }
+  return records;
 }
 
 }  // namespace ccd::harness

@@ -34,4 +34,16 @@ using CellProgress = std::function<void(int pass, std::size_t step, const std::s
 CellRecord run_cell(const SceneData& data, const strategies::StrategySpec& spec, const RunOptions& options, std::size_t steps,
                     const std::string& cell_name, const CellProgress& progress = {}, const std::string& planned_name = {});
 
+/// A cell of a scene to run: its spec, its file's name, the resolved name it was planned with (as run_cell's).
+struct CellToRun {
+  const strategies::StrategySpec* spec;
+  std::string cell_name, planned_name;
+};
+
+/// Runs several cells of one scene at one δ with their timed passes in turn: pass 1 of each cell, then pass 2 of each
+/// (`run --interleave`). A machine that slows down meanwhile slows every cell's passes alike, so compare can test two
+/// of them pass by pass. Each cell is then judged and recorded as run_cell does, and its summary holds `group`.
+std::vector<CellRecord> run_cells_interleaved(const SceneData& data, const std::vector<CellToRun>& cells, const RunOptions& options,
+                                              std::size_t steps, const CellProgress& progress, const std::string& group);
+
 }  // namespace ccd::harness

@@ -9,6 +9,7 @@
 #include "harness/run/comparability.hpp"
 #include "harness/run/record_fields.hpp"
 #include "harness/run/result_set.hpp"
+#include "harness/statistics.hpp"
 #include "harness/table.hpp"
 
 #include <nlohmann/json.hpp>
@@ -82,6 +83,10 @@ struct CellComparison {
   /// The pairs the head misses and the base did not, by step: the records as the head kept them.
   std::vector<std::pair<std::size_t, json>> newly_missed;
   std::optional<RankTest> time_test;
+  /// Its passes ran in turn with the other side's (one `run --interleave`): tested pair by pair, and gated.
+  bool paired = false;
+  /// The time test's p adjusted for every cell whose times this comparison tests (Holm): what is compared with alpha.
+  double p_family = 1;
   double ratio = 0;
 };
 
@@ -122,8 +127,7 @@ void compare_steps(const ResultSet& base, const ResultSet& head, CellComparison&
   }
 }
 
-CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set, const json& base, const json& head, const std::string& name,
-                            const CompareOptions& options) {
+CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set, const json& base, const json& head, const std::string& name) {
   CellComparison cell;
   cell.name = name;
   cell.base = base;
@@ -157,22 +161,60 @@ CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set
   }
   compare_steps(base_set, head_set, cell);
   cell.times_differ = times_differ(base, head);
-  if (!cell.times_differ.empty()) {
+  if (base == head) {
+    // A cell of a run compared with that run (one outside --pair): nothing to test, and no place in the family.
+    cell.notes.push_back("one record on both sides: times not tested");
+  } else if (!cell.times_differ.empty()) {
     cell.notes.push_back("times not compared: " + cell.times_differ);
   } else if (base.contains("ms_per_repeat") && head.contains("ms_per_repeat")) {
     const auto base_times = base["ms_per_repeat"].get<std::vector<double>>(), head_times = head["ms_per_repeat"].get<std::vector<double>>();
-    cell.time_test = mann_whitney(base_times, head_times);
-    if (smallest_p(base_times.size(), head_times.size()) >= options.alpha) {
-      cell.notes.push_back("times cannot be told apart at p < " + significant(options.alpha, 3) + " from " + std::to_string(base_times.size()) +
-                           " and " + std::to_string(head_times.size()) + " passes (run both with --repeat 5 or more)");
+    const json& group = base.value("interleave_group", json());
+    cell.paired = group.is_string() && head.value("interleave_group", json()) == group && base_times.size() == head_times.size() &&
+                  std::all_of(base_times.begin(), base_times.end(), [](double t) { return t > 0; }) &&
+                  std::all_of(head_times.begin(), head_times.end(), [](double t) { return t > 0; });
+    if (cell.paired) {
+      // Pass i of each side ran one after the other: the ratio is the median of the passes' ratios.
+      cell.time_test = wilcoxon_signed_rank(base_times, head_times);
+      std::vector<double> ratios;
+      for (std::size_t i = 0; i < base_times.size(); ++i) ratios.push_back(head_times[i] / base_times[i]);
+      cell.ratio = median(ratios);
+    } else {
+      cell.time_test = mann_whitney(base_times, head_times);
+      cell.ratio = base["ms_per_step"].get<double>() > 0 ? head["ms_per_step"].get<double>() / base["ms_per_step"].get<double>() : 0;
+      cell.notes.push_back(
+          "times from two runs apart, not gated: their passes are not independent of the machine's drift between the runs, "
+          "which no test over them sees (run base and head in one invocation with --interleave)");
     }
-    cell.ratio = base["ms_per_step"].get<double>() > 0 ? head["ms_per_step"].get<double>() / base["ms_per_step"].get<double>() : 0;
-    cell.slower = cell.time_test->p < options.alpha && cell.ratio > 1 + options.noise_band;
-    cell.faster = cell.time_test->p < options.alpha && cell.ratio < 1 / (1 + options.noise_band);
   } else {
     cell.notes.push_back("times not tested: a side has no per-repeat times (records of schema 1)");
   }
   return cell;
+}
+
+/// The time verdicts of every cell whose times were tested, as one family: each p adjusted for the family's size
+/// (Holm), so that the chance of calling any cell of identical code slower or faster is at most alpha where the
+/// passes are independent samples (paired passes: docs/ci-regression.md, "Time verdicts"); and the noise band.
+void judge_times(std::vector<CellComparison>& cells, const CompareOptions& options) {
+  std::vector<double> p;
+  for (const CellComparison& c : cells) {
+    if (c.time_test) p.push_back(c.time_test->p);
+  }
+  const std::vector<double> adjusted = holm_adjusted(p);
+  std::size_t k = 0;
+  for (CellComparison& c : cells) {
+    if (!c.time_test) continue;
+    c.p_family = adjusted[k++];
+    c.slower = c.p_family < options.alpha && c.ratio > 1 + options.noise_band;
+    c.faster = c.p_family < options.alpha && c.ratio < 1 / (1 + options.noise_band);
+    const std::size_t base_passes = c.base["ms_per_repeat"].size(), head_passes = c.head["ms_per_repeat"].size();
+    const double smallest = c.paired ? smallest_signed_rank_p(base_passes) : smallest_p(base_passes, head_passes);
+    if (smallest * static_cast<double>(p.size()) >= options.alpha) {
+      c.notes.push_back("times cannot be told apart: " + std::to_string(base_passes) + " and " + std::to_string(head_passes) +
+                        " passes give p >= " + significant(smallest, 2) + ", and with " + std::to_string(p.size()) + " cell" +
+                        (p.size() == 1 ? "" : "s") + " tested it must be below " + significant(options.alpha / static_cast<double>(p.size()), 2) +
+                        " (run both with more --repeat)");
+    }
+  }
 }
 
 Table comparison_table(const std::vector<CellComparison>& cells) {
@@ -187,7 +229,7 @@ Table comparison_table(const std::vector<CellComparison>& cells) {
                {"MiB host peak", Align::right},
                {"ms/step", Align::right},
                {"head/base", Align::right},
-               {"p", Align::right},
+               {"p (Holm)", Align::right},
                {"verdict"}});
   for (const CellComparison& c : cells) {
     auto mib = [](std::optional<double> bytes) { return bytes ? std::optional<double>(*bytes / (1024.0 * 1024.0)) : std::nullopt; };
@@ -198,6 +240,7 @@ Table comparison_table(const std::vector<CellComparison>& cells) {
       verdict += ", times not comparable: " + c.times_differ;
     } else if (c.time_test) {
       verdict += c.slower ? ", slower beyond noise" : c.faster ? ", faster beyond noise" : ", time within noise";
+      if (!c.paired && (c.slower || c.faster)) verdict += " (runs apart: not gated)";
     }
     table.add_row({c.name, change(number(c.base, "missed"), number(c.head, "missed")), change(number(c.base, "errors"), number(c.head, "errors")),
                    change(number(c.base, "false_alarms"), number(c.head, "false_alarms")),
@@ -206,7 +249,7 @@ Table comparison_table(const std::vector<CellComparison>& cells) {
                    change(number(c.base, "toi_error_p99"), number(c.head, "toi_error_p99"), 3),
                    change(mib(number(c.base, "host_peak_bytes")), mib(number(c.head, "host_peak_bytes")), 4),
                    change(number(c.base, "ms_per_step"), number(c.head, "ms_per_step"), 4), c.time_test ? fixed(c.ratio, 2) + "x" : "-",
-                   c.time_test ? significant(c.time_test->p, 2) : "-", verdict});
+                   c.time_test ? significant(c.p_family, 2) + (c.paired ? " paired" : " apart") : "-", verdict});
   }
   return table;
 }
@@ -309,7 +352,10 @@ void write_comparison_json(const std::filesystem::path& path, const std::vector<
                               "device_bytes", "ms_per_step"}) {
       row[field] = {{"base", c.base.value(field, json())}, {"head", c.head.value(field, json())}};
     }
-    if (c.time_test) row["time"] = {{"ratio", c.ratio}, {"p", c.time_test->p}, {"u", c.time_test->u}};
+    if (c.time_test) {
+      row["time"] = {{"ratio", c.ratio},   {"p", c.time_test->p},         {"p_family", c.p_family},
+                     {"paired", c.paired}, {"statistic", c.time_test->u}, {"test", c.paired ? "wilcoxon signed-rank" : "mann-whitney u"}};
+    }
     json missed = json::array();
     for (const auto& [step, pair] : c.newly_missed) missed.push_back({{"step", step}, {"kind", pair["kind"]}, {"ids", pair["ids"]}});
     row["newly_missed"] = missed;
@@ -377,9 +423,10 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
       only_base.push_back(cell_name(*b->second, given(*b->second)));
     } else {
       const std::string spec = matched_spec(given(*b->second), true);
-      cells.push_back(compare_cell(base, head, *b->second, *h->second, cell_name(*h->second, spec), options));
+      cells.push_back(compare_cell(base, head, *b->second, *h->second, cell_name(*h->second, spec)));
     }
   }
+  judge_times(cells, options);
   if (!options.replay.empty()) clear_replay(options.replay);
   std::map<std::string, std::filesystem::path> written;
   for (std::size_t k = 0; k < cells.size(); ++k) {
@@ -398,12 +445,18 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
   }
   // A cell the base had and the head lacks is a verdict the head cannot show.
   const bool worse = !only_base.empty() || std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.worse; });
-  const bool slower = std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.slower; });
+  // Only times of passes that ran in turn are gated (the notes say why the others are not).
+  const bool slower = std::any_of(cells.begin(), cells.end(), [](const CellComparison& c) { return c.slower && c.paired; });
+  const auto slower_apart = std::count_if(cells.begin(), cells.end(), [](const CellComparison& c) { return c.slower && !c.paired; });
   const auto not_comparable =
       std::count_if(cells.begin(), cells.end(), [](const CellComparison& c) { return !c.inputs_differ.empty() || !c.times_differ.empty(); });
   if (options.markdown) write_markdown(*options.markdown, worse, table, details(cells, written), only_base, only_head);
   if (options.json) write_comparison_json(*options.json, cells, only_base, only_head);
   out << "compare: " << (worse ? "a verdict got WORSE" : "no verdict got worse") << (slower ? "; a cell got slower beyond the noise" : "");
+  if (slower_apart > 0) {
+    out << "; " << slower_apart << " cell" << (slower_apart == 1 ? "" : "s")
+        << " of two runs apart called slower, not gated (run base and head with --interleave)";
+  }
   if (not_comparable > 0) {
     out << "; " << not_comparable << " cell" << (not_comparable == 1 ? "" : "s") << " not comparable (verdicts or times, named on the row)"
         << (options.allow_incomparable ? ", allowed" : ": --allow-incomparable accepts that");

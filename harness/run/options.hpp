@@ -33,6 +33,10 @@ struct RunOptions {
   bool toi = false;
   /// Timed passes over the whole sequence; ms per step is the median over them.
   int repeats = 1;
+  /// The timed passes of a scene's cells at one δ run in turn, pass 1 of each cell, then pass 2 (`--interleave`):
+  /// a machine that slows down during the run slows every cell's passes alike, and compare tests two such cells
+  /// pass by pass (docs/ci-regression.md, "Time verdicts").
+  bool interleave = false;
   std::filesystem::path out = "results";
   std::optional<std::filesystem::path> json;
   std::optional<std::filesystem::path> report;

@@ -229,6 +229,7 @@ void to_json(json& j, const CellSummary& s) {
   if (s.child_peak_bytes > 0) j["child_peak_bytes"] = s.child_peak_bytes;
   put_optional(j, "errors_written", s.errors_written);
   put_optional(j, "nondeterministic_at_step", s.nondeterministic_at_step);
+  put_optional(j, "interleave_group", s.interleave_group);
   j.update(json(s.environment));
   put_optional(j, "key", s.key);
   if (s.resumed) j["resumed"] = true;
@@ -276,6 +277,7 @@ void from_json(const json& j, CellSummary& s) {
   s.errors = j.value("errors", std::size_t{0});
   s.errors_written = optional_field<std::string>(j, "errors_written");
   s.nondeterministic_at_step = optional_field<std::size_t>(j, "nondeterministic_at_step");
+  s.interleave_group = optional_field<std::string>(j, "interleave_group");
   s.finished_at = j.value("finished_at", std::string());
   s.verdict.reset();
   if (j.contains("colliding")) {

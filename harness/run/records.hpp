@@ -125,6 +125,9 @@ struct CellSummary {
   std::size_t errors = 0;
   std::optional<std::string> errors_written;
   std::optional<std::size_t> nondeterministic_at_step;
+  /// With `run --interleave`: one id shared by the cells of a scene and δ whose timed passes ran in turn (pass 1 of
+  /// each, then pass 2, ...), unique to that run; compare tests two such cells' times pass by pass.
+  std::optional<std::string> interleave_group;
   std::string finished_at;
   std::optional<CellVerdict> verdict;
   RecordEnvironment environment;

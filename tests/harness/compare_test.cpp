@@ -36,6 +36,23 @@ TEST(RankTest, ExactPValuesMatchPublishedValues) {
   EXPECT_EQ(harness::mann_whitney({}, {1, 2}).p, 1);
 }
 
+// The signed-rank test of the logs of paired ratios (R: wilcox.test(log(y), log(x), paired = TRUE)), and Holm's
+// adjustment (R: p.adjust(p, "holm")).
+TEST(RankTest, SignedRanksAndHolmMatchR) {
+  const harness::RankTest five = harness::wilcoxon_signed_rank({1, 1, 1, 1, 1}, {1.1, 1.2, 0.7, 1.4, 1.5});
+  EXPECT_EQ(five.u, 11);                  // V = 11
+  EXPECT_NEAR(five.p, 14.0 / 32, 1e-12);  // p-value = 0.4375
+  std::vector<double> x(9, 10.0), y(9, 12.5);
+  for (std::size_t i = 0; i < 9; ++i) y[i] += 0.1 * static_cast<double>(i);
+  EXPECT_NEAR(harness::wilcoxon_signed_rank(x, y).p, 2.0 / 512, 1e-12);
+  EXPECT_NEAR(harness::smallest_signed_rank_p(9), 2.0 / 512, 1e-12);
+  EXPECT_EQ(harness::wilcoxon_signed_rank({1, 2}, {1, 2}).p, 1);  // no pair differs
+  EXPECT_THROW(harness::wilcoxon_signed_rank({1, 2}, {1}), std::invalid_argument);
+  const std::vector<double> adjusted = harness::holm_adjusted({0.01, 0.04, 0.03, 0.005});
+  const std::vector<double> expected = {0.03, 0.06, 0.06, 0.02};
+  for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_NEAR(adjusted[i], expected[i], 1e-12) << i;
+}
+
 TEST(RankTest, TiesUseTheCorrectedNormalApproximation) {
   std::vector<double> x, y;
   for (int k = 0; k < 30; ++k) {
@@ -65,6 +82,8 @@ struct SyntheticCell {
   /// What its verdicts are of (the scene's content digest in its key) and where its times were made.
   std::string scene_content = "c0";
   std::size_t threads = 2;
+  /// `run --interleave`: the group whose passes ran in turn.
+  std::optional<std::string> interleave_group;
 
   std::string resolved() const {
     return spec.rfind("plugin:", 0) == 0 ? "plugin:/abs/" + spec.substr(7) + ":digest=" + digest + ":isolate=on" : spec;
@@ -110,7 +129,9 @@ struct SyntheticCell {
                                     {"executable", "e0"},
                                     {"build_type", "Release"},
                                     {"provenance", {{"compiler", "GNU 12.2.0"}, {"cxx_flags", "-O2"}}}};
-    return text + summary.dump() + "\n";
+    nlohmann::json record = summary;
+    if (interleave_group) record["interleave_group"] = *interleave_group;
+    return text + record.dump() + "\n";
   }
 };
 
@@ -139,7 +160,8 @@ TEST_F(Compare, ARunComparedWithItselfShowsNoChange) {
   const nlohmann::json document = read_json(dir_ / "c.json");
   ASSERT_EQ(document["cells"].size(), 1u);
   EXPECT_FALSE(document["cells"][0]["worse"]);
-  EXPECT_EQ(document["cells"][0]["time"]["ratio"], 1.0);
+  EXPECT_FALSE(document["cells"][0].contains("time"));  // one record on both sides: nothing to test
+  EXPECT_NE(result.output.find("one record on both sides: times not tested"), std::string::npos) << result.output;
   EXPECT_TRUE(std::filesystem::exists(dir_ / "c.md"));
 }
 
@@ -180,6 +202,7 @@ TEST_F(Compare, OneMoreMissedPairExits1NamingTheCellAndThePair) {
 }
 
 TEST_F(Compare, TimesWithinTheNoiseAreNotFlaggedATwofoldSlowdownIs) {
+  // Two runs apart: tested and shown, never gated (their passes do not sample the drift between the runs).
   SyntheticCell base;
   SyntheticCell noisy = base;
   noisy.ms_per_repeat = {30.4, 29.8, 31.2, 29.2, 30.1};
@@ -188,19 +211,21 @@ TEST_F(Compare, TimesWithinTheNoiseAreNotFlaggedATwofoldSlowdownIs) {
   EXPECT_NE(same.output.find("time within noise"), std::string::npos) << same.output;
   SyntheticCell slow = base;
   for (double& ms : slow.ms_per_repeat) ms *= 2;
-  const auto slower = compare(dir_ / "base.jsonl", write("slow.jsonl", {slow}));
-  EXPECT_EQ(slower.exit_code, 0) << slower.output;  // a verdict did not get worse
+  const auto slower = compare(dir_ / "base.jsonl", write("slow.jsonl", {slow}), "--fail-on-slower");
+  EXPECT_EQ(slower.exit_code, 0) << slower.output;
   EXPECT_NE(slower.output.find("2.00x"), std::string::npos) << slower.output;
-  EXPECT_NE(slower.output.find("0.0079"), std::string::npos) << slower.output;  // 2 / C(10, 5)
-  EXPECT_NE(slower.output.find("slower beyond noise"), std::string::npos) << slower.output;
-  EXPECT_EQ(compare(dir_ / "base.jsonl", dir_ / "slow.jsonl", "--fail-on-slower").exit_code, 1);
+  EXPECT_NE(slower.output.find("0.0079 apart"), std::string::npos) << slower.output;  // 2 / C(10, 5)
+  EXPECT_NE(slower.output.find("slower beyond noise (runs apart: not gated)"), std::string::npos) << slower.output;
+  EXPECT_NE(slower.output.find("1 cell of two runs apart called slower, not gated"), std::string::npos) << slower.output;
   // Three passes a side cannot reach p < 0.05 (2 / C(6, 3) = 0.1): it says so rather than flag nothing silently.
   SyntheticCell few = base, few_slow = slow;
   few.ms_per_repeat.resize(3);
   few_slow.ms_per_repeat.resize(3);
   const auto too_few = compare(write("few.jsonl", {few}), write("few_slow.jsonl", {few_slow}), "--fail-on-slower");
   EXPECT_EQ(too_few.exit_code, 0) << too_few.output;
-  EXPECT_NE(too_few.output.find("times cannot be told apart at p < 0.05 from 3 and 3 passes"), std::string::npos) << too_few.output;
+  EXPECT_NE(too_few.output.find("times cannot be told apart: 3 and 3 passes give p >= 0.1, and with 1 cell tested it must be below 0.05"),
+            std::string::npos)
+      << too_few.output;
   // Another machine: verdicts only, and the times said to be not comparable (exit 3 unless allowed).
   SyntheticCell elsewhere = slow;
   elsewhere.machine = "m2";
@@ -208,6 +233,41 @@ TEST_F(Compare, TimesWithinTheNoiseAreNotFlaggedATwofoldSlowdownIs) {
   EXPECT_EQ(other.exit_code, 3) << other.output;
   EXPECT_NE(other.output.find("times not compared: the machine differs (m1, m2)"), std::string::npos) << other.output;
   EXPECT_EQ(compare(dir_ / "base.jsonl", dir_ / "elsewhere.jsonl", "--fail-on-slower --allow-incomparable").exit_code, 0);
+}
+
+// Passes that ran in turn (run --interleave: one group on both sides) are tested pair by pair and gated: a drift
+// of the whole machine (every pass of both 1.3x slower from the fifth on) is no slowdown, 1.25x on every pair is.
+TEST_F(Compare, InterleavedPassesAreTestedPairByPairAndGated) {
+  SyntheticCell base;
+  base.spec = "plugin:base/my.so";
+  base.interleave_group = "run-1/0";
+  base.ms_per_repeat = {30, 31, 29, 30.5, 29.5, 30.2, 29.8, 30.6, 29.4};
+  for (std::size_t i = 4; i < base.ms_per_repeat.size(); ++i) base.ms_per_repeat[i] *= 1.3;
+  SyntheticCell drifted = base;
+  drifted.spec = "plugin:head/my.so";
+  const std::vector<double> noise = {1.01, 0.99, 1.02, 0.98, 1.01, 0.99, 1.0, 1.03, 0.97};
+  for (std::size_t i = 0; i < noise.size(); ++i) drifted.ms_per_repeat[i] *= noise[i];
+  const std::string pair = "--pair plugin:base/my.so plugin:head/my.so --fail-on-slower";
+  const auto same = compare(write("same.jsonl", {base, drifted}), dir_ / "same.jsonl", pair);
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_NE(same.output.find("paired"), std::string::npos) << same.output;
+  EXPECT_NE(same.output.find("time within noise"), std::string::npos) << same.output;
+  SyntheticCell slowed = drifted;
+  for (double& ms : slowed.ms_per_repeat) ms *= 1.25;
+  const auto slower = compare(write("slowed.jsonl", {base, slowed}), dir_ / "slowed.jsonl", pair + " --json " + quoted(dir_ / "c.json"));
+  EXPECT_EQ(slower.exit_code, 1) << slower.output;
+  EXPECT_NE(slower.output.find("1.25x"), std::string::npos) << slower.output;
+  EXPECT_NE(slower.output.find("0.0039 paired"), std::string::npos) << slower.output;  // 2 / 2^9
+  EXPECT_NE(slower.output.find("a cell got slower beyond the noise"), std::string::npos) << slower.output;
+  const nlohmann::json time = read_json(dir_ / "c.json")["cells"][0]["time"];
+  EXPECT_EQ(time["test"], "wilcoxon signed-rank");
+  EXPECT_TRUE(time["paired"].get<bool>());
+  // The same passes from two groups (two runs) are apart: the drift then hides in the rank test, and nothing is gated.
+  SyntheticCell other_run = slowed;
+  other_run.interleave_group = "run-2/0";
+  const auto apart = compare(write("apart.jsonl", {base, other_run}), dir_ / "apart.jsonl", pair);
+  EXPECT_EQ(apart.exit_code, 0) << apart.output;
+  EXPECT_NE(apart.output.find("times from two runs apart, not gated"), std::string::npos) << apart.output;
 }
 
 // Route 3 of the gate issue: another scene under one label (same name, another content) has verdicts of another
@@ -446,6 +506,36 @@ TEST_F(GateRoundTrip, WrittenBaselinePassesAndARebuildMissingOneMorePairFailsIt)
 
 // examples/ci/regression.sh as a user's CI runs it, its builds given (the template, and the rebuild that drops one
 // query in 50 as the head): the baseline written, then the gate failing the head and the comparison naming it.
+// run --interleave: pass 1 of every cell of a scene at one δ, then pass 2, ...; the cells share one group, each δ its
+// own. Without it, a cell's passes run one after another and no group is recorded.
+TEST_F(GateRoundTrip, AnInterleavedRunRunsTheCellsPassesInTurn) {
+  testing::small_fold(dir_ / "fold8");
+  const std::string command =
+      "run --scene " + quoted(dir_ / "fold8") + " --thickness scene,0 --strategy full,full+cubic64 --repeat 2 --verify none --fresh";
+  const auto interleaved = run_ccdbench(command + " --interleave --out " + quoted(dir_ / "i") + " --json " + quoted(dir_ / "i.json"));
+  ASSERT_EQ(interleaved.exit_code, 0) << interleaved.output;
+  std::vector<std::string> order;
+  std::istringstream lines(interleaved.output);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find(" done") != std::string::npos && line.find(": pass ") != std::string::npos) order.push_back(line.substr(line.find("/ ") + 2));
+  }
+  const std::vector<std::string> expected = {"full+conservative: pass 1 of 2 done", "full+cubic64: pass 1 of 2 done",
+                                             "full+conservative: pass 2 of 2 done", "full+cubic64: pass 2 of 2 done"};
+  ASSERT_EQ(order.size(), 8u) << interleaved.output;
+  EXPECT_EQ(std::vector<std::string>(order.begin(), order.begin() + 4), expected) << interleaved.output;
+  EXPECT_EQ(std::vector<std::string>(order.begin() + 4, order.end()), expected) << interleaved.output;
+  const nlohmann::json cells = read_json(dir_ / "i.json");
+  ASSERT_EQ(cells.size(), 4u);
+  EXPECT_TRUE(cells[0]["interleave_group"].is_string()) << cells[0].dump();
+  EXPECT_EQ(cells[0]["interleave_group"], cells[1]["interleave_group"]);
+  EXPECT_EQ(cells[2]["interleave_group"], cells[3]["interleave_group"]);
+  EXPECT_NE(cells[0]["interleave_group"], cells[2]["interleave_group"]);
+  const auto apart = run_ccdbench(command + " --out " + quoted(dir_ / "a") + " --json " + quoted(dir_ / "a.json"));
+  ASSERT_EQ(apart.exit_code, 0) << apart.output;
+  EXPECT_FALSE(read_json(dir_ / "a.json")[0].contains("interleave_group"));
+  EXPECT_NE(apart.output.find("full+conservative: pass 2 of 2 done\nrun: fold8 / full+cubic64: pass 1 of 2 done"), std::string::npos) << apart.output;
+}
+
 TEST_F(GateRoundTrip, TheCiExampleScriptGatesTheHeadAndComparesItWithTheBase) {
   testing::small_fold(dir_ / "fold8");
   const std::filesystem::path plugins(CCDBENCH_PLUGIN_DIR);
@@ -468,8 +558,10 @@ TEST_F(GateRoundTrip, TheCiExampleScriptGatesTheHeadAndComparesItWithTheBase) {
   EXPECT_EQ(same.exit_code, 0) << same.output;
   EXPECT_NE(same.output.find("fold8 / plugin:base/libmy_ccd.so → plugin:head/libmy_ccd.so / δ 0.001"), std::string::npos) << same.output;
   EXPECT_NE(same.output.find("no verdict got worse"), std::string::npos) << same.output;
-  EXPECT_NE(same.output.find("fold8 / plugin:base/libmy_ccd.so → plugin:head/libmy_ccd.so / δ 0.001"), std::string::npos) << same.output;
-  EXPECT_NE(same.output.find("no verdict got worse"), std::string::npos) << same.output;
+  // Base and head ran in turn (run --interleave): their times are tested pass by pass.
+  const nlohmann::json compared = read_json(dir_ / "work" / "compare.json")["cells"];
+  ASSERT_EQ(compared.size(), 1u) << compared.dump();
+  EXPECT_TRUE(compared[0]["time"]["paired"].get<bool>()) << compared.dump();
   std::filesystem::remove_all(dir_ / "work");
   const auto regressed = testing::run_command("HEAD_BUILD=" + quoted(dir_ / "head-build") + " " + settings + script + arguments);
   EXPECT_EQ(regressed.exit_code, 1) << regressed.output;

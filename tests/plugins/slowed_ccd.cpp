@@ -1,20 +1,22 @@
 // The template's method (examples/plugin/my_ccd.cpp) as a change might slow it down: the same answers, every call
 // taking CCDBENCH_TEST_SLOWDOWN times as long (default 1.25; it spins after the call for the time the call took times
-// the factor less one). What the time verdict of `compare` must flag (scripts/time-verdicts.sh counts how often it
-// does, and how often it flags two runs of the same code). Built under the template's plugin name: a rebuild of the
-// user's method, not another method.
+// the factor less one). Every call: each query (`queries`, `run --strategy full+plugin:...`) and each whole step
+// (`run --strategy plugin:...`), so that the strategy `plugin:` is that much slower as a whole, not only its share
+// of a step. What the time verdict of `compare` must flag (scripts/time-verdicts.sh counts how often it does, and
+// how often it flags two runs of the same code). Built under the template's plugin name: a rebuild of the user's
+// method, not another method.
 #include <ccdbench/ccdbench_plugin.hpp>
 
 #include <chrono>
 #include <cstdlib>
 
-// The template's own entry point is left out (this file makes its own, of the class below).
-#pragma push_macro("CCDBENCH_PLUGIN_FROM_CCD_CLASS")
-#undef CCDBENCH_PLUGIN_FROM_CCD_CLASS
-#define CCDBENCH_PLUGIN_FROM_CCD_CLASS(...)
+// The template's plugin, built as it is, under another entry point: this file's entry hands out its table with each
+// call slowed.
+#undef CCDBENCH_PLUGIN_ENTRY
+#define CCDBENCH_PLUGIN_ENTRY ccdbench_template_entry
 #include "examples/plugin/my_ccd.cpp"
-#undef CCDBENCH_PLUGIN_FROM_CCD_CLASS
-#pragma pop_macro("CCDBENCH_PLUGIN_FROM_CCD_CLASS")
+#undef CCDBENCH_PLUGIN_ENTRY
+#define CCDBENCH_PLUGIN_ENTRY ccdbench_plugin_init_v1
 
 namespace {
 
@@ -29,9 +31,9 @@ double slowdown() {
 
 /// Runs `call`, then spins until it has taken slowdown() times its own time.
 template <class Call>
-bool slowed(Call&& call) {
+auto slowed(Call&& call) {
   const auto start = std::chrono::steady_clock::now();
-  const bool answer = call();
+  const auto answer = call();
   const auto took = std::chrono::steady_clock::now() - start;
   const auto until = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(took * slowdown());
   while (std::chrono::steady_clock::now() < until) {
@@ -39,20 +41,36 @@ bool slowed(Call&& call) {
   return answer;
 }
 
-class SlowedCCD : public MyCCD {
- public:
-  bool point_triangle_ccd(const Vector3& p_t0, const Vector3& t0_t0, const Vector3& t1_t0, const Vector3& t2_t0, const Vector3& p_t1,
-                          const Vector3& t0_t1, const Vector3& t1_t1, const Vector3& t2_t1, double& toi, double min_distance, double tmax) const {
-    return slowed([&] { return MyCCD::point_triangle_ccd(p_t0, t0_t0, t1_t0, t2_t0, p_t1, t0_t1, t1_t1, t2_t1, toi, min_distance, tmax); });
-  }
-  bool edge_edge_ccd(const Vector3& ea0_t0, const Vector3& ea1_t0, const Vector3& eb0_t0, const Vector3& eb1_t0, const Vector3& ea0_t1,
-                     const Vector3& ea1_t1, const Vector3& eb0_t1, const Vector3& eb1_t1, double& toi, double min_distance, double tmax) const {
-    return slowed([&] { return MyCCD::edge_edge_ccd(ea0_t0, ea1_t0, eb0_t0, eb1_t0, ea0_t1, ea1_t1, eb0_t1, eb1_t1, toi, min_distance, tmax); });
-  }
-};
+const ccdbench_plugin& template_table() { return *ccdbench_template_entry(CCDBENCH_PLUGIN_ABI_VERSION); }
+
+void slowed_vertex_face(void* context, const double* rows, double thickness, ccdbench_answer* answer) {
+  slowed([&] {
+    template_table().vertex_face(context, rows, thickness, answer);
+    return 0;
+  });
+}
+
+void slowed_edge_edge(void* context, const double* rows, double thickness, ccdbench_answer* answer) {
+  slowed([&] {
+    template_table().edge_edge(context, rows, thickness, answer);
+    return 0;
+  });
+}
+
+int slowed_step(void* context, const struct ccdbench_step* step, const ccdbench_contacts* contacts, char* error) {
+  return slowed([&] { return template_table().step(context, step, contacts, error); });
+}
+
+const ccdbench_plugin slowed_table = [] {
+  ccdbench_plugin table = template_table();
+  table.vertex_face = slowed_vertex_face;
+  table.edge_edge = slowed_edge_edge;
+  table.step = slowed_step;
+  return table;
+}();
 
 }  // namespace
 
-CCDBENCH_PLUGIN_FROM_CCD_CLASS(SlowedCCD, ccdbench::Vector3, "my-ccd", "0.1",
-                               "the template: distance at 33 sample times in double; misses what passes between them",
-                               CCDBENCH_THREAD_SAFE | CCDBENCH_REPORTS_TOI)
+extern "C" CCDBENCH_PLUGIN_EXPORT const ccdbench_plugin* CCDBENCH_PLUGIN_ENTRY(uint32_t host_abi_version) {
+  return host_abi_version == CCDBENCH_PLUGIN_ABI_VERSION ? &slowed_table : nullptr;
+}
