@@ -230,6 +230,8 @@ std::string Benchmark::why_not_kept(const std::string& spec, const json& summary
     return "a plugin's answers can depend on what no digest covers (its environment, files it reads, libraries it opens itself, "
            "LD_PRELOAD); --resume reuses its kept cell, marked resumed, which check refuses unless --allow-resumed";
   }
+  // Its passes did not run in turn with this run's cells: compare could not test it pair by pair.
+  if (options_.interleave) return "--interleave times a scene's cells in turn, which a kept cell's passes were not";
   // A kept cell holds its answers' digests, not the answers: the files asked for need them.
   if (options_.write_answers) return "--write-answers needs its answers, which a kept cell does not hold";
   if (options_.misses && summary.value("missed", json(0)) != json(0)) return "--misses needs its missed pairs, which a kept cell does not hold";

@@ -111,9 +111,9 @@ Command add_compare(CLI::App& app) {
                          "the TOI error's median and 99th percentile, memory, and ms per step with the ratio and whether it is beyond the\n"
                          "noise. Two cells whose passes ran in turn (one `run --interleave`) are tested pass by pass (Wilcoxon\n"
                          "signed-rank, exact: with R passes p >= 2/2^R) and gated; cells of two runs apart by a Mann-Whitney U test,\n"
-                         "shown but never gated (their passes do not sample the machine's drift between the runs). Every tested cell's\n"
-                         "p is adjusted for the number tested (Holm), so that identical code is called slower or faster in at most\n"
-                         "alpha of comparisons. With step records (an --out folder, or its results.jsonl)\n"
+                         "shown but never gated (their passes do not sample the machine's drift between the runs). Each p is adjusted for\n"
+                         "the number of cells tested alike (Holm), so that identical code run in turn is called slower or faster in\n"
+                         "at most alpha of comparisons. With step records (an --out folder, or its results.jsonl)\n"
                          "also the steps whose answers changed and the pairs the head newly misses, written as query files to replay.\n"
                          "Cells are matched by scene, δ and the strategy as given; verdicts are compared only between cells of the same\n"
                          "input (the scene's content, steps, δ), times only between records of one machine, thread count, build,\n"
@@ -128,8 +128,8 @@ Command add_compare(CLI::App& app) {
                       "of a plugin run in one invocation: BASE and HEAD may then be one file); repeatable");
   compare
       ->add_option("--alpha", options->alpha,
-                   "a time change counts when its p-value, adjusted for the cells tested (Holm), is below this (default\n0.05): the chance that a "
-                   "comparison of identical code calls any cell slower or faster")
+                   "a time change counts when its p-value, adjusted for the cells tested alike (Holm), is below this\n"
+                   "(default 0.05): for cells run in turn, the chance that identical code is called slower or faster")
       ->check(CLI::Range(1e-9, 0.5));
   compare
       ->add_option("--noise-band", options->noise_band,

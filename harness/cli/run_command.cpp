@@ -3,6 +3,7 @@
 #include "datasets/scene_file.hpp"
 #include "harness/cli/cli.hpp"
 #include "harness/run.hpp"
+#include "harness/work_queue.hpp"
 #include "strategies/narrowphase_registry.hpp"
 #include "strategies/registry.hpp"
 
@@ -148,6 +149,11 @@ int run_run(RunCommandOptions& o, const Shared& shared) {
   }
   run.verify = o.verify == "exact";
   if (run.toi && !run.verify) return refuse("--toi", "TOIs are compared with the exact truth: it needs --verify exact");
+  if (run.interleave && run.repeats < 6 && harness::rank_info().rank == 0) {
+    // The exact signed-rank test's smallest p over R pairs is 2/2^R: below 6 no time change can be called at 0.05.
+    std::cerr << "run: warning: --interleave with " << run.repeats << " pass" << (run.repeats == 1 ? "" : "es")
+              << ": compare can call no time change from fewer than 6 pairs of passes (use --repeat 9 or more)\n";
+  }
   run.command_line = shared.command_line;
   harness::run_benchmark(run, std::cout);
   return 0;

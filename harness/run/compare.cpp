@@ -191,28 +191,31 @@ CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set
   return cell;
 }
 
-/// The time verdicts of every cell whose times were tested, as one family: each p adjusted for the family's size
-/// (Holm), so that the chance of calling any cell of identical code slower or faster is at most alpha where the
-/// passes are independent samples (paired passes: docs/ci-regression.md, "Time verdicts"); and the noise band.
+/// The time verdicts of the cells whose times were tested, in two families: the paired cells (passes in turn, the
+/// ones gated) and the cells of runs apart. Each p is adjusted for its family's size (Holm), so that a comparison of
+/// identical code calls any paired cell slower or faster with probability at most alpha (docs/ci-regression.md,
+/// "Time verdicts"); and the noise band.
 void judge_times(std::vector<CellComparison>& cells, const CompareOptions& options) {
-  std::vector<double> p;
-  for (const CellComparison& c : cells) {
-    if (c.time_test) p.push_back(c.time_test->p);
-  }
-  const std::vector<double> adjusted = holm_adjusted(p);
-  std::size_t k = 0;
-  for (CellComparison& c : cells) {
-    if (!c.time_test) continue;
-    c.p_family = adjusted[k++];
-    c.slower = c.p_family < options.alpha && c.ratio > 1 + options.noise_band;
-    c.faster = c.p_family < options.alpha && c.ratio < 1 / (1 + options.noise_band);
-    const std::size_t base_passes = c.base["ms_per_repeat"].size(), head_passes = c.head["ms_per_repeat"].size();
-    const double smallest = c.paired ? smallest_signed_rank_p(base_passes) : smallest_p(base_passes, head_passes);
-    if (smallest * static_cast<double>(p.size()) >= options.alpha) {
-      c.notes.push_back("times cannot be told apart: " + std::to_string(base_passes) + " and " + std::to_string(head_passes) +
-                        " passes give p >= " + significant(smallest, 2) + ", and with " + std::to_string(p.size()) + " cell" +
-                        (p.size() == 1 ? "" : "s") + " tested it must be below " + significant(options.alpha / static_cast<double>(p.size()), 2) +
-                        " (run both with more --repeat)");
+  for (const bool paired : {true, false}) {
+    std::vector<double> p;
+    for (const CellComparison& c : cells) {
+      if (c.time_test && c.paired == paired) p.push_back(c.time_test->p);
+    }
+    const std::vector<double> adjusted = holm_adjusted(p);
+    std::size_t k = 0;
+    for (CellComparison& c : cells) {
+      if (!c.time_test || c.paired != paired) continue;
+      c.p_family = adjusted[k++];
+      c.slower = c.p_family < options.alpha && c.ratio > 1 + options.noise_band;
+      c.faster = c.p_family < options.alpha && c.ratio < 1 / (1 + options.noise_band);
+      const std::size_t base_passes = c.base["ms_per_repeat"].size(), head_passes = c.head["ms_per_repeat"].size();
+      const double smallest = paired ? smallest_signed_rank_p(base_passes) : smallest_p(base_passes, head_passes);
+      if (smallest * static_cast<double>(p.size()) >= options.alpha) {
+        c.notes.push_back("times cannot be told apart: " + std::to_string(base_passes) + " and " + std::to_string(head_passes) +
+                          " passes give p >= " + significant(smallest, 2) + ", and with " + std::to_string(p.size()) + " cell" +
+                          (p.size() == 1 ? "" : "s") + (paired ? " paired" : " apart") + " it must be below " +
+                          significant(options.alpha / static_cast<double>(p.size()), 2) + " (run both with more --repeat)");
+      }
     }
   }
 }
