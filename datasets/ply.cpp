@@ -285,18 +285,22 @@ class AsciiCursor {
 
 std::string element_where(const PlyElement& element, std::size_t index) { return element.name + " " + std::to_string(index); }
 
-void check_face_count(const std::filesystem::path& path, const std::string& where, double count, std::size_t face) {
+/// `where()` names the element for a message: made only when one is thrown (a frame of a large mesh has millions of
+/// elements, and making each one's name was most of the time a binary PLY took to read).
+template <class Where>
+void check_face_count(const std::filesystem::path& path, const Where& where, double count, std::size_t face) {
   if (count != 3.0) {
-    throw InputError(path, where,
+    throw InputError(path, where(),
                      "face " + std::to_string(face) + " has " + std::to_string(static_cast<long long>(count)) +
                          " corners; ccdbench reads triangle meshes only (triangulate it first)");
   }
 }
 
-VertexId to_vertex_index(const std::filesystem::path& path, const std::string& where, double value) {
+template <class Where>
+VertexId to_vertex_index(const std::filesystem::path& path, const Where& where, double value) {
   // Negative or huge indices become an out-of-range index that validation reports with its value.
   if (value < 0.0 || value > 4294967295.0) {
-    throw InputError(path, where, "vertex index " + std::to_string(static_cast<long long>(value)) + " out of range");
+    throw InputError(path, where(), "vertex index " + std::to_string(static_cast<long long>(value)) + " out of range");
   }
   return static_cast<VertexId>(value);
 }
@@ -313,9 +317,9 @@ void check_elements_have_properties(const std::filesystem::path& path, const Ply
 /// One entry (number i) of element `e`, its values read through `read(type)`: a vertex's coordinates or a face's
 /// corner indices go into `frame`, appended as the body delivers them (never allocated from the header's counts: a
 /// header may declare 300000000 faces in a 200-byte file); other properties are read past.
-template <class Read>
+template <class Where, class Read>
 void read_entry(const std::filesystem::path& path, const MeshLayout& layout, const PlyElement& element, std::size_t e, std::size_t i,
-                const std::string& where, Read&& read, MeshFrame& frame) {
+                const Where& where, Read&& read, MeshFrame& frame) {
   if (e == layout.vertex_element) frame.positions.emplace_back(0.0, 0.0, 0.0);
   if (e == layout.face_element) frame.faces.push_back(Face{});
   for (std::size_t p = 0; p < element.properties.size(); ++p) {
@@ -332,7 +336,7 @@ void read_entry(const std::filesystem::path& path, const MeshLayout& layout, con
     const double count = read(property.count_type);
     const bool is_index = e == layout.face_element && static_cast<int>(p) == layout.index_property;
     if (is_index) check_face_count(path, where, count, i);
-    if (count < 0.0) throw InputError(path, where, "negative list length");
+    if (count < 0.0) throw InputError(path, where(), "negative list length");
     for (std::size_t k = 0; k < static_cast<std::size_t>(count); ++k) {
       const double value = read(property.type);
       if (is_index) frame.faces[i][k] = to_vertex_index(path, where, value);
@@ -352,7 +356,7 @@ MeshFrame read_ascii_body(const std::filesystem::path& path, std::ifstream& in, 
         throw InputError(path, line_at(cursor.line_number()), "file ends at " + element_where(element, i) + " of " + std::to_string(element.count));
       }
       read_entry(
-          path, layout, element, e, i, line_at(cursor.line_number()), [&](PlyType type) { return cursor.read(type); }, frame);
+          path, layout, element, e, i, [&] { return line_at(cursor.line_number()); }, [&](PlyType type) { return cursor.read(type); }, frame);
       cursor.expect_line_end();
       if (e == layout.vertex_element) vertex_lines.push_back(cursor.line_number());
       if (e == layout.face_element) face_lines.push_back(cursor.line_number());
@@ -373,19 +377,26 @@ MeshFrame read_binary_body(const std::filesystem::path& path, std::ifstream& in,
   MeshFrame frame;
   const bool big_endian = header.encoding == PlyEncoding::binary_big_endian;
   frame.format = big_endian ? "PLY binary_big_endian" : "PLY binary_little_endian";
-  in.seekg(static_cast<std::streamoff>(header.body_offset));
-  std::vector<char> body((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The body as the file holds it (its size is the file's bytes, not a count the header claims), read at once.
+  in.seekg(0, std::ios::end);
+  const std::streamoff end = in.tellg();
+  const auto offset = static_cast<std::streamoff>(header.body_offset);
+  std::vector<char> body(end > offset ? static_cast<std::size_t>(end - offset) : 0);
+  in.seekg(offset);
+  if (!body.empty() && !in.read(body.data(), static_cast<std::streamsize>(body.size()))) {
+    throw InputError(path, "body", "cannot read the body (file changed while it was read?)");
+  }
   BinaryCursor cursor(body, big_endian);
   for (std::size_t e = 0; e < header.elements.size(); ++e) {
     const PlyElement& element = header.elements[e];
     for (std::size_t i = 0; i < element.count; ++i) {
-      const std::string where = element_where(element, i);
+      const auto where = [&] { return element_where(element, i); };
       auto read = [&](PlyType type) {
         double value = 0.0;
         if (!cursor.read(type, value)) {
           throw InputError(
-              path, where,
-              "truncated binary PLY: file ends inside " + where + " of " + std::to_string(element.count) + " " + element.name + " elements");
+              path, where(),
+              "truncated binary PLY: file ends inside " + where() + " of " + std::to_string(element.count) + " " + element.name + " elements");
         }
         return value;
       };

@@ -6,7 +6,8 @@
 # (reported pairs and elementary tests, step by step) are the same as one process's. Builds nothing: run
 # scripts/device-carry.sh first (the device machine has no OpenMPI of its own).
 # Usage: scripts/device-gpus.sh OUT_DIR   (SUITE=paper, RANKS="1 GPUS": the rank counts to run, STRATEGY: the specs,
-#        e.g. with device=0 to put every rank on one GPU as before)
+#        e.g. with device=0 to put every rank on one GPU as before; THICKNESS=scene: the δ list, e.g. scene,0 for the
+#        issue's sweep of 36 cells with STRATEGY=full:backend=opencl,full+cubic64:backend=opencl,apccd:backend=opencl)
 set -euo pipefail
 out=${1:?usage: device-gpus.sh OUT_DIR}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -16,12 +17,13 @@ suite=${SUITE:-paper}
 cores=$(nproc)
 gpus=$(nvidia-smi -L | wc -l)
 strategy=${STRATEGY:-full:backend=opencl,full+cubic64:backend=opencl}
+thickness=${THICKNESS:-scene}
 export CCDBENCH_CACHE_DIR=${CCDBENCH_CACHE_DIR:-/tmp/ccdbench-gpus-cache}
 mkdir -p "$out"
 echo "machine: $cores cores, $gpus GPUs ($(nvidia-smi --query-gpu=name --format=csv,noheader | sort | uniq -c | xargs)); $("$bin" --version)"
 "$bin" devices | grep -E '^[0-9]+:' || true
 # Warm: the suite's frames generated and the kernels compiled once, outside the timed runs.
-"$bin" --threads "$cores" run --suite "$suite" --strategy "$strategy" --verify none --max-steps 1 --fresh --out /tmp/gpus-warm > /dev/null 2>&1
+"$bin" --threads "$cores" run --suite "$suite" --strategy "$strategy" --thickness "$thickness" --verify none --max-steps 1 --fresh --out /tmp/gpus-warm > /dev/null 2>&1
 printf '%-6s %-8s %-10s %-24s %s\n' ranks threads wall_ms "devices by rank" "busiest 100 ms per GPU (%)"
 for ranks in ${RANKS:-1 $gpus}; do
   threads=$((cores / ranks))
@@ -34,7 +36,7 @@ for ranks in ${RANKS:-1 $gpus}; do
   nvidia-smi --query-gpu=index,utilization.gpu --format=csv,noheader,nounits -lms 100 > "$out/$name.smi" &
   sampler=$!
   start=$(date +%s%N)
-  "${launch[@]}" run --suite "$suite" --strategy "$strategy" --verify none --fresh --out "/tmp/gpus-$name" --json "$out/$name.json" \
+  "${launch[@]}" run --suite "$suite" --strategy "$strategy" --thickness "$thickness" --verify none --fresh --out "/tmp/gpus-$name" --json "$out/$name.json" \
     > "$out/$name.txt" 2> "$out/$name.log"
   wall=$((($(date +%s%N) - start) / 1000000))
   kill "$sampler" 2> /dev/null || true
