@@ -378,11 +378,9 @@ MeshFrame read_binary_body(const std::filesystem::path& path, std::ifstream& in,
   const bool big_endian = header.encoding == PlyEncoding::binary_big_endian;
   frame.format = big_endian ? "PLY binary_big_endian" : "PLY binary_little_endian";
   // The body as the file holds it (its size is the file's bytes, not a count the header claims), read at once.
-  in.seekg(0, std::ios::end);
-  const std::streamoff end = in.tellg();
-  const auto offset = static_cast<std::streamoff>(header.body_offset);
-  std::vector<char> body(end > offset ? static_cast<std::size_t>(end - offset) : 0);
-  in.seekg(offset);
+  const std::uintmax_t size = input_file_size(path);
+  std::vector<char> body(size > header.body_offset ? static_cast<std::size_t>(size - header.body_offset) : 0);
+  in.seekg(static_cast<std::streamoff>(header.body_offset));
   if (!body.empty() && !in.read(body.data(), static_cast<std::streamsize>(body.size()))) {
     throw InputError(path, "body", "cannot read the body (file changed while it was read?)");
   }

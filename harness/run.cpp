@@ -366,7 +366,6 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
     cell.summary.key = planned.key.to_json();
     json record = cell;
     write_cell(planned.file, record);
-    rebuild_results_log(options_.out, std::cerr);
     ++cells_done_;
     ++cells_finished_;
     progress_->update(static_cast<double>(cells_finished_), cell_total_,
@@ -377,6 +376,8 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
     }
     cells_[planned.slot] = std::move(record);
   }
+  // Once for the item's cells (every cell file of OUT is read again).
+  rebuild_results_log(options_.out, std::cerr);
 }
 
 void Benchmark::run_all() {

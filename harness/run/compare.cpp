@@ -169,9 +169,10 @@ CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set
   } else if (base.contains("ms_per_repeat") && head.contains("ms_per_repeat")) {
     const auto base_times = base["ms_per_repeat"].get<std::vector<double>>(), head_times = head["ms_per_repeat"].get<std::vector<double>>();
     const json& group = base.value("interleave_group", json());
+    // The paired test takes the logs of the passes' ratios: every time positive.
+    const auto positive = [](const std::vector<double>& times) { return std::all_of(times.begin(), times.end(), [](double t) { return t > 0; }); };
     cell.paired = group.is_string() && head.value("interleave_group", json()) == group && base_times.size() == head_times.size() &&
-                  std::all_of(base_times.begin(), base_times.end(), [](double t) { return t > 0; }) &&
-                  std::all_of(head_times.begin(), head_times.end(), [](double t) { return t > 0; });
+                  positive(base_times) && positive(head_times);
     if (cell.paired) {
       // Pass i of each side ran one after the other: the ratio is the median of the passes' ratios.
       cell.time_test = wilcoxon_signed_rank(base_times, head_times);
