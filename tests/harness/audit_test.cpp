@@ -25,11 +25,6 @@ using testing::run_ccdbench;
 
 std::string built_plugin(const std::string& name) { return (std::filesystem::path(CCDBENCH_PLUGIN_DIR) / ("lib" + name + ".so")).string(); }
 
-std::string file_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
 class Audit : public ::testing::Test {
  protected:
   void SetUp() override { ::setenv("CCDBENCH_CACHE_DIR", (dir_ / "cache").c_str(), 1); }
@@ -84,7 +79,7 @@ TEST_F(Audit, FaultsOfSameNamedFilesAreWrittenApart) {
   EXPECT_EQ(written.size(), 4u) << "two kinds in two folders";
   std::string notes;
   for (const auto& entry : std::filesystem::recursive_directory_iterator(faults)) {
-    if (entry.path().filename() == "FAULTS.txt") notes += file_text(entry.path());
+    if (entry.path().filename() == "FAULTS.txt") notes += testing::read_text(entry.path());
   }
   std::size_t kept = 0;
   for (const std::filesystem::path& file : written) {
@@ -190,7 +185,7 @@ TEST_F(Audit, TheTemplateBuildsReleaseUnlessToldOtherwise) {
   const auto configured = testing::run_command(cmake + " -S " + quoted(std::filesystem::path(CCDBENCH_SOURCE_DIR) / "examples" / "plugin") + " -B " +
                                                quoted(dir_ / "template") + " -DCMAKE_PREFIX_PATH=" + quoted(CCDBENCH_BUILD_DIR));
   // Configuring may fail for want of an installed package: only the build type is asked here.
-  const std::string cache = file_text(dir_ / "template" / "CMakeCache.txt");
+  const std::string cache = testing::read_text(dir_ / "template" / "CMakeCache.txt");
   EXPECT_NE(cache.find("CMAKE_BUILD_TYPE:STRING=Release"), std::string::npos) << configured.output;
 }
 

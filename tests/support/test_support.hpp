@@ -78,6 +78,9 @@ class TempDir {
 /// Writes `text` to `path` as it is (no newline added).
 void write_text(const std::filesystem::path& path, const std::string& text);
 
+/// A file's bytes as they are ("" when it cannot be read).
+std::string read_text(const std::filesystem::path& path);
+
 /// The kinematic fold at resolution 8 (106 triangles, contact at both δ) with `frames` frames, generated into
 /// `folder` unless it is there already: the scene the plugin, audit and regression tests run.
 std::filesystem::path small_fold(const std::filesystem::path& folder, std::size_t frames = 8);
