@@ -112,6 +112,27 @@ TEST_F(GateRoundTrip, WrittenBaselinePassesAndARebuildMissingOneMorePairFailsIt)
 
 // examples/ci/regression.sh as a user's CI runs it, its builds given (the template, and the rebuild that drops one
 // query in 50 as the head): the baseline written, then the gate failing the head and the comparison naming it.
+// One step numbering (docs/running.md): from 0, in the messages a run prints ("truth of step K of steps 0-N", a
+// pass's progress) as in the step records it writes, which compare and the fault folders name steps by. A fold of 8
+// frames has steps 0-6: no message may say "step 7" or "of steps 1-".
+TEST_F(GateRoundTrip, StepsAreNumberedFromZeroInMessagesAsInRecords) {
+  testing::small_fold(dir_ / "fold8");
+  const auto run = run_ccdbench("run --scene " + quoted(dir_ / "fold8") + " --strategy full --out " + quoted(dir_ / "out"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::vector<std::size_t> recorded;
+  std::istringstream records(testing::read_text(dir_ / "out" / "results.jsonl"));
+  for (std::string line; std::getline(records, line);) {
+    const nlohmann::json record = nlohmann::json::parse(line);
+    if (record["record"] == "step") recorded.push_back(record["step"].get<std::size_t>());
+  }
+  ASSERT_EQ(recorded, (std::vector<std::size_t>{0, 1, 2, 3, 4, 5, 6}));
+  for (std::size_t k = 0; k < recorded.size(); ++k) {
+    EXPECT_NE(run.output.find("truth of step " + std::to_string(k) + " of steps 0-6 computed"), std::string::npos) << k << run.output;
+  }
+  EXPECT_EQ(run.output.find("step 7"), std::string::npos) << run.output;
+  EXPECT_EQ(run.output.find("of steps 1-"), std::string::npos) << run.output;
+}
+
 // run --interleave: pass 1 of every cell of a scene at one δ, then pass 2, ...; the cells share one group, each δ its
 // own. Without it, a cell's passes run one after another and no group is recorded.
 TEST_F(GateRoundTrip, AnInterleavedRunRunsTheCellsPassesInTurn) {
