@@ -12,6 +12,7 @@
 #include "datasets/scene_file.hpp"
 #include "harness/queries/scoring.hpp"
 #include "harness/run.hpp"
+#include "harness/run/record_fields.hpp"
 #include "harness/run/records.hpp"
 #include "reference/elementary_pair.hpp"
 #include "strategies/plugin/fp_environment.hpp"
@@ -133,9 +134,18 @@ ccd::reference::DecisionRequest decision_request(bool want_toi) {
   return request;
 }
 
-/// The API's summary from the record's one reader (harness/run/records.hpp).
-CellSummary cell_summary(const json& record) {
-  const auto s = record.get<ccd::harness::CellSummary>();
+/// The summaries given to the gate, read back from each one's record as check reads a results file.
+ccd::harness::GateResults gate_results(const std::string& name, const std::vector<CellSummary>& results) {
+  ccd::harness::GateResults file{name, {}};
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    file.summaries.push_back(
+        ccd::harness::read_summary(json::parse(results[i].json), name, "entry " + std::to_string(i), ccd::harness::SummaryUse::gate));
+  }
+  return file;
+}
+
+/// The API's summary: made from the type, in this one place (Python's come from here too).
+CellSummary cell_summary(const ccd::harness::CellSummary& s) {
   CellSummary cell;
   cell.scene = s.scene;
   cell.strategy = s.strategy;
@@ -158,7 +168,7 @@ CellSummary cell_summary(const json& record) {
     }
   }
   cell.nondeterministic = s.nondeterministic_at_step.has_value();
-  cell.json = record.dump();
+  cell.json = json(s).dump();
   return cell;
 }
 
@@ -431,21 +441,18 @@ std::vector<CellSummary> run(const RunRequest& request) {
     options.max_steps = request.max_steps;
     options.out = std::filesystem::absolute(request.out);
     options.command_line = "ccdbench::run (the C++ API)";
-    std::ostringstream table;
     std::vector<CellSummary> cells;
-    for (const json& summary : ccd::harness::run_benchmark(options, table)) cells.push_back(cell_summary(summary));
+    for (const ccd::harness::CellRecord& cell : ccd::harness::run_benchmark(options).cells) cells.push_back(cell_summary(cell.summary));
     return cells;
   });
 }
 
 std::vector<std::string> write_baseline(const std::string& baseline_file, const std::vector<CellSummary>& results, const std::string& margin) {
   return guarded([&] {
-    json summaries = json::array();
-    for (const CellSummary& cell : results) summaries.push_back(json::parse(cell.json));
     const ccd::harness::BaselineMargin parsed = ccd::harness::BaselineMargin::parse(margin);
     ccd::datasets::require_writable_file(baseline_file);
     std::ostringstream warnings;
-    const json baseline = ccd::harness::write_baseline({{"(results given to ccdbench::write_baseline)", summaries}}, parsed, {}, warnings);
+    const json baseline = ccd::harness::write_baseline({gate_results("(results given to ccdbench::write_baseline)", results)}, parsed, {}, warnings);
     ccd::datasets::write_json_file(baseline_file, baseline);
     std::vector<std::string> lines;
     for (const json& entry : baseline) lines.push_back(entry.dump());
@@ -457,14 +464,12 @@ std::vector<std::string> write_baseline(const std::string& baseline_file, const 
 
 GateResult check(const std::string& baseline_file, const std::vector<CellSummary>& results) {
   return guarded([&] {
-    json summaries = json::array();
-    for (const CellSummary& cell : results) summaries.push_back(json::parse(cell.json));
     const json baseline = ccd::datasets::read_json_file(baseline_file, "baseline file");
-    std::ostringstream lines;
+    const ccd::harness::GateVerdict verdict =
+        ccd::harness::gate_results(baseline, baseline_file, {gate_results("(results given to ccdbench::check)", results)}, {});
     GateResult result;
-    result.passed = ccd::harness::check_against_baseline(baseline, baseline_file, {{"(results given to ccdbench::check)", summaries}}, {}, lines);
-    std::istringstream in(lines.str());
-    for (std::string line; std::getline(in, line);) result.lines.push_back(line);
+    result.passed = verdict.passed();
+    result.lines = ccd::harness::gate_lines(verdict);
     return result;
   });
 }

@@ -7,6 +7,7 @@
 #include "harness/progress.hpp"
 #include "harness/run/cells.hpp"
 #include "harness/run/provenance.hpp"
+#include "harness/run/record_fields.hpp"
 #include "harness/run/tables.hpp"
 #include "harness/truth_cache.hpp"
 #include "harness/work_queue.hpp"
@@ -120,8 +121,9 @@ class Benchmark {
   /// every scene at once.
   void run_all();
 
-  /// The table, notes and outputs of the cells, and their summaries.
-  std::vector<json> report(std::ostream& out) const;
+  /// The cells in the order of --strategy (kept or computed), each summary with the spec as given and its speed-up,
+  /// and the cells left out.
+  RunResult result() const;
 
  private:
   void say(const std::string& text) {
@@ -150,7 +152,7 @@ class Benchmark {
   };
   std::optional<Pending> plan_cell(std::size_t s, const strategies::StrategySpec& spec, const std::string& content);
   /// Why a kept cell of `spec` may not stand for a fresh one in this run (docs/DESIGN.md §10 "Kept cells"), or "".
-  std::string why_not_kept(const std::string& spec, const json& summary) const;
+  std::string why_not_kept(const std::string& spec, const CellSummary& summary) const;
   /// The run's spec whose text is `text` (a work item names its cell's spec by it).
   const strategies::StrategySpec& spec_named(const std::string& text) const;
   void item_done(std::size_t index, const std::string& text, int rank);
@@ -164,12 +166,12 @@ class Benchmark {
   /// This run's id (rank 0's start time and process): what the interleaved cells of one of its scenes share.
   const std::string run_id_ = utc_now() + "-" + std::to_string(::getpid());
   std::optional<Progress> progress_;
-  std::vector<std::optional<json>> cells_;
+  std::vector<std::optional<CellRecord>> cells_;
   std::vector<std::string> cell_specs_;  // each cell's spec as --strategy gave it (the table's short name)
   std::vector<WorkItem> items_;
   std::vector<PlannedItem> planned_;
-  /// Cells a strategy refused (several δ only): per spec, the scenes and δ, and the first refusal's reason.
-  std::vector<std::pair<std::string, std::pair<std::vector<std::string>, std::string>>> left_out_;
+  /// Cells a strategy refused (several δ only).
+  std::vector<LeftOut> left_out_;
 };
 
 void Benchmark::cell_moved(int pass, std::size_t step, const std::string& strategy) {
@@ -223,7 +225,7 @@ std::string Benchmark::work_on(const std::string& payload) {
   return json(run_cells_interleaved(data, cells, options_, data.steps, progress, task.at("group"))).dump();
 }
 
-std::string Benchmark::why_not_kept(const std::string& spec, const json& summary) const {
+std::string Benchmark::why_not_kept(const std::string& spec, const CellSummary& summary) const {
   // What a plugin's answers depend on is unbounded (its environment, files it reads, libraries it opens itself or
   // that LD_PRELOAD puts before its own): no key covers it, so its answers stand for this run's only when asked.
   if (strategies::runs_plugin(spec) && !options_.resume) {
@@ -234,7 +236,7 @@ std::string Benchmark::why_not_kept(const std::string& spec, const json& summary
   if (options_.interleave) return "--interleave times a scene's cells in turn, which a kept cell's passes were not";
   // A kept cell holds its answers' digests, not the answers: the files asked for need them.
   if (options_.write_answers) return "--write-answers needs its answers, which a kept cell does not hold";
-  if (options_.misses && summary.value("missed", json(0)) != json(0)) return "--misses needs its missed pairs, which a kept cell does not hold";
+  if (options_.misses && summary.verdict && summary.verdict->missed != 0) return "--misses needs its missed pairs, which a kept cell does not hold";
   return {};
 }
 
@@ -253,9 +255,9 @@ std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const stra
     try {
       strategies::check_scene(spec, scene);
     } catch (const std::invalid_argument& refusal) {
-      auto it = std::find_if(left_out_.begin(), left_out_.end(), [&](const auto& entry) { return entry.first == spec.text; });
-      if (it == left_out_.end()) it = left_out_.insert(left_out_.end(), {spec.text, {{}, refusal.what()}});
-      it->second.first.push_back(source.label + " at δ " + significant(scene.thickness(), 3));
+      auto it = std::find_if(left_out_.begin(), left_out_.end(), [&](const LeftOut& entry) { return entry.spec == spec.text; });
+      if (it == left_out_.end()) it = left_out_.insert(left_out_.end(), {spec.text, {}, refusal.what()});
+      it->scenes.push_back(source.label + " at δ " + significant(scene.thickness(), 3));
       --cell_total_;
       return std::nullopt;
     }
@@ -264,16 +266,16 @@ std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const stra
   CellKey key{source.label,    content,      data.steps,       scene.thickness(), data.thickness_from, strategies::resolved_name(spec),
               options_.verify, options_.toi, options_.repeats, worker_threads(),  executable_digest()};
   const auto file = options_.out / "cells" / cell_file_name(key);
-  std::optional<json> kept;
+  std::optional<CellRecord> kept;
   if (!options_.fresh && !strategies::runs_host_method(spec.text)) {
     try {
-      kept = read_cell(file, key);
+      if (const std::optional<json> cell = read_cell(file, key)) kept = read_cell_record(*cell, file);
     } catch (const InputError& corrupt) {
       throw InputError(corrupt.file(), corrupt.where(), corrupt.reason() + " (remove the file, or rerun with --fresh)");
     }
   }
   if (kept) {
-    if (const std::string why = why_not_kept(spec.text, (*kept)["summary"]); !why.empty()) {
+    if (const std::string why = why_not_kept(spec.text, kept->summary); !why.empty()) {
       say("run: " + source.label + " / " + strategies::short_label(spec.text) + ": computed again, not kept from an earlier run: " + why);
       kept.reset();
     }
@@ -285,12 +287,12 @@ std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const stra
   }
   // The cell is kept under its resolved name; the strategy as given is this run's: results.jsonl names it so
   // (compare and check match cells by it), rank 0 alone writing.
-  if ((*kept)["summary"].value("spec", json()) != json(spec.text)) {
-    (*kept)["summary"]["spec"] = spec.text;
-    write_cell(file, *kept);
+  if (kept->summary.spec != spec.text) {
+    kept->summary.spec = spec.text;
+    write_cell(file, json(*kept));
     rebuild_results_log(options_.out, std::cerr);
   }
-  (*kept)["summary"]["resumed"] = true;
+  kept->summary.resumed = true;
   say("run: " + source.label + " / " + key.strategy +
       ": kept from an earlier run with the same inputs, strategy, steps, δ, repeats, threads and executable (--fresh reruns it)");
   ++cells_finished_;
@@ -364,8 +366,7 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
     PlannedCell& planned = item.cells[c];
     CellRecord cell = result.at(c).get<CellRecord>();
     cell.summary.key = planned.key.to_json();
-    json record = cell;
-    write_cell(planned.file, record);
+    write_cell(planned.file, json(cell));
     ++cells_done_;
     ++cells_finished_;
     progress_->update(static_cast<double>(cells_finished_), cell_total_,
@@ -374,7 +375,7 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
       say("run: " + item.label + " / " + planned.key.strategy + ": cell " + std::to_string(cells_done_) + " of " + std::to_string(cell_count_) +
           " done" + on_rank(rank));
     }
-    cells_[planned.slot] = std::move(record);
+    cells_[planned.slot] = std::move(cell);
   }
   // Once for the item's cells (every cell file of OUT is read again).
   rebuild_results_log(options_.out, std::cerr);
@@ -400,36 +401,15 @@ void Benchmark::run_all() {
   say_on_termination({});
 }
 
-std::vector<json> Benchmark::report(std::ostream& out) const {
-  std::vector<json> summaries;
+RunResult Benchmark::result() const {
+  RunResult result;
   for (std::size_t c = 0; c < cells_.size(); ++c) {
-    summaries.push_back(cells_[c]->at("summary"));
-    summaries.back()["spec"] = cell_specs_[c];
+    result.cells.push_back(*cells_[c]);
+    result.cells.back().summary.spec = cell_specs_[c];
   }
-  attach_speedups(summaries);
-  const Table table = summary_table(summaries);
-  table.print(out);
-  out << summary_notes(table) << resolved_names(summaries);
-  for (const json& s : summaries) {
-    if (s.value("errors", 0) == 0) continue;
-    out << "errors: " << s["scene"].get<std::string>() << " / " << s.value("spec", s["strategy"].get<std::string>()) << ": " << s["errors"]
-        << " answers could not be taken (counted apart, and as the plugin's errors= key says); written to "
-        << s.value("errors_written", std::string("(kept from an earlier run)")) << "/FAULTS.txt\n";
-  }
-  for (const auto& [spec, refused] : left_out_) {
-    out << "left out: " << spec << " on " << refused.first.size() << " scene" << (refused.first.size() == 1 ? "" : "s") << " (";
-    for (std::size_t i = 0; i < refused.first.size(); ++i) out << (i ? ", " : "") << refused.first[i];
-    out << "), which it refuses; the first said: " << refused.second << "\n";
-  }
-  if (options_.json) datasets::write_json_file(*options_.json, summaries);
-  if (options_.report) {
-    std::vector<json> finished;
-    for (const std::optional<json>& cell : cells_) finished.push_back(*cell);
-    write_report(*options_.report, table, summaries, finished, options_.command_line);
-    out << "report: " << (*options_.report / "README.md").string() << "\n";
-  }
-  out << "results: " << (options_.out / "results.jsonl").string() << " (every finished cell of every run into " << options_.out.string() << ")\n";
-  return summaries;
+  attach_speedups(result.cells);
+  result.left_out = left_out_;
+  return result;
 }
 
 }  // namespace
@@ -452,7 +432,7 @@ void prepare_run_outputs(const RunOptions& options) {
   }
 }
 
-std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
+RunResult run_benchmark(const RunOptions& options) {
   // Every output is checked before any work (a run must not compute for an hour and then fail to write). The specs
   // were validated where they were parsed (the command line, the C++ API).
   prepare_run_outputs(options);
@@ -462,7 +442,7 @@ std::vector<json> run_benchmark(const RunOptions& options, std::ostream& out) {
     return {};
   }
   benchmark.run_all();
-  return benchmark.report(out);
+  return benchmark.result();
 }
 
 }  // namespace ccd::harness

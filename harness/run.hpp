@@ -4,6 +4,7 @@
 
 #include "datasets/scene_sequence.hpp"
 #include "harness/run/options.hpp"
+#include "harness/run/records.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -30,9 +31,10 @@ std::string scene_file_label(const std::filesystem::path& path);
 /// could take for its own. @throws InputError naming an output that cannot be written (nothing removed then).
 void prepare_run_outputs(const RunOptions& options);
 
-/// Runs the cells, prints the table and writes the results. Returns the summaries (docs/DESIGN.md §5 fields). Its
-/// strategies are validated specs (strategies::validate).
-std::vector<nlohmann::json> run_benchmark(const RunOptions& options, std::ostream& out);
+/// Runs the cells. Prints nothing but its progress (on stderr); every finished cell is written to --out at once
+/// (its cell file, and results.jsonl rebuilt). The table, --json and --report are reporters over the result
+/// (report_run, run/tables.hpp). Its strategies are validated specs (strategies::validate).
+RunResult run_benchmark(const RunOptions& options);
 
 /// How the gate takes results beyond their entries.
 struct GateOptions {
@@ -41,25 +43,46 @@ struct GateOptions {
   bool allow_resumed = false;
 };
 
+/// A results file given to the gate, read (run/result_set.hpp): its summaries, in order.
+struct GateResults {
+  std::filesystem::path file;
+  std::vector<CellSummary> summaries;
+};
+
+/// The gate's verdict on one result (or on one baseline entry that no single result matched).
+struct GateLine {
+  /// The cell ("SCENE / STRATEGY / δ ..."), or the entry; empty for the line on empty results.
+  std::string name;
+  /// Every reason it fails (a maintainer sees them all at once); none: it passes.
+  std::vector<std::string> failures;
+  /// What a passing result shows ("missed 0 of 12 <= 0").
+  std::string passed;
+};
+
+/// The gate's verdict: a line per result, in order, then one per entry with no result or several.
+struct GateVerdict {
+  std::vector<GateLine> lines;
+  bool passed() const;
+};
+
 /// The CI gate (`ccdbench check`). The baseline is a JSON array of {scene, strategy, thickness, max_missed}
 /// (strategy: the resolved name, or the spec exactly as `run --strategy` was given it, which a plugin's gate uses):
 /// thickness is "scene" (the scene's own δ) or the number a cell ran at; max_missed an integer >= 0; optional pins
-/// steps and colliding (exactly equal) and max_toi_late (results from a run with --toi). `results` is
-/// a `ccdbench run --json` array (several are taken as one). It passes only when the results are not empty, every result has exactly one
-/// baseline entry (and only one) and every entry exactly one result, every result was verified and has at least one colliding
-/// pair (a cell that cannot miss proves nothing), and none misses more than its entry allows. Prints a FAIL line per
-/// reason a result fails (every one), or its ok line, and one line per unmatched entry.
-/// @throws InputError (the file, the entry) for a malformed baseline or results.
-/// @return whether the gate passes.
-bool check_against_baseline(const nlohmann::json& baseline, const std::filesystem::path& baseline_file,
-                            const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, const GateOptions& options,
-                            std::ostream& out);
+/// steps and colliding (exactly equal) and max_toi_late (results from a run with --toi). `results` are summaries of
+/// `ccdbench run` (several files are taken as one). It passes only when the results are not empty, every result has
+/// exactly one baseline entry (and only one) and every entry exactly one result, every result was verified and has at
+/// least one colliding pair (a cell that cannot miss proves nothing), and none misses more than its entry allows.
+/// @throws InputError (the file, the entry) for a malformed baseline.
+GateVerdict gate_results(const nlohmann::json& baseline, const std::filesystem::path& baseline_file, const std::vector<GateResults>& results,
+                         const GateOptions& options);
 
-/// Keeps of the results (run --json arrays) those of the given strategies, each as --strategy gave it (a summary's
-/// spec) or its resolved name; says on `out` how many others were left out. @throws InputError when a strategy has
-/// no result at all (a misspelt name would otherwise gate nothing).
-std::vector<std::pair<std::filesystem::path, nlohmann::json>> select_results(
-    const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, const std::vector<std::string>& strategies, std::ostream& out);
+/// The verdict's lines as `check` prints them: a FAIL line per reason a result fails, or its ok line.
+std::vector<std::string> gate_lines(const GateVerdict& verdict);
+
+/// Keeps of the results those of the given strategies, each as --strategy gave it (a summary's spec) or its resolved
+/// name; says on `out` how many others were left out. @throws InputError when a strategy has no result at all (a
+/// misspelt name would otherwise gate nothing).
+std::vector<GateResults> select_results(const std::vector<GateResults>& results, const std::vector<std::string>& strategies, std::ostream& out);
 
 /// How much a written baseline allows beyond what the results show, for missed pairs, errors and late TOIs: a count
 /// added to each, or a percentage of each (rounded up).
@@ -79,7 +102,7 @@ struct BaselineMargin {
 /// a plugin's resumed cell unless allowed), and two results for one cell. A result whose
 /// answers changed between passes gets no allow_nondeterministic: it is named on `warnings`, and check fails it until
 /// a person says it may. @throws InputError (the file, the entry).
-nlohmann::json write_baseline(const std::vector<std::pair<std::filesystem::path, nlohmann::json>>& results, const BaselineMargin& margin,
-                              const GateOptions& options, std::ostream& warnings);
+nlohmann::json write_baseline(const std::vector<GateResults>& results, const BaselineMargin& margin, const GateOptions& options,
+                              std::ostream& warnings);
 
 }  // namespace ccd::harness

@@ -32,6 +32,11 @@ struct StepCounters {
   std::vector<std::pair<std::string, double>> extra;
 };
 
+/// Counters of `extra` that a reader shows (the run table's device budget column), by one name each: an OpenCL step's
+/// memory budget in bytes, and the chunks it ran in within it.
+inline constexpr const char* kDeviceBudgetCounter = "device_budget_bytes";
+inline constexpr const char* kDeviceChunksCounter = "device_chunks";
+
 /// The elementary pairs a step tested (audit mode), sorted: a miss not among them was culled before testing.
 struct TestedPairs {
   std::vector<VertexFacePair> vertex_face;

@@ -21,7 +21,7 @@ struct CheckOptions {
   harness::GateOptions gate;
 };
 
-using Results = std::vector<std::pair<std::filesystem::path, nlohmann::json>>;
+using Results = std::vector<harness::GateResults>;
 
 Results read_results(const CheckOptions& options) {
   Results results;
@@ -29,9 +29,9 @@ Results read_results(const CheckOptions& options) {
     // A run's --out folder or its results.jsonl, as compare reads them (the latest summary of each cell), or a run's
     // --json array.
     if (std::filesystem::is_directory(file) || std::filesystem::path(file).extension() == ".jsonl") {
-      results.emplace_back(file, nlohmann::json(harness::read_result_set(file).summaries));
+      results.push_back({file, harness::read_result_set(file, harness::SummaryUse::gate).summaries});
     } else {
-      results.emplace_back(file, datasets::read_json_file(file, "results file"));
+      results.push_back({file, harness::read_summaries(datasets::read_json_file(file, "results file"), file, harness::SummaryUse::gate)});
     }
   }
   if (!options.strategies.empty()) results = harness::select_results(results, CLI::detail::split(options.strategies, ','), std::cout);
@@ -56,7 +56,9 @@ int write_baseline(const CheckOptions& options) {
 int gate(const CheckOptions& options) {
   if (options.baseline.empty()) return refuse({}, "check needs --baseline FILE (or --write-baseline FILE to write one)");
   const nlohmann::json baseline = datasets::read_json_file(options.baseline, "baseline file");
-  const bool ok = harness::check_against_baseline(baseline, options.baseline, read_results(options), options.gate, std::cout);
+  const harness::GateVerdict verdict = harness::gate_results(baseline, options.baseline, read_results(options), options.gate);
+  for (const std::string& line : harness::gate_lines(verdict)) std::cout << line << "\n";
+  const bool ok = verdict.passed();
   std::cout << (ok ? "check: every result within its baseline\n" : "check: FAILED\n");
   return ok ? 0 : 1;
 }

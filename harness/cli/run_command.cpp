@@ -3,6 +3,7 @@
 #include "datasets/scene_file.hpp"
 #include "harness/cli/cli.hpp"
 #include "harness/run.hpp"
+#include "harness/run/tables.hpp"
 #include "harness/work_queue.hpp"
 #include "strategies/narrowphase_registry.hpp"
 #include "strategies/registry.hpp"
@@ -155,7 +156,7 @@ int run_run(RunCommandOptions& o, const Shared& shared) {
               << ": compare can call no time change from fewer than 6 pairs of passes (use --repeat 9 or more)\n";
   }
   run.command_line = shared.command_line;
-  harness::run_benchmark(run, std::cout);
+  harness::report_run(harness::run_benchmark(run), run, std::cout);
   return 0;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <set>
+#include <tuple>
 
 namespace ccd::harness {
 namespace {
@@ -21,39 +22,46 @@ std::string differs(const std::string& name, const json& base, const json& head)
 
 json field_of(const json& s, const char* name) { return s.is_object() && s.contains(name) ? s[name] : json(); }
 
+/// The field of a cell's key that says what its input was (CellKey::to_json).
+constexpr const char* kSceneContent = "scene_content";
+
 /// Provenance fields that name the code under audit: what a comparison of two builds of a plugin changes on purpose.
 constexpr std::array<const char*, 4> kCodeUnderAudit = {"plugin", "plugin_digest", "plugin_objects", "plugin_environment_at_load"};
 
 }  // namespace
 
-std::string inputs_differ(const json& base, const json& head) {
-  const json base_key = field_of(base, "key"), head_key = field_of(head, "key");
-  if (!base_key.is_object() || !head_key.is_object() || !base_key.contains("scene_content") || !head_key.contains("scene_content")) {
-    return std::string("the ") + (base_key.is_object() && base_key.contains("scene_content") ? "head" : "base") +
+std::string inputs_differ(const CellSummary& base, const CellSummary& head) {
+  const json base_key = base.key.value_or(json()), head_key = head.key.value_or(json());
+  const bool base_says = base_key.is_object() && base_key.contains(kSceneContent),
+             head_says = head_key.is_object() && head_key.contains(kSceneContent);
+  if (!base_says || !head_says) {
+    return std::string("the ") + (base_says ? "head" : "base") +
            " does not say what its input was (no key with the scene's content: a record made by hand or by an older ccdbench)";
   }
-  if (std::string why = differs("the scene's content", base_key["scene_content"], head_key["scene_content"]); !why.empty()) {
+  if (std::string why = differs("the scene's content", base_key[kSceneContent], head_key[kSceneContent]); !why.empty()) {
     return why + ": another scene under one label";
   }
-  if (std::string why = differs("the step count", field_of(base, "steps"), field_of(head, "steps")); !why.empty()) return why;
-  return differs("δ", field_of(base, "thickness"), field_of(head, "thickness"));
+  if (std::string why = differs("the step count", base.steps, head.steps); !why.empty()) return why;
+  return differs("δ", base.thickness, head.thickness);
 }
 
-std::string times_differ(const json& base, const json& head) {
-  for (const auto& [field, name] :
-       {std::pair{"machine", "the machine"}, {"threads", "the thread count"}, {"build_type", "the build type"}, {"executable", "the executable"}}) {
-    if (std::string why = differs(name, field_of(base, field), field_of(head, field)); !why.empty()) return why;
+std::string times_differ(const CellSummary& base, const CellSummary& head) {
+  const RecordEnvironment &b = base.environment, &h = head.environment;
+  for (const auto& [name, base_value, head_value] : {std::tuple{"the machine", json(b.machine), json(h.machine)},
+                                                     {"the thread count", json(b.threads), json(h.threads)},
+                                                     {"the build type", json(b.build_type), json(h.build_type)},
+                                                     {"the executable", json(b.executable), json(h.executable)}}) {
+    if (std::string why = differs(name, base_value, head_value); !why.empty()) return why;
   }
-  const json base_provenance = field_of(base, "provenance"), head_provenance = field_of(head, "provenance");
   std::set<std::string> names;
-  for (const json* provenance : {&base_provenance, &head_provenance}) {
+  for (const json* provenance : {&b.provenance, &h.provenance}) {
     if (!provenance->is_object()) continue;
     for (const auto& item : provenance->items()) names.insert(item.key());
   }
   for (const std::string& name : names) {
     if (std::find(kCodeUnderAudit.begin(), kCodeUnderAudit.end(), name) != kCodeUnderAudit.end()) continue;
     const std::string shown = "the " + name + " of the provenance";
-    if (std::string why = differs(shown, field_of(base_provenance, name.c_str()), field_of(head_provenance, name.c_str())); !why.empty()) return why;
+    if (std::string why = differs(shown, field_of(b.provenance, name.c_str()), field_of(h.provenance, name.c_str())); !why.empty()) return why;
   }
   return {};
 }

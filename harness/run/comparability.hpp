@@ -5,6 +5,8 @@
 /// machine, thread count, build, executable and library versions. Anything else is not comparable, said on the
 /// cell's row, kept out of every verdict and of --fail-on-slower, and makes compare exit 3 unless allowed.
 
+#include "harness/run/records.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <string>
@@ -13,11 +15,11 @@ namespace ccd::harness {
 
 /// Why the verdicts of two summaries of one cell are not of the same input, in words ("the scene's content differs
 /// (...)"), or "" when they are. A summary that does not say what its input was (no `key`) cannot be compared.
-std::string inputs_differ(const nlohmann::json& base, const nlohmann::json& head);
+std::string inputs_differ(const CellSummary& base, const CellSummary& head);
 
 /// Why the times of two summaries may not be compared ("the thread count differs (2, 1)"), or "" when they may: the machine,
 /// the thread count, the build type, the executable's digest and every library version in `provenance` but those
 /// naming the code under audit (a plugin's name, digest and objects, which a comparison of two builds changes).
-std::string times_differ(const nlohmann::json& base, const nlohmann::json& head);
+std::string times_differ(const CellSummary& base, const CellSummary& head);
 
 }  // namespace ccd::harness

@@ -7,7 +7,6 @@
 #include "harness/rank_test.hpp"
 #include "harness/run/cells.hpp"
 #include "harness/run/comparability.hpp"
-#include "harness/run/record_fields.hpp"
 #include "harness/run/result_set.hpp"
 #include "harness/statistics.hpp"
 #include "harness/table.hpp"
@@ -29,24 +28,14 @@ using nlohmann::json;
 
 namespace {
 
-/// The strategy as the run was given it (what the gate and compare match), else its resolved name.
-std::string spec_of(const json& s) { return s.contains("spec") ? s["spec"].get<std::string>() : s["strategy"].get<std::string>(); }
-
 /// "fold / full / δ scene's 0.008" or "... / δ 0".
-std::string cell_name(const json& s, const std::string& spec) {
-  return s["scene"].get<std::string>() + " / " + spec + " / δ " + (s["thickness_from"] == "scene" ? "scene's " : "") +
-         significant(s["thickness"].get<double>(), 6);
+std::string cell_name(const CellSummary& s, const std::string& spec) {
+  return s.scene + " / " + spec + " / δ " + (s.thickness_from == "scene" ? "scene's " : "") + significant(s.thickness, 6);
 }
 
 /// What matches a cell: scene, δ (the scene's own, or the number) and the spec.
-std::string match_key(const json& s, const std::string& spec) {
-  const bool scene_thickness = s["thickness_from"] == "scene";
-  return s["scene"].get<std::string>() + "|" + (scene_thickness ? std::string("scene") : s["thickness"].dump()) + "|" + spec;
-}
-
-std::optional<double> number(const json& s, const char* field) {
-  if (!s.contains(field) || !s[field].is_number()) return std::nullopt;
-  return s[field].get<double>();
+std::string match_key(const CellSummary& s, const std::string& spec) {
+  return s.scene + "|" + (s.thickness_from == "scene" ? std::string("scene") : json(s.thickness).dump()) + "|" + spec;
 }
 
 /// "3 → 4" (or "3" when equal, "-" when unknown on a side).
@@ -74,13 +63,13 @@ double smallest_p(std::size_t n, std::size_t m) {
 
 struct CellComparison {
   std::string name;
-  json base, head;
+  CellSummary base, head;
   bool worse = false, slower = false, faster = false;
   /// Why its verdicts (inputs_differ) or its times (times_differ) cannot be compared, "" when they can.
   std::string inputs_differ, times_differ;
   std::vector<std::string> notes;
   std::vector<std::size_t> changed_steps;
-  /// The pairs the head misses and the base did not, by step: the records as the head kept them.
+  /// The pairs the head misses and the base did not, by step: the records as the head kept them (missed_pair_record).
   std::vector<std::pair<std::size_t, json>> newly_missed;
   std::optional<RankTest> time_test;
   /// Its passes ran in turn with the other side's (one `run --interleave`): tested pair by pair, and gated.
@@ -91,22 +80,23 @@ struct CellComparison {
 };
 
 void compare_steps(const ResultSet& base, const ResultSet& head, CellComparison& cell) {
-  const auto base_steps = base.steps.find(steps_key(cell.base));
-  const auto head_steps = head.steps.find(steps_key(cell.head));
+  const auto base_steps = base.steps.find(steps_key(cell.base.scene, cell.base.thickness, cell.base.strategy));
+  const auto head_steps = head.steps.find(steps_key(cell.head.scene, cell.head.thickness, cell.head.strategy));
   if (base_steps == base.steps.end() || head_steps == head.steps.end()) return;
   std::vector<std::size_t> unlisted;  // steps with more missed pairs than their records keep
   for (const auto& [k, head_step] : head_steps->second) {
     const auto other = base_steps->second.find(k);
     if (other == base_steps->second.end()) continue;
-    const json& base_step = other->second;
-    if (base_step.value("answers", "") != head_step.value("answers", "")) cell.changed_steps.push_back(k);
-    if (!head_step.contains("missed_pairs")) continue;
+    const StepRecord& base_step = other->second;
+    if (base_step.answers.value_or("") != head_step.answers.value_or("")) cell.changed_steps.push_back(k);
+    if (!head_step.verdict || !head_step.verdict->missed_pairs) continue;
     // Each side keeps only its first missed pairs (kKeptMissedPairs): beyond them a pair's status is not known.
-    const json& kept_base = base_step.contains("missed_pairs") ? base_step["missed_pairs"] : json::array();
-    const json& kept_head = head_step["missed_pairs"];
+    const json kept_base = base_step.verdict ? base_step.verdict->missed_pairs.value_or(json::array()) : json::array();
+    const json& kept_head = *head_step.verdict->missed_pairs;
     // A step's missed count includes face-shape contacts, which are kept as no pair.
-    auto pairs_missed = [](const json& step) {
-      return step.value("missed", std::size_t{0}) - std::min(step.value("missed", std::size_t{0}), step.value("missed_face_shape", std::size_t{0}));
+    auto pairs_missed = [](const StepRecord& step) {
+      if (!step.verdict) return std::size_t{0};
+      return step.verdict->missed - std::min(step.verdict->missed, step.verdict->missed_face_shape.value_or(0));
     };
     if (pairs_missed(base_step) > kept_base.size() || pairs_missed(head_step) > kept_head.size()) {
       unlisted.push_back(k);
@@ -127,7 +117,8 @@ void compare_steps(const ResultSet& base, const ResultSet& head, CellComparison&
   }
 }
 
-CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set, const json& base, const json& head, const std::string& name) {
+CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set, const CellSummary& base, const CellSummary& head,
+                            const std::string& name) {
   CellComparison cell;
   cell.name = name;
   cell.base = base;
@@ -138,40 +129,39 @@ CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set
     cell.notes.push_back("not compared: " + cell.inputs_differ);
     return cell;
   }
-  for (const char* field : {"missed", "errors", "toi_late"}) {
-    const auto b = number(base, field), h = number(head, field);
+  for (const Measure* measure : {&measures::missed, &measures::errors, &measures::toi_late}) {
+    const auto b = measure->of(base), h = measure->of(head);
     if (b && h && *h > *b) {
       cell.worse = true;
-      cell.notes.push_back(std::string(field) + " " + change(b, h));
+      cell.notes.push_back(std::string(measure->name) + " " + change(b, h));
     } else if (b && !h) {
       // A verdict the base has and the head does not (a head run without --verify exact or --toi) cannot be said
       // not to have got worse.
       cell.worse = true;
-      cell.notes.push_back(std::string("the head has no ") + field + " (the base has " + change(b, b) + "): run it with --verify exact" +
-                           (std::string(field) == "toi_late" ? " --toi" : ""));
+      cell.notes.push_back(std::string("the head has no ") + measure->name + " (the base has " + change(b, b) + "): run it with --verify exact" +
+                           (measure == &measures::toi_late ? " --toi" : ""));
     }
   }
-  if (head.contains("nondeterministic_at_step") && !base.contains("nondeterministic_at_step")) {
+  if (head.nondeterministic_at_step && !base.nondeterministic_at_step) {
     cell.worse = true;
-    cell.notes.push_back("answers now change between passes (step " + head["nondeterministic_at_step"].dump() + ")");
+    cell.notes.push_back("answers now change between passes (step " + std::to_string(*head.nondeterministic_at_step) + ")");
   }
-  if (base["strategy"] != head["strategy"]) {
-    const std::string b = digest_in(base["strategy"]), h = digest_in(head["strategy"]);
+  if (base.strategy != head.strategy) {
+    const std::string b = digest_in(base.strategy), h = digest_in(head.strategy);
     cell.notes.push_back(!b.empty() && !h.empty() && b != h ? "plugin code changed: digest " + b + " → " + h : "resolved strategy changed");
   }
   compare_steps(base_set, head_set, cell);
   cell.times_differ = times_differ(base, head);
-  if (base == head) {
+  if (json(base) == json(head)) {
     // A cell of a run compared with that run (one outside --pair): nothing to test, and no place in the family.
     cell.notes.push_back("one record on both sides: times not tested");
   } else if (!cell.times_differ.empty()) {
     cell.notes.push_back("times not compared: " + cell.times_differ);
-  } else if (base.contains("ms_per_repeat") && head.contains("ms_per_repeat")) {
-    const auto base_times = base["ms_per_repeat"].get<std::vector<double>>(), head_times = head["ms_per_repeat"].get<std::vector<double>>();
-    const json& group = base.value("interleave_group", json());
+  } else if (!base.ms_per_repeat.empty() && !head.ms_per_repeat.empty()) {
+    const std::vector<double>&base_times = base.ms_per_repeat, &head_times = head.ms_per_repeat;
     // The paired test takes the logs of the passes' ratios: every time positive.
     const auto positive = [](const std::vector<double>& times) { return std::all_of(times.begin(), times.end(), [](double t) { return t > 0; }); };
-    cell.paired = group.is_string() && head.value("interleave_group", json()) == group && base_times.size() == head_times.size() &&
+    cell.paired = base.interleave_group && head.interleave_group == base.interleave_group && base_times.size() == head_times.size() &&
                   positive(base_times) && positive(head_times);
     if (cell.paired) {
       // Pass i of each side ran one after the other: the ratio is the median of the passes' ratios.
@@ -181,7 +171,7 @@ CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set
       cell.ratio = median(ratios);
     } else {
       cell.time_test = mann_whitney(base_times, head_times);
-      cell.ratio = base["ms_per_step"].get<double>() > 0 ? head["ms_per_step"].get<double>() / base["ms_per_step"].get<double>() : 0;
+      cell.ratio = base.ms_per_step > 0 ? head.ms_per_step / base.ms_per_step : 0;
       cell.notes.push_back(
           "times from two runs apart, not gated: their passes are not independent of the machine's drift between the runs, "
           "which no test over them sees (run base and head in one invocation with --interleave)");
@@ -209,7 +199,7 @@ void judge_times(std::vector<CellComparison>& cells, const CompareOptions& optio
       c.p_family = adjusted[k++];
       c.slower = c.p_family < options.alpha && c.ratio > 1 + options.noise_band;
       c.faster = c.p_family < options.alpha && c.ratio < 1 / (1 + options.noise_band);
-      const std::size_t base_passes = c.base["ms_per_repeat"].size(), head_passes = c.head["ms_per_repeat"].size();
+      const std::size_t base_passes = c.base.ms_per_repeat.size(), head_passes = c.head.ms_per_repeat.size();
       const double smallest = paired ? smallest_signed_rank_p(base_passes) : smallest_p(base_passes, head_passes);
       if (smallest * static_cast<double>(p.size()) >= options.alpha) {
         c.notes.push_back("times cannot be told apart: " + std::to_string(base_passes) + " and " + std::to_string(head_passes) +
@@ -246,14 +236,12 @@ Table comparison_table(const std::vector<CellComparison>& cells) {
       verdict += c.slower ? ", slower beyond noise" : c.faster ? ", faster beyond noise" : ", time within noise";
       if (!c.paired && (c.slower || c.faster)) verdict += " (runs apart: not gated)";
     }
-    table.add_row({c.name, change(number(c.base, "missed"), number(c.head, "missed")), change(number(c.base, "errors"), number(c.head, "errors")),
-                   change(number(c.base, "false_alarms"), number(c.head, "false_alarms")),
-                   change(number(c.base, "toi_late"), number(c.head, "toi_late")),
-                   change(number(c.base, "toi_error_median"), number(c.head, "toi_error_median"), 3),
-                   change(number(c.base, "toi_error_p99"), number(c.head, "toi_error_p99"), 3),
-                   change(mib(number(c.base, "host_peak_bytes")), mib(number(c.head, "host_peak_bytes")), 4),
-                   change(number(c.base, "ms_per_step"), number(c.head, "ms_per_step"), 4), c.time_test ? fixed(c.ratio, 2) + "x" : "-",
-                   c.time_test ? significant(c.p_family, 2) + (c.paired ? " paired" : " apart") : "-", verdict});
+    auto shown = [&](const Measure& m, int digits = -1) { return change(m.of(c.base), m.of(c.head), digits); };
+    table.add_row({c.name, shown(measures::missed), shown(measures::errors), shown(measures::false_alarms), shown(measures::toi_late),
+                   shown(measures::toi_error_median, 3), shown(measures::toi_error_p99, 3),
+                   change(mib(measures::host_peak_bytes.of(c.base)), mib(measures::host_peak_bytes.of(c.head)), 4), shown(measures::ms_per_step, 4),
+                   c.time_test ? fixed(c.ratio, 2) + "x" : "-", c.time_test ? significant(c.p_family, 2) + (c.paired ? " paired" : " apart") : "-",
+                   verdict});
   }
   return table;
 }
@@ -274,8 +262,7 @@ std::string details(const std::vector<CellComparison>& cells, const std::map<std
       text << "  newly missed at step " << step << ": " << pair["kind"].get<std::string>() << " " << pair["ids"].dump() << "\n";
     if (const auto it = written.find(c.name); it != written.end()) {
       // The pairs collide at the cell's δ: they are replayed at it.
-      text << "  written to replay: ccdbench queries " << it->second.string() << " --thickness " << significant(c.head["thickness"].get<double>(), 17)
-           << "\n";
+      text << "  written to replay: ccdbench queries " << it->second.string() << " --thickness " << significant(c.head.thickness, 17) << "\n";
     }
   }
   return text.str();
@@ -303,8 +290,7 @@ void clear_replay(const std::filesystem::path& root) {
 /// collide there, as run's --misses files do), which the folder's name says and the replay command passes.
 std::filesystem::path write_replay(const CellComparison& c, std::size_t number, const std::filesystem::path& root) {
   const std::filesystem::path folder =
-      root / ("cell-" + std::to_string(number) + "-" + safe_path_component(c.head["scene"].get<std::string>().substr(0, 100)) + "-at-" +
-              significant(c.head["thickness"].get<double>(), 17));
+      root / ("cell-" + std::to_string(number) + "-" + safe_path_component(c.head.scene.substr(0, 100)) + "-at-" + significant(c.head.thickness, 17));
   std::vector<datasets::Query> vertex_face, edge_edge;
   for (const auto& [step, pair] : c.newly_missed) {
     datasets::Query query;
@@ -320,7 +306,7 @@ std::filesystem::path write_replay(const CellComparison& c, std::size_t number, 
     (pair["kind"] == "vf" ? vertex_face : edge_edge).push_back(std::move(query));
   }
   // Labelled at the cell's δ, which the files say (a replay at another δ is told its labels are not for it).
-  const double thickness = c.head["thickness"].get<double>();
+  const double thickness = c.head.thickness;
   if (!vertex_face.empty()) datasets::write_query_file(folder / "vertex-face" / kReplayFile, vertex_face, thickness);
   if (!edge_edge.empty()) datasets::write_query_file(folder / "edge-edge" / kReplayFile, edge_edge, thickness);
   return folder;
@@ -352,9 +338,11 @@ void write_comparison_json(const std::filesystem::path& path, const std::vector<
                 {"times_not_comparable", c.times_differ.empty() ? json() : json(c.times_differ)},
                 {"notes", c.notes},
                 {"changed_steps", c.changed_steps}};
-    for (const char* field : {"missed", "errors", "false_alarms", "toi_late", "toi_error_median", "toi_error_p99", "toi_error_max", "host_peak_bytes",
-                              "device_bytes", "ms_per_step"}) {
-      row[field] = {{"base", c.base.value(field, json())}, {"head", c.head.value(field, json())}};
+    for (const Measure* m :
+         {&measures::missed, &measures::errors, &measures::false_alarms, &measures::toi_late, &measures::toi_error_median, &measures::toi_error_p99,
+          &measures::toi_error_max, &measures::host_peak_bytes, &measures::device_bytes, &measures::ms_per_step}) {
+      const auto b = m->of(c.base), h = m->of(c.head);
+      row[m->name] = {{"base", b ? json(*b) : json()}, {"head", h ? json(*h) : json()}};
     }
     if (c.time_test) {
       row["time"] = {{"ratio", c.ratio},   {"p", c.time_test->p},         {"p_family", c.p_family},
@@ -377,13 +365,13 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
   // Records of schema 1 carry no spec: then every cell is matched by its resolved name (built-in strategies still
   // match; a plugin's resolved name holds its path and digest, so its two builds do not).
   const auto without_spec = [](const ResultSet& set) {
-    return std::any_of(set.summaries.begin(), set.summaries.end(), [](const json& s) { return !s.contains("spec"); });
+    return std::any_of(set.summaries.begin(), set.summaries.end(), [](const CellSummary& s) { return s.spec.empty(); });
   };
   const bool by_resolved = without_spec(base) || without_spec(head);
-  auto given = [&](const json& s) { return by_resolved ? s["strategy"].get<std::string>() : spec_of(s); };
+  auto given = [&](const CellSummary& s) { return by_resolved ? s.strategy : s.given(); };
   for (const auto& [b, h] : options.pairs) {
     for (const auto& [set, spec] : {std::pair{&base, b}, {&head, h}}) {
-      if (std::none_of(set->summaries.begin(), set->summaries.end(), [&](const json& s) { return given(s) == spec; })) {
+      if (std::none_of(set->summaries.begin(), set->summaries.end(), [&](const CellSummary& s) { return given(s) == spec; })) {
         throw InputError(set->path, {}, "--pair " + b + " " + h + ": no cell of " + spec + " here (the strategy as run's --strategy gave it)");
       }
     }
@@ -405,10 +393,10 @@ int run_compare(const CompareOptions& options, std::ostream& out) {
     }
     return other && !own;
   };
-  std::map<std::string, const json*> base_cells, head_cells;
+  std::map<std::string, const CellSummary*> base_cells, head_cells;
   std::vector<std::string> order;
   for (const auto& [set, cells, base_side] : {std::tuple{&base, &base_cells, true}, {&head, &head_cells, false}}) {
-    for (const json& s : set->summaries) {
+    for (const CellSummary& s : set->summaries) {
       if (left_out(given(s), base_side)) continue;
       const std::string key = match_key(s, matched_spec(given(s), base_side));
       if (!cells->emplace(key, &s).second) {

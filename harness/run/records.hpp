@@ -98,8 +98,11 @@ struct CellVerdict : VerdictCounts {
 struct CellSummary {
   int schema = kRecordSchema;
   std::string scene, strategy;
-  /// The strategy as --strategy gave it (what check and compare match a cell by).
+  /// The strategy as --strategy gave it (what check and compare match a cell by); empty in a record without it
+  /// (schema 1).
   std::string spec;
+  /// The strategy as given, else (a record without spec) its resolved name.
+  const std::string& given() const { return spec.empty() ? strategy : spec; }
   std::size_t triangles = 0, vertices = 0, steps = 0;
   double thickness = 0;
   std::string thickness_from;  // "scene" or "command line"
@@ -123,6 +126,9 @@ struct CellSummary {
   int repeats = 1;
   std::string cell;  // the cell file's stem
   std::size_t errors = 0;
+  /// False for a summary read back that does not count its errors (one made by an older ccdbench, or by hand):
+  /// the gate refuses it. Not written (the serializer writes `errors`).
+  bool errors_counted = true;
   std::optional<std::string> errors_written;
   std::optional<std::size_t> nondeterministic_at_step;
   /// With `run --interleave`: one id shared by the cells of a scene and δ whose timed passes ran in turn (pass 1 of
@@ -147,6 +153,33 @@ struct CellSummary {
 struct CellRecord {
   CellSummary summary;
   std::vector<StepRecord> steps;
+};
+
+/// A measure of a summary that compare judges and shows, named as the summary's field is: none where the summary has
+/// none (not verified, no --toi, errors not counted).
+struct Measure {
+  const char* name;
+  std::optional<double> (*of)(const CellSummary& s);
+};
+
+namespace measures {
+extern const Measure missed, errors, false_alarms, toi_late, toi_error_median, toi_error_p99, toi_error_max, host_peak_bytes, device_bytes,
+    ms_per_step;
+}  // namespace measures
+
+/// The cells of one strategy that it refused (several δ only): the scenes and δ, and the first refusal's reason.
+struct LeftOut {
+  std::string spec;
+  std::vector<std::string> scenes;
+  std::string reason;
+};
+
+/// What a run gives: its cells (kept or computed) in the order of scenes, δ and --strategy, each summary with the
+/// spec as given and its speed-up over its baseline strategy in this invocation (attach_speedups), and the cells
+/// left out. Empty on a rank other than 0.
+struct RunResult {
+  std::vector<CellRecord> cells;
+  std::vector<LeftOut> left_out;
 };
 
 void to_json(nlohmann::json& j, const RecordEnvironment& e);

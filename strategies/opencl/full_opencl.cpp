@@ -283,7 +283,7 @@ class FullOpenCl final : public Strategy {
       result.tested = std::move(chunks.tested);
     }
     if (separation_filter_) result.counters.extra.emplace_back("distance_filtered", static_cast<double>(chunks.elementary - chunks.tests));
-    result.counters.extra.emplace_back("device_chunks", static_cast<double>(std::max<std::size_t>(chunks.count, 1)));
+    result.counters.extra.emplace_back(kDeviceChunksCounter, static_cast<double>(std::max<std::size_t>(chunks.count, 1)));
     if (workers_.size() > 1) result.counters.extra.emplace_back("devices", static_cast<double>(workers_.size()));
     std::uint64_t budget = 0, fixed = 0, bytes = 0;
     for (const auto& worker : workers_) {
@@ -292,7 +292,7 @@ class FullOpenCl final : public Strategy {
       bytes += worker->device_bytes();
       worker->finish(step);
     }
-    result.counters.extra.emplace_back("device_budget_bytes", static_cast<double>(budget));
+    result.counters.extra.emplace_back(kDeviceBudgetCounter, static_cast<double>(budget));
     result.counters.extra.emplace_back("device_fixed_bytes", static_cast<double>(fixed));
     // Face-shape pairs on the host, with the host's narrow phase (face_shape.hpp), as the CPU backend does.
     run_face_shape_stage(result, first.pipeline().scene(), step, *first.pipeline().narrow_phase().host, audit);

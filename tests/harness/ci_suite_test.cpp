@@ -1,6 +1,7 @@
 // The `ci` suite is what the CI gate holds strategies to: it must be able to catch a miss of every kind.
 
 #include "harness/run.hpp"
+#include "harness/run/tables.hpp"
 #include "reference/step_truth.hpp"
 #include "strategies/registry.hpp"
 #include "tests/support/test_support.hpp"
@@ -71,8 +72,7 @@ TEST(RunSummary, StrategyCountersHaveTheirMeanAndMaxOverTheSteps) {
   options.strategies = {strategies::parse_strategy_spec("apccd")};
   options.verify = false;
   options.out = dir.path() / "results";
-  std::ostringstream table;
-  const std::vector<nlohmann::json> summaries = run_benchmark(options, table);
+  const nlohmann::json summaries = summaries_json(run_benchmark(options).cells);
   ::unsetenv("CCDBENCH_CACHE_DIR");
   ASSERT_EQ(summaries.size(), 1u);
   const nlohmann::json& summary = summaries[0];

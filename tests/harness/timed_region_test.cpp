@@ -6,6 +6,7 @@
 #include "datasets/query_file.hpp"
 #include "harness/queries/scoring.hpp"
 #include "harness/run.hpp"
+#include "harness/run/tables.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -35,8 +36,7 @@ TEST(TimedRegion, NoHarnessPassRunsInsideAStrategysTime) {
   options.out = dir.path() / "results";
   options.misses = dir.path() / "misses";
   options.write_answers = dir.path() / "answers";
-  std::ostringstream table;
-  const std::vector<nlohmann::json> summaries = run_benchmark(options, table);
+  const nlohmann::json summaries = summaries_json(run_benchmark(options).cells);
   ::unsetenv("CCDBENCH_CACHE_DIR");
   ASSERT_EQ(summaries.size(), 2u);
   EXPECT_GT(summaries[1]["missed"].get<std::size_t>(), 0u) << "full+cubic32 no longer misses here: the miss records go untested";

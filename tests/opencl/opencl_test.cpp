@@ -6,6 +6,7 @@
 #include "datasets/sample_step.hpp"
 #include "datasets/scene_file.hpp"
 #include "harness/run.hpp"
+#include "harness/run/tables.hpp"
 #include "strategies/opencl/full_opencl.hpp"
 #include "strategies/opencl/pipeline.hpp"
 #include "strategies/opencl/runtime.hpp"
@@ -231,9 +232,8 @@ TEST_F(OpenClParity, ApccdOnTheDeviceMissesNothingOnTheCiSuite) {
     options.strategies = {strategies::parse_strategy_spec("apccd:backend=opencl"), strategies::parse_strategy_spec("apccd+cubic64:backend=opencl")};
     if (zero) options.thicknesses = {0.0};
     options.out = cache_.path() / (zero ? "results-zero" : "results");
-    std::ostringstream table;
-    const std::vector<nlohmann::json> summaries = harness::run_benchmark(options, table);
-    ASSERT_EQ(summaries.size(), 2 * harness::suite_scenes("ci").size()) << table.str();
+    const nlohmann::json summaries = harness::summaries_json(harness::run_benchmark(options).cells);
+    ASSERT_EQ(summaries.size(), 2 * harness::suite_scenes("ci").size()) << summaries.dump().substr(0, 2000);
     for (const nlohmann::json& summary : summaries) {
       SCOPED_TRACE(summary.value("scene", "") + " " + summary.value("strategy", ""));
       EXPECT_TRUE(summary.value("verified", false));

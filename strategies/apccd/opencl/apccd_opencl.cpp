@@ -180,7 +180,7 @@ class ApccdOpenCl final : public Strategy {
                                                          {"history_table_bytes", static_cast<double>(history_.bytes())},
                                                          {"distance_filtered", static_cast<double>(elementary - tests)},
                                                          {"device_bytes", static_cast<double>(device)},
-                                                         {"device_budget_bytes", static_cast<double>(memory_budget_)},
+                                                         {kDeviceBudgetCounter, static_cast<double>(memory_budget_)},
                                                          {"pending_table_builds", static_cast<double>(table_builds_)},
                                                          {"admissible_pairs", static_cast<double>(admissible)},
                                                          {"object_pair_candidates", static_cast<double>(across_count)},
