@@ -123,6 +123,12 @@ struct Score {
 CCDBENCH_API std::vector<Score> score_queries(const std::vector<std::string>& paths, const std::vector<std::string>& methods, double thickness = 0,
                                               bool toi = false, int repeats = 1);
 
+// MethodBatch and MethodAnswers are deliberately not the plugin layer's HostBatch and HostAnswers
+// (strategies/plugin/host_method.hpp in ccdbench's sources), though both carry one batch's pairs and answers: these
+// are this installed API's, in its words (PairKind, Rows), and change only with its major version; those are internal,
+// in the narrow phases' words (a vertex_face flag, rows as flat doubles as a plugin gets them), free to change, and
+// the strategies library must not include api/. register_method (api/ccdbench.cpp) translates one into the other.
+
 /// A method of the calling program, audited as a plugin is (Python's callables enter this way): once registered
 /// under NAME, `callable:NAME` names it wherever a narrow phase is named: as a method of score_queries, and in a
 /// run's strategy (`full+callable:NAME`: full's broad phase gives it each step's candidate pairs, of one kind per

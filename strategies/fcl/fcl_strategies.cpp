@@ -183,6 +183,49 @@ void sort_unique(std::vector<Pair>& pairs) {
 }
 
 // ---------------------------------------------------------------------------------------------------------------
+// What both strategies do alike around their traversal.
+
+/// An FCL strategy: it refuses what FCL cannot model (refuse_thickness), builds its models at init, refits them as
+/// each step's first stage ("refit") and keeps their bytes; `detect` is the rest of its step.
+template <class BV>
+class FclStrategy : public Strategy {
+ public:
+  void check_scene(const Scene& scene) const final { refuse_thickness(scene, strategy_); }
+
+  void init(const Scene& scene, std::span<const Vec3> first_frame) override {
+    check_scene(scene);
+    scene_ = &scene;
+    models_.build(scene, first_frame);
+  }
+
+  StepResult step(const StepView& step, bool audit) final {
+    StepResult result;
+    {
+      ScopedStageTimer timer(result.stages, "refit");
+      models_.update(step);
+    }
+    detect(*scene_, models_, step, audit, result);
+    result.counters.kept_bytes = models_.bytes();
+    return result;
+  }
+
+ protected:
+  /// `strategy`: its name in refusals ("fcl", "fcl-bvh").
+  FclStrategy(std::string strategy, std::string bv_name) : strategy_(std::move(strategy)), bv_name_(std::move(bv_name)) {}
+
+  /// The step after the refit, on models brought to it: its stages, collisions and counters (with `audit`, the
+  /// tested pairs) into `result`.
+  virtual void detect(const Scene& scene, const FclModels<BV>& models, const StepView& step, bool audit, StepResult& result) = 0;
+
+  const std::string& bv_name() const { return bv_name_; }
+
+ private:
+  std::string strategy_, bv_name_;
+  const Scene* scene_ = nullptr;
+  FclModels<BV> models_;
+};
+
+// ---------------------------------------------------------------------------------------------------------------
 // `fcl`: FCL's continuous traversal and its elementary tests.
 
 /// FCL's node, which also lists the triangle pairs that reached its leaf test (audit mode).
@@ -197,26 +240,14 @@ class AuditedContinuousNode : public fcl::detail::MeshContinuousCollisionTravers
 };
 
 template <class BV>
-class FclContinuous final : public Strategy {
+class FclContinuous final : public FclStrategy<BV> {
  public:
-  explicit FclContinuous(std::string bv_name) : bv_name_(std::move(bv_name)) {}
+  explicit FclContinuous(std::string bv_name) : FclStrategy<BV>("fcl", std::move(bv_name)) {}
 
-  std::string name() const override { return "fcl:bv=" + bv_name_; }
+  std::string name() const override { return "fcl:bv=" + this->bv_name(); }
 
-  void check_scene(const Scene& scene) const override { refuse_thickness(scene, "fcl"); }
-
-  void init(const Scene& scene, std::span<const Vec3> first_frame) override {
-    check_scene(scene);
-    scene_ = &scene;
-    models_.build(scene, first_frame);
-  }
-
-  StepResult step(const StepView& step, bool audit) override {
-    StepResult result;
-    {
-      ScopedStageTimer timer(result.stages, "refit");
-      models_.update(step);
-    }
+ private:
+  void detect(const Scene& scene, const FclModels<BV>& models, const StepView&, bool audit, StepResult& result) override {
     std::vector<bvh::TrianglePair> leaves;
     std::size_t leaf_tests = 0, tests = 0;
     {
@@ -239,33 +270,26 @@ class FclContinuous final : public Strategy {
         for (const auto& [a, b] : leaf_ids) leaves.push_back(global_pair(first_a, a, first_b, b));
         leaf_ids.clear();
       };
-      for_each_traversal<BV, AuditedContinuousNode<BV>>(*scene_, models_, make_node, visit);
+      for_each_traversal<BV, AuditedContinuousNode<BV>>(scene, models, make_node, visit);
       sort_unique(result.triangle_pairs);
     }
     // Outside the timed stages: the elementary pairs the reported triangle pairs contain, for judging.
     TestedPairs contained;
-    for (const auto& [a, b] : result.triangle_pairs) append_all_elementary_pairs(scene_->topology(), a, b, contained);
+    for (const auto& [a, b] : result.triangle_pairs) append_all_elementary_pairs(scene.topology(), a, b, contained);
     for (const VertexFacePair& pair : contained.vertex_face) result.collisions.add(pair);
     for (const EdgeEdgePair& pair : contained.edge_edge) result.collisions.add(pair);
     result.collisions.normalize();
     if (audit) {
       sort_unique(leaves);
       TestedPairs tested;
-      for (const auto& [a, b] : leaves) append_all_elementary_pairs(scene_->topology(), a, b, tested);
+      for (const auto& [a, b] : leaves) append_all_elementary_pairs(scene.topology(), a, b, tested);
       sort_unique(tested.vertex_face);
       sort_unique(tested.edge_edge);
       result.tested = std::move(tested);
     }
     result.counters.candidate_triangle_pairs = leaf_tests;
     result.counters.elementary_tests = tests;
-    result.counters.kept_bytes = models_.bytes();
-    return result;
   }
-
- private:
-  std::string bv_name_;
-  const Scene* scene_ = nullptr;
-  FclModels<BV> models_;
 };
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -281,28 +305,20 @@ class OverlapNode : public fcl::detail::BVHCollisionTraversalNode<BV> {
 };
 
 template <class BV>
-class FclBroadPhase final : public Strategy {
+class FclBroadPhase final : public FclStrategy<BV> {
  public:
   FclBroadPhase(std::string bv_name, std::unique_ptr<narrowphase::NarrowPhase> narrow_phase)
-      : bv_name_(std::move(bv_name)), narrow_phase_(std::move(narrow_phase)) {}
+      : FclStrategy<BV>("fcl-bvh", std::move(bv_name)), narrow_phase_(std::move(narrow_phase)) {}
 
-  std::string name() const override { return "fcl-bvh+" + narrow_phase_->name() + ":bv=" + bv_name_; }
-
-  void check_scene(const Scene& scene) const override { refuse_thickness(scene, "fcl-bvh"); }
+  std::string name() const override { return "fcl-bvh+" + narrow_phase_->name() + ":bv=" + this->bv_name(); }
 
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
-    check_scene(scene);
-    scene_ = &scene;
+    FclStrategy<BV>::init(scene, first_frame);
     masks_ = assign_primitives(scene.topology());
-    models_.build(scene, first_frame);
   }
 
-  StepResult step(const StepView& step, bool audit) override {
-    StepResult result;
-    {
-      ScopedStageTimer timer(result.stages, "refit");
-      models_.update(step);
-    }
+ private:
+  void detect(const Scene& scene, const FclModels<BV>& models, const StepView& step, bool audit, StepResult& result) override {
     std::vector<bvh::TrianglePair> candidates;
     {
       ScopedStageTimer timer(result.stages, "traversal");
@@ -315,20 +331,14 @@ class FclBroadPhase final : public Strategy {
       auto visit = [&](const OverlapNode<BV>& node, FaceId first_a, FaceId first_b) {
         for (const auto& [a, b] : node.pairs) candidates.push_back(global_pair(first_a, a, first_b, b));
       };
-      for_each_traversal<BV, OverlapNode<BV>>(*scene_, models_, make_node, visit);
+      for_each_traversal<BV, OverlapNode<BV>>(scene, models, make_node, visit);
       sort_unique(candidates);
     }
-    run_narrow_phase(result, scene_->topology(), masks_, candidates, step, *narrow_phase_, 0.0, audit);
-    result.counters.kept_bytes = models_.bytes();
-    return result;
+    run_narrow_phase(result, scene.topology(), masks_, candidates, step, *narrow_phase_, 0.0, audit);
   }
 
- private:
-  std::string bv_name_;
   std::unique_ptr<narrowphase::NarrowPhase> narrow_phase_;
-  const Scene* scene_ = nullptr;
   std::vector<AssignmentMask> masks_;
-  FclModels<BV> models_;
 };
 
 // ---------------------------------------------------------------------------------------------------------------

@@ -114,13 +114,11 @@ std::vector<StrategyEntry> full_traversal_entries() {
     return std::make_unique<FullTraversal>(std::move(request.narrow_phase), filter);
   };
   full.check = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow) {
-    const BackendChoice backend = read_backend(keys);
-    if (backend.opencl()) opencl_device_name("full", backend, narrow, false);
+    resolved_backend("full", read_backend(keys), narrow, false);
   };
   full.resolve = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow) {
     const BackendChoice backend = read_backend(keys);
-    const std::string name = "full+" + narrow.name + (keys.choice("filter") == "on" ? ":filter=on" : "");
-    return backend.opencl() ? name + backend.resolved(opencl_device_name("full", backend, narrow, false), narrow.conservative) : name;
+    return "full+" + narrow.name + (keys.choice("filter") == "on" ? ":filter=on" : "") + resolved_backend("full", backend, narrow, false);
   };
   StrategyEntry brute;
   brute.name = "brute";

@@ -1,12 +1,8 @@
 #include "strategies/opencl/full_opencl.hpp"
 
-#include "ccd/config.hpp"
 #include "strategies/face_shape.hpp"
 #include "strategies/narrowphase/narrow_phase.hpp"
-
-#if CCDBENCH_WITH_OPENCL
 #include "strategies/opencl/pipeline.hpp"
-#endif
 
 #include <algorithm>
 #include <atomic>
@@ -20,8 +16,6 @@
 #include <thread>
 
 namespace ccd::strategies {
-
-#if CCDBENCH_WITH_OPENCL
 namespace {
 
 using opencl::Buffer;
@@ -407,29 +401,5 @@ std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPh
   std::vector<opencl::DeviceInfo> devices = opencl::choose_checked_devices("full", backend.device);
   return std::make_unique<FullOpenCl>(std::move(narrow), std::move(devices), backend, separation_filter);
 }
-
-#else
-
-std::vector<OpenClDeviceSummary> opencl_devices() {
-  throw std::invalid_argument(
-      "OpenCL is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
-      "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
-}
-
-namespace {
-
-[[noreturn]] void refuse_without_opencl() {
-  throw std::invalid_argument(
-      "backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
-      "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
-}
-
-}  // namespace
-
-std::string opencl_device_name(const std::string&, const BackendChoice&, const narrowphase::ResolvedNarrowPhase&, bool) { refuse_without_opencl(); }
-
-std::unique_ptr<Strategy> make_full_opencl(std::unique_ptr<narrowphase::NarrowPhase>, const BackendChoice&, bool) { refuse_without_opencl(); }
-
-#endif
 
 }  // namespace ccd::strategies

@@ -47,6 +47,14 @@ std::vector<OpenClDeviceSummary> opencl_devices();
 std::string opencl_device_name(const std::string& strategy, const BackendChoice& backend, const narrowphase::ResolvedNarrowPhase& narrow,
                                bool int64_atomics);
 
+/// The backend's part of `strategy`'s resolved name, which the entries of both strategies with an OpenCL backend
+/// (full, apccd) check and name it by: "" on the CPU; with backend=opencl, the device checked (opencl_device_name)
+/// and BackendChoice::resolved. @throws std::invalid_argument as opencl_device_name does.
+inline std::string resolved_backend(const std::string& strategy, const BackendChoice& backend, const narrowphase::ResolvedNarrowPhase& narrow,
+                                    bool int64_atomics) {
+  return backend.opencl() ? backend.resolved(opencl_device_name(strategy, backend, narrow, int64_atomics), narrow.conservative) : "";
+}
+
 /// Chooses the device (listing them) and checks it has what the kernels need, so a bad device is refused when the
 /// run is planned. The context, the program and the device's arithmetic self-test come at init().
 /// @throws std::invalid_argument for a narrow phase without a device form, a missing device, or a device without

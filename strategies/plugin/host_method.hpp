@@ -22,6 +22,12 @@ namespace ccd::plugin {
 
 inline constexpr const char* kCallableHead = narrowphase::kHostMethodHead;
 
+// HostBatch and HostAnswers are deliberately not the C++ API's MethodBatch and MethodAnswers
+// (api/ccdbench/ccdbench.hpp), though both carry one batch's pairs and answers: those are the installed API's, in its
+// words (PairKind, Rows), and change only with its major version; these are this layer's, in the narrow phases' words
+// (NarrowPhase's vertex_face flag, rows as flat doubles as a plugin gets them), free to change, and strategies/ must
+// not include api/. The API's register_method (api/ccdbench.cpp) translates one into the other.
+
 /// One batch asked of a host method: `count` pairs of one kind, their rows flat (24 doubles a pair, in
 /// Tight-Inclusion's order), at thickness δ.
 struct HostBatch {

@@ -329,13 +329,12 @@ std::vector<StrategyEntry> apccd_entries() {
   };
   apccd.check = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow) {
     read_apccd_settings(keys);
-    const BackendChoice backend = read_backend(keys);
-    if (backend.opencl()) opencl_device_name("apccd", backend, narrow, true);
+    resolved_backend("apccd", read_backend(keys), narrow, true);
   };
   apccd.resolve = [](const narrowphase::SpecReader& keys, const narrowphase::ResolvedNarrowPhase& narrow) {
     const BackendChoice backend = read_backend(keys);
     const std::string name = apccd_name(read_apccd_settings(keys), narrow.name);
-    return backend.opencl() ? name + backend.resolved(opencl_device_name("apccd", backend, narrow, true), narrow.conservative) : name;
+    return name + resolved_backend("apccd", backend, narrow, true);
   };
   return {std::move(apccd)};
 }

@@ -1,18 +1,12 @@
 #include "strategies/apccd/opencl/apccd_opencl.hpp"
 
-#include "ccd/config.hpp"
-
-#if CCDBENCH_WITH_OPENCL
 #include "strategies/face_shape.hpp"
 #include "strategies/opencl/pipeline.hpp"
-#endif
 
 #include <chrono>
 #include <stdexcept>
 
 namespace ccd::strategies {
-
-#if CCDBENCH_WITH_OPENCL
 namespace {
 
 using opencl::Buffer;
@@ -410,15 +404,5 @@ std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings& settings, std::
   opencl::DeviceInfo device = opencl::choose_checked_device("apccd", backend.device, true);
   return std::make_unique<ApccdOpenCl>(settings, std::move(narrow), std::move(device), backend);
 }
-
-#else
-
-std::unique_ptr<Strategy> make_apccd_opencl(const ApccdSettings&, std::unique_ptr<narrowphase::NarrowPhase>, const BackendChoice&) {
-  throw std::invalid_argument(
-      "backend=opencl is not available: this build has CCDBENCH_WITH_OPENCL=OFF (install ocl-icd-opencl-dev "
-      "opencl-headers pocl-opencl-icd, which scripts/setup.sh does, and reconfigure)");
-}
-
-#endif
 
 }  // namespace ccd::strategies
