@@ -64,6 +64,8 @@ struct Passes {
   std::vector<strategies::StepResult> first;
   std::vector<std::string> digests;
   std::vector<std::vector<double>> step_ms;
+  /// Each pass's start: making the strategy and its init on the first frame, ms.
+  std::vector<double> setup_ms;
   std::map<std::string, std::vector<double>> stage_ms;
   /// Each timed step's ms less the sum of its own stages, over every pass: the time no stage names (the summary's
   /// ms_per_step_mean and stage_ms_mean are of medians and of means, and their difference is not this).
@@ -88,6 +90,7 @@ void not_deterministic(const CellContext& cell, Passes& passes, std::size_t k, c
 /// One timed pass over every step; the first keeps its answers, later ones are compared with them.
 void time_pass(const CellContext& cell, Passes& passes, int repeat, const CellProgress& progress, const std::string& planned_name) {
   const Scene& scene = cell.data.sequence.scene();
+  const auto setup = std::chrono::steady_clock::now();
   auto strategy = strategies::make_strategy(cell.spec);
   passes.resolved = strategy->name();
   if (!planned_name.empty() && passes.resolved != planned_name) {
@@ -98,6 +101,7 @@ void time_pass(const CellContext& cell, Passes& passes, int repeat, const CellPr
   for (const auto& [name, value] : strategy->provenance()) passes.environment.provenance[name] = value;
   strategy->name_scene(cell.data.label);
   strategy->init(scene, cell.data.frames[0]);
+  passes.setup_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - setup).count());
   for (std::size_t k = 0; k < cell.steps; ++k) {
     const StepView view{&scene, k, cell.data.frames[k], cell.data.frames[k + 1]};
     plugin::set_activity("cell " + cell.data.label + " / " + cell.spec.label + ", pass " + std::to_string(repeat + 1) + ", step " +
@@ -318,6 +322,7 @@ void add_times(const CellContext& cell, const Passes& passes, const Totals& tota
   summary.ms_per_step = median(totals.medians);
   summary.ms_per_step_mean = std::accumulate(totals.medians.begin(), totals.medians.end(), 0.0) / steps;
   summary.unattributed_ms_mean = passes.unattributed_count ? passes.unattributed_sum / static_cast<double>(passes.unattributed_count) : 0.0;
+  summary.setup_ms = passes.setup_ms.empty() ? 0.0 : median(passes.setup_ms);
 }
 
 /// The summary's verdicts (with --verify exact): colliding, missed and why, false alarms, contact by objects, TOIs.

@@ -199,6 +199,7 @@ void to_json(json& j, const CellSummary& s) {
        {"stage_ms", s.stage_ms},
        {"stage_ms_mean", s.stage_ms_mean},
        {"unattributed_ms_mean", s.unattributed_ms_mean},
+       {"setup_ms", s.setup_ms},
        {"counters", counters},
        {"candidate_pairs", s.candidate_pairs},
        {"elementary_tests", s.elementary_tests},
@@ -257,6 +258,7 @@ void from_json(const json& j, CellSummary& s) {
   s.ms_per_step = j.value("ms_per_step", 0.0);
   s.ms_per_step_mean = j.value("ms_per_step_mean", s.ms_per_step);
   s.unattributed_ms_mean = j.value("unattributed_ms_mean", 0.0);
+  s.setup_ms = j.value("setup_ms", 0.0);
   s.ms_per_repeat = j.value("ms_per_repeat", std::vector<double>{});
   s.stage_ms = j.value("stage_ms", std::map<std::string, double>{});
   s.stage_ms_mean = j.value("stage_ms_mean", std::map<std::string, double>{});

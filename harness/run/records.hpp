@@ -107,6 +107,10 @@ struct CellSummary {
   double thickness = 0;
   std::string thickness_from;  // "scene" or "command line"
   double ms_per_step = 0, ms_per_step_mean = 0, unattributed_ms_mean = 0;
+  /// A cell's start, outside its timed steps: making the strategy and its init on the first frame (trees, an OpenCL
+  /// context, program and device buffers, a plugin's load or its child process), median over the passes, ms. What a
+  /// sweep of many short cells spends beside its steps.
+  double setup_ms = 0;
   std::vector<double> ms_per_repeat;
   std::map<std::string, double> stage_ms, stage_ms_mean;
   struct Counter {

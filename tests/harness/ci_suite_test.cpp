@@ -117,5 +117,32 @@ TEST(RunSummary, StrategyCountersHaveTheirMeanAndMaxOverTheSteps) {
   EXPECT_NEAR(summary["unattributed_ms_mean"].get<double>(), unattributed / static_cast<double>(steps.size()), 1e-9 * ms);
 }
 
+// A cell's start (making the strategy, its init on the first frame: apccd builds its hierarchies there) is timed
+// apart from its steps, in the summary that --json and results.jsonl both write.
+TEST(RunSummary, ACellsStartIsTimedApartFromItsSteps) {
+  testing::TempDir dir;
+  ::setenv("CCDBENCH_CACHE_DIR", dir.path().c_str(), 1);
+  RunOptions options;
+  options.scenes = {suite_scenes("ci").front()};
+  options.strategies = {strategies::parse_strategy_spec("apccd")};
+  options.verify = false;
+  options.repeats = 2;
+  options.out = dir.path() / "results";
+  const nlohmann::json summaries = summaries_json(run_benchmark(options).cells);
+  ::unsetenv("CCDBENCH_CACHE_DIR");
+  ASSERT_EQ(summaries.size(), 1u);
+  ASSERT_TRUE(summaries[0].contains("setup_ms") && summaries[0]["setup_ms"].is_number()) << summaries[0].dump();
+  EXPECT_GT(summaries[0]["setup_ms"].get<double>(), 0.0);
+  std::ifstream in(options.out / "results.jsonl");
+  std::size_t found = 0;
+  for (std::string line; std::getline(in, line);) {
+    const nlohmann::json record = nlohmann::json::parse(line);
+    if (record.value("record", "") != "summary") continue;
+    EXPECT_EQ(record["setup_ms"], summaries[0]["setup_ms"]);
+    ++found;
+  }
+  EXPECT_EQ(found, 1u);
+}
+
 }  // namespace
 }  // namespace ccd::harness
