@@ -172,35 +172,27 @@ CellSummary cell_summary(const ccd::harness::CellSummary& s) {
   return cell;
 }
 
+/// The API's score: made from the type, in this one place (Python's come from here too); the TOI error's statistics
+/// as the harness computes them for every reader.
 Score score_of(const ccd::harness::QueryScore& s) {
   Score score;
   score.method = s.method;
   score.file = s.file;
   score.queries = s.queries;
   score.reported = s.reported;
-  score.errors = s.faults;
-  score.unlabelled = s.unlabeled;
-  if (s.any_labelled()) {
-    score.positives = s.positives;
-    score.false_negatives = s.false_negatives;
-    score.false_positives = s.false_positives;
-  }
+  score.errors = s.errors;
+  score.unlabelled = s.unlabelled;
+  score.positives = s.labelled(s.positives);
+  score.false_negatives = s.labelled(s.false_negatives);
+  score.false_positives = s.labelled(s.false_positives);
   score.ns_per_query = s.ns_per_query;
   score.toi_checked = s.toi_checked;
   score.toi_late = s.toi_late;
   score.changed_between_passes = s.changed_between_passes;
-  if (s.with_toi && s.toi_checked > 0) {
-    std::vector<double> errors = s.toi_errors;
-    std::sort(errors.begin(), errors.end());
-    auto nearest_rank = [&](double p) {
-      const auto rank = static_cast<std::size_t>(std::ceil(p / 100.0 * static_cast<double>(errors.size())));
-      return errors[std::clamp<std::size_t>(rank, 1, errors.size()) - 1];
-    };
-    score.toi_error_max = s.toi_error_max;
-    if (!errors.empty()) {
-      score.toi_error_median = nearest_rank(50);
-      score.toi_error_p99 = nearest_rank(99);
-    }
+  if (const std::optional<ccd::harness::ToiErrors> errors = ccd::harness::toi_errors_of(s)) {
+    score.toi_error_max = errors->max;
+    score.toi_error_median = errors->median;
+    score.toi_error_p99 = errors->p99;
   }
   return score;
 }

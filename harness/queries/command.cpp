@@ -87,7 +87,7 @@ std::optional<std::vector<QueryScore>> score_over_ranks(const std::vector<datase
     const std::size_t left = scale_exponent != 0 ? scale_query_files(one, scale_exponent) : 0;
     nlohmann::json message = {{"left_out", left}, {"scores", nlohmann::json::array()}};
     if (!methods) methods = make_query_methods(request.methods);
-    for (const QueryScore& score : score_query_file(one.front(), request, *methods)) message["scores"].push_back(to_message(score));
+    for (const QueryScore& score : score_query_file(one.front(), request, *methods)) message["scores"].push_back(score);
     return message.dump();
   };
   if (rank_info().rank != 0) {
@@ -106,7 +106,7 @@ std::optional<std::vector<QueryScore>> score_over_ranks(const std::vector<datase
   std::vector<QueryScore> scores;
   for (const nlohmann::json& result : results) {
     left_out += result.at("left_out").get<std::size_t>();
-    for (const nlohmann::json& score : result.at("scores")) scores.push_back(from_message(score));
+    for (const nlohmann::json& score : result.at("scores")) scores.push_back(score.get<QueryScore>());
   }
   append_query_totals(scores, request.methods);
   return scores;
@@ -122,8 +122,8 @@ void report_query_scores(const std::vector<QueryScore>& scores, const std::vecto
     write_query_answers(*options.write_answers, scores);
     out << "answers: " << options.write_answers->string() << "\n";
   }
-  if (const QueryScore& total = scores.back(); total.unlabeled > 0) {
-    out << "note: " << total.unlabeled << " of " << total.queries
+  if (const QueryScore& total = scores.back(); total.unlabelled > 0) {
+    out << "note: " << total.unlabelled << " of " << total.queries
         << " queries had no truth label: FN and FP count the labelled ones only ('-': none labelled).\n";
   }
   // Labels are for thickness 0 unless a file says another (docs/DESIGN.md §7): scored at another δ, a method may
@@ -142,7 +142,7 @@ void report_query_scores(const std::vector<QueryScore>& scores, const std::vecto
     // Every record says where and how it was made, as run's do.
     const nlohmann::json made = environment();
     for (const QueryScore& score : scores) {
-      rows.push_back(to_json(score));
+      rows.push_back(score_row(score));
       rows.back().update(made);
     }
     datasets::write_json_file(*options.json, rows);

@@ -1,5 +1,5 @@
-// QueryScore as records leave the process: the message ranks exchange (to_message, from_message), the table, the
-// answer file --write-answers writes, and the report page. Scoring itself is scoring.cpp's.
+// QueryScore as records leave the process: its one serializer (to_json, from_json: what ranks exchange), the
+// table, the answer file --write-answers writes, and the report page. Scoring itself is scoring.cpp's.
 #include "datasets/atomic_file.hpp"
 #include "datasets/content_hash.hpp"
 #include "datasets/rational.hpp"
@@ -39,7 +39,7 @@ std::vector<double> numbers_of(const nlohmann::json& list) {
 }
 nlohmann::json fault_list(const QueryScore& s) {
   nlohmann::json list = nlohmann::json::array();
-  for (const QueryScore::Fault& f : s.fault_queries) list.push_back({f.index, f.line, f.message});
+  for (const QueryScore::ErrorQuery& e : s.error_queries) list.push_back({e.index, e.line, e.message});
   return list;
 }
 nlohmann::json label_list(const QueryScore& s) {
@@ -57,34 +57,34 @@ nlohmann::json answer_list(const QueryScore& s) {
 
 }  // namespace
 
-nlohmann::json to_message(const QueryScore& s) {
-  return {{"method", s.method},
-          {"file", s.file},
-          {"thickness", s.thickness},
-          {"queries", s.queries},
-          {"positives", s.positives},
-          {"reported", s.reported},
-          {"false_negatives", s.false_negatives},
-          {"false_positives", s.false_positives},
-          {"unlabeled", s.unlabeled},
-          {"ns_per_query", s.ns_per_query},
-          {"with_toi", s.with_toi},
-          {"toi_checked", s.toi_checked},
-          {"toi_late", s.toi_late},
-          {"toi_error_max", s.toi_error_max},
-          {"toi_error_sum", s.toi_error_sum},
-          {"toi_errors", s.toi_errors},
-          {"false_negative_lines", s.false_negative_lines},
-          {"faults", s.faults},
-          {"changed_between_passes", s.changed_between_passes},
-          {"fault_queries", fault_list(s)},
-          {"answers", answer_list(s)},
-          {"exact_toi", number_list(s.exact_toi)},
-          {"labels", label_list(s)}};
+void to_json(nlohmann::json& j, const QueryScore& s) {
+  j = {{"method", s.method},
+       {"file", s.file},
+       {"thickness", s.thickness},
+       {"queries", s.queries},
+       {"positives", s.positives},
+       {"reported", s.reported},
+       {"false_negatives", s.false_negatives},
+       {"false_positives", s.false_positives},
+       {"unlabelled", s.unlabelled},
+       {"ns_per_query", s.ns_per_query},
+       {"with_toi", s.with_toi},
+       {"toi_checked", s.toi_checked},
+       {"toi_late", s.toi_late},
+       {"toi_error_max", s.toi_error_max},
+       {"toi_error_sum", s.toi_error_sum},
+       {"toi_errors", s.toi_errors},
+       {"false_negative_lines", s.false_negative_lines},
+       {"errors", s.errors},
+       {"changed_between_passes", s.changed_between_passes},
+       {"error_queries", fault_list(s)},
+       {"answers", answer_list(s)},
+       {"exact_toi", number_list(s.exact_toi)},
+       {"labels", label_list(s)}};
 }
 
-QueryScore from_message(const nlohmann::json& m) {
-  QueryScore s;
+void from_json(const nlohmann::json& m, QueryScore& s) {
+  s = QueryScore();
   s.method = m.at("method");
   s.file = m.at("file");
   s.thickness = m.at("thickness");
@@ -93,7 +93,7 @@ QueryScore from_message(const nlohmann::json& m) {
   s.reported = m.at("reported");
   s.false_negatives = m.at("false_negatives");
   s.false_positives = m.at("false_positives");
-  s.unlabeled = m.at("unlabeled");
+  s.unlabelled = m.at("unlabelled");
   s.ns_per_query = m.at("ns_per_query");
   s.with_toi = m.at("with_toi");
   s.toi_checked = m.at("toi_checked");
@@ -102,16 +102,15 @@ QueryScore from_message(const nlohmann::json& m) {
   s.toi_error_sum = m.at("toi_error_sum");
   s.toi_errors = m.at("toi_errors").get<std::vector<double>>();
   s.false_negative_lines = m.at("false_negative_lines").get<std::vector<std::size_t>>();
-  s.faults = m.at("faults");
+  s.errors = m.at("errors");
   s.changed_between_passes = m.at("changed_between_passes");
-  for (const nlohmann::json& f : m.at("fault_queries")) s.fault_queries.push_back({f.at(0), f.at(1), f.at(2)});
+  for (const nlohmann::json& e : m.at("error_queries")) s.error_queries.push_back({e.at(0), e.at(1), e.at(2)});
   for (const nlohmann::json& a : m.at("answers")) {
     s.answers.push_back(
         {a.at(0).get<bool>(), a.at(1).is_null() ? std::numeric_limits<double>::quiet_NaN() : a.at(1).get<double>(), a.at(2).get<std::string>()});
   }
   s.exact_toi = numbers_of(m.at("exact_toi"));
   for (const nlohmann::json& label : m.at("labels")) s.labels.push_back(label.is_null() ? std::nullopt : std::optional<bool>(label.get<bool>()));
-  return s;
 }
 
 namespace {
@@ -130,7 +129,7 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
   const bool with_toi = !scores.empty() && scores.front().with_toi;
   // An error is its own outcome (a method that gave no answer): a column wherever a method can give one.
   const bool with_errors = std::any_of(scores.begin(), scores.end(),
-                                       [](const QueryScore& s) { return s.faults > 0 || plugin::names_plugin(s.method) || names_answers(s.method); });
+                                       [](const QueryScore& s) { return s.errors > 0 || plugin::names_plugin(s.method) || names_answers(s.method); });
   if (with_errors) table.add_column({"errors", Align::right});
   const bool with_changes = std::any_of(scores.begin(), scores.end(), [](const QueryScore& s) { return s.changed_between_passes > 0; });
   if (with_changes) table.add_column({"changed between passes", Align::right});
@@ -146,7 +145,7 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
                                     labelled_text(s, s.false_negatives),
                                     labelled_text(s, s.false_positives),
                                     fixed(s.ns_per_query, 0)};
-    if (with_errors) row.push_back(std::to_string(s.faults));
+    if (with_errors) row.push_back(std::to_string(s.errors));
     if (with_changes) row.push_back(std::to_string(s.changed_between_passes));
     if (with_toi && s.toi_checked == 0) {
       // Nothing checked (no TOI reported on a colliding query): '-', never a 0 nobody measured.
@@ -203,7 +202,7 @@ void write_query_faults(const std::vector<QueryScore>& scores, const std::vector
                         int scale_exponent, std::ostream& out) {
   std::map<std::filesystem::path, std::string> notes_of_folder;
   for (const QueryScore& score : scores) {
-    if (score.file == "(all)" || score.fault_queries.empty()) continue;
+    if (score.file == "(all)" || score.error_queries.empty()) continue;
     const auto file = std::find_if(files.begin(), files.end(), [&](const datasets::QueryFile& f) { return f.path.string() == score.file; });
     if (file == files.end()) continue;
     // A method's folder: its name's start and a hash of the whole (two specs that differ late never share one).
@@ -214,7 +213,7 @@ void write_query_faults(const std::vector<QueryScore>& scores, const std::vector
     kept[0].kind = file->kind;
     kept[0].labels_thickness = file->labels_thickness;
     std::string notes;
-    for (const QueryScore::Fault& fault : score.fault_queries) {
+    for (const QueryScore::ErrorQuery& fault : score.error_queries) {
       kept[0].queries.push_back(file->queries.at(fault.index));
       notes += score.file + " query " + std::to_string(fault.index + 1) + " (index " + std::to_string(fault.index) + ", line " +
                std::to_string(fault.line) + "; query " + std::to_string(kept[0].queries.size()) + " of WRITTEN): " + fault.message + "\n";
@@ -235,8 +234,8 @@ void write_query_faults(const std::vector<QueryScore>& scores, const std::vector
       at += written.string().size();
     }
     notes_of_folder[folder] += notes + "  replay: " + replay + "\n";
-    out << score.method << ": " << score.faults << " of " << score.queries << " queries of " << score.file << " got no answer; first: query "
-        << score.fault_queries.front().index + 1 << " (line " << score.fault_queries.front().line << "): " << score.fault_queries.front().message
+    out << score.method << ": " << score.errors << " of " << score.queries << " queries of " << score.file << " got no answer; first: query "
+        << score.error_queries.front().index + 1 << " (line " << score.error_queries.front().line << "): " << score.error_queries.front().message
         << "\n  written to " << written.string() << " (replay: " << replay << ")\n";
   }
   for (const auto& [folder, notes] : notes_of_folder) {
@@ -248,7 +247,7 @@ void write_query_faults(const std::vector<QueryScore>& scores, const std::vector
 
 void write_query_report(const std::filesystem::path& directory, const std::vector<QueryScore>& scores, const std::string& command) {
   nlohmann::json rows = nlohmann::json::array();
-  for (const QueryScore& score : scores) rows.push_back(to_json(score));
+  for (const QueryScore& score : scores) rows.push_back(score_row(score));
   datasets::write_json_file(directory / "scores.json", rows);
   datasets::AtomicFile file(directory / "README.md", std::ios::out);
   std::ostream& out = file.stream();

@@ -41,38 +41,46 @@ std::size_t changed_answers(const std::vector<QueryAnswer>& again, const std::ve
   return changed;
 }
 
-/// A count over the labelled queries, or null (unknown) when none is labelled: never a 0 nobody measured.
-nlohmann::json labelled_count(const QueryScore& s, std::size_t count) { return s.any_labelled() ? nlohmann::json(count) : nlohmann::json(nullptr); }
+/// A value or null (unknown).
+template <class T>
+nlohmann::json or_null(const std::optional<T>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
 
 }  // namespace
 
-nlohmann::json to_json(const QueryScore& s) {
+std::optional<ToiErrors> toi_errors_of(const QueryScore& s) {
+  if (!s.with_toi || s.toi_checked == 0) return std::nullopt;
+  return ToiErrors{s.toi_error_max, s.toi_error_sum / static_cast<double>(s.toi_checked), percentile(s.toi_errors, 50), percentile(s.toi_errors, 99)};
+}
+
+nlohmann::json score_row(const QueryScore& s) {
   nlohmann::json row = {{"method", s.method},
                         {"file", s.file},
                         {"thickness", s.thickness},
                         {"queries", s.queries},
-                        {"positives", labelled_count(s, s.positives)},
+                        {"positives", or_null(s.labelled(s.positives))},
                         {"reported", s.reported},
-                        {"false_negatives", labelled_count(s, s.false_negatives)},
-                        {"false_positives", labelled_count(s, s.false_positives)},
-                        {"unlabeled", s.unlabeled},
+                        {"false_negatives", or_null(s.labelled(s.false_negatives))},
+                        {"false_positives", or_null(s.labelled(s.false_positives))},
+                        {"unlabelled", s.unlabelled},
                         {"ns_per_query", s.ns_per_query},
                         {"false_negative_lines", s.false_negative_lines},
-                        {"errors", s.faults},
+                        {"errors", s.errors},
                         {"changed_between_passes", s.changed_between_passes}};
-  if (!s.fault_queries.empty()) {
+  if (!s.error_queries.empty()) {
     row["error_queries"] = nlohmann::json::array();
-    for (const QueryScore::Fault& f : s.fault_queries) row["error_queries"].push_back({{"index", f.index}, {"line", f.line}, {"message", f.message}});
+    for (const QueryScore::ErrorQuery& e : s.error_queries)
+      row["error_queries"].push_back({{"index", e.index}, {"line", e.line}, {"message", e.message}});
   }
   if (s.with_toi) {
-    // With no TOI checked the error is unknown: null, never a 0 nobody measured.
-    auto checked = [&](double value) { return s.toi_checked ? nlohmann::json(value) : nlohmann::json(nullptr); };
+    const std::optional<ToiErrors> errors = toi_errors_of(s);
     row["toi_checked"] = s.toi_checked;
     row["toi_late"] = s.toi_late;
-    row["toi_error_max"] = checked(s.toi_error_max);
-    row["toi_error_mean"] = checked(s.toi_checked ? s.toi_error_sum / static_cast<double>(s.toi_checked) : 0.0);
-    row["toi_error_median"] = checked(percentile(s.toi_errors, 50));
-    row["toi_error_p99"] = checked(percentile(s.toi_errors, 99));
+    row["toi_error_max"] = errors ? nlohmann::json(errors->max) : nlohmann::json(nullptr);
+    row["toi_error_mean"] = errors ? nlohmann::json(errors->mean) : nlohmann::json(nullptr);
+    row["toi_error_median"] = errors ? nlohmann::json(errors->median) : nlohmann::json(nullptr);
+    row["toi_error_p99"] = errors ? nlohmann::json(errors->p99) : nlohmann::json(nullptr);
   }
   return row;
 }
@@ -131,8 +139,8 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
         const datasets::Query& query = file.queries[q];
         const bool reported = answers[q].collides;
         if (!answers[q].fault.empty()) {
-          score.faults += 1;
-          if (score.fault_queries.size() < kKeptQueryFaults) score.fault_queries.push_back({q, query.first_line, answers[q].fault});
+          score.errors += 1;
+          if (score.error_queries.size() < kKeptQueryFaults) score.error_queries.push_back({q, query.first_line, answers[q].fault});
         }
         // Lateness is exact: exact_toi is the largest double not after the earliest contact.
         if (request.toi && reported && !std::isnan(exact_toi[q]) && !std::isnan(answers[q].toi)) {
@@ -146,7 +154,7 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
         score.queries += 1;
         score.reported += reported ? 1 : 0;
         if (!query.truth) {
-          score.unlabeled += 1;
+          score.unlabelled += 1;
           continue;
         }
         score.positives += *query.truth ? 1 : 0;
@@ -187,14 +195,14 @@ void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std:
     total.reported += score.reported;
     total.false_negatives += score.false_negatives;
     total.false_positives += score.false_positives;
-    total.unlabeled += score.unlabeled;
+    total.unlabelled += score.unlabelled;
     total.with_toi = score.with_toi;
     total.toi_checked += score.toi_checked;
     total.toi_late += score.toi_late;
     total.toi_error_max = std::max(total.toi_error_max, score.toi_error_max);
     total.toi_error_sum += score.toi_error_sum;
     total.toi_errors.insert(total.toi_errors.end(), score.toi_errors.begin(), score.toi_errors.end());
-    total.faults += score.faults;
+    total.errors += score.errors;
     total.changed_between_passes += score.changed_between_passes;
     total_nanoseconds[score.method] += score.ns_per_query * static_cast<double>(score.queries);
   }

@@ -30,8 +30,10 @@ struct QueryScore {
   std::size_t false_positives = 0;
   /// Queries without a truth label: counted in `reported` but in neither error count. positives, FN and FP count
   /// the labelled queries only; with none labelled they are unknown, shown as '-' and written as null.
-  std::size_t unlabeled = 0;
-  bool any_labelled() const { return unlabeled < queries; }
+  std::size_t unlabelled = 0;
+  bool any_labelled() const { return unlabelled < queries; }
+  /// A count over the labelled queries (positives, FN, FP), none when no query is labelled.
+  std::optional<std::size_t> labelled(std::size_t count) const { return any_labelled() ? std::optional<std::size_t>(count) : std::nullopt; }
   /// Median over repeats of (time for the file / queries).
   double ns_per_query = 0.0;
   /// With TOIs (QueryScoringRequest::toi), over the queries that collide and that the method reports with a time:
@@ -46,13 +48,13 @@ struct QueryScore {
   /// First lines of the missed queries (for the regression library), at most 20.
   std::vector<std::size_t> false_negative_lines;
   /// Queries the method gave no answer to (QueryAnswer::fault), and the first kKeptQueryFaults of them.
-  std::size_t faults = 0;
-  struct Fault {
+  std::size_t errors = 0;
+  struct ErrorQuery {
     std::size_t index = 0;
     std::size_t line = 0;
     std::string message;
   };
-  std::vector<Fault> fault_queries;
+  std::vector<ErrorQuery> error_queries;
   /// Queries whose answer (outcome, TOI bits, or whether it was an error) differed between timed passes
   /// (--repeat N > 1): a method whose answers depend on what it was asked before.
   std::size_t changed_between_passes = 0;
@@ -63,10 +65,19 @@ struct QueryScore {
   std::vector<std::optional<bool>> labels;
 };
 
-/// Faults a score keeps whole (the count covers every one).
+/// Queries without an answer a score keeps whole (its count of errors covers every one).
 inline constexpr std::size_t kKeptQueryFaults = 20;
 
-nlohmann::json to_json(const QueryScore& score);
+/// The TOI error over a score's checked queries: max, mean, and the median and 99th percentile by nearest rank
+/// (harness/statistics.hpp); none without TOIs or with none checked (never a 0 nobody measured).
+struct ToiErrors {
+  double max = 0, mean = 0, median = 0, p99 = 0;
+};
+std::optional<ToiErrors> toi_errors_of(const QueryScore& score);
+
+/// A score as `queries --json` and the report's scores.json write it, a reporter over the type: counts over the
+/// labelled queries null when none is labelled, the TOI error's statistics null when none was checked.
+nlohmann::json score_row(const QueryScore& score);
 
 struct QueryScoringRequest {
   std::vector<std::string> methods;
@@ -109,9 +120,10 @@ std::vector<QueryScore> score_query_file(const datasets::QueryFile& file, const 
 /// query is weighted by each file's queries.
 void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std::string>& methods);
 
-/// A score whole (sums, not means), for sending between MPI ranks; from_message reads it back.
-nlohmann::json to_message(const QueryScore& score);
-QueryScore from_message(const nlohmann::json& message);
+/// A score whole (sums, not means, every query's answer): its one serializer and reader, what MPI ranks exchange
+/// (queries/records.cpp). What `queries --json` and the report write is a reporter over it (score_row).
+void to_json(nlohmann::json& j, const QueryScore& score);
+void from_json(const nlohmann::json& j, QueryScore& score);
 
 /// Scores every method on every file (each method made once); returns per-file scores followed by one "(all)" score
 /// per method. `moved(done, count)` is told how many files are done, a fraction of the one under way included.

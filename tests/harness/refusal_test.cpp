@@ -47,7 +47,7 @@ TEST_F(Refusal, QueriesWithoutLabelsAreAnErrorUnlessAllowedAndThenNeverScoreZero
     EXPECT_TRUE(score["false_negatives"].is_null()) << score.dump();
     EXPECT_TRUE(score["false_positives"].is_null()) << score.dump();
     EXPECT_TRUE(score["positives"].is_null()) << score.dump();
-    EXPECT_EQ(score["unlabeled"], 1);
+    EXPECT_EQ(score["unlabelled"], 1);
   }
   // The table shows '-' where the count is unknown.
   const std::string table_row = allowed.output.substr(allowed.output.find("(all)"));
