@@ -421,14 +421,10 @@ std::vector<CellSummary> run(const RunRequest& request) {
       options.scenes.push_back({scene.label(), [file] { return ccd::datasets::load_scene_file(file); }});
     }
     if (options.scenes.empty()) throw std::invalid_argument("a run needs at least one scene");
-    for (const std::string& spec : request.strategies) {
-      options.strategies.push_back(ccd::strategies::parse_strategy_spec(spec));
-      ccd::strategies::validate(options.strategies.back());
-    }
     options.thicknesses = request.thicknesses;
     options.verify = request.verify;
     options.toi = request.toi;
-    if (options.toi && !options.verify) throw std::invalid_argument("TOIs are compared with the exact truth: toi needs verify");
+    ccd::harness::complete_run_request(options, request.strategies);
     options.repeats = request.repeats;
     options.max_steps = request.max_steps;
     options.out = std::filesystem::absolute(request.out);

@@ -414,6 +414,19 @@ RunResult Benchmark::result() const {
 
 }  // namespace
 
+void complete_run_request(RunOptions& options, const std::vector<std::string>& specs) {
+  for (const std::string& text : specs) {
+    try {
+      options.strategies.push_back(strategies::parse_strategy_spec(text));
+      strategies::validate(options.strategies.back());
+    } catch (const std::invalid_argument& error) {
+      throw RunRequestRefused("strategy " + text, error.what());
+    }
+  }
+  if (options.toi && !options.verify)
+    throw RunRequestRefused("toi", "TOIs are compared with the exact truth: they need verification (--verify exact; the C++ API's verify)");
+}
+
 void prepare_run_outputs(const RunOptions& options) {
   if (rank_info().rank != 0) return;  // only rank 0 writes them
   datasets::require_writable_directory(options.out);

@@ -12,6 +12,7 @@
 #include <functional>
 #include <iosfwd>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,17 @@ std::vector<SceneSource> suite_scenes(const std::string& suite);
 
 /// The label of a scene given as a file: the folder's name for FOLDER or FOLDER/scene.json, else the file's name.
 std::string scene_file_label(const std::filesystem::path& path);
+
+/// A run asked for that cannot be: what was asked ("strategy SPEC", "toi") and why.
+struct RunRequestRefused : std::invalid_argument {
+  RunRequestRefused(std::string asked, const std::string& why) : std::invalid_argument(why), asked(std::move(asked)) {}
+  std::string asked;
+};
+
+/// The one place a run's strategies are parsed and its request checked, for the command line and the C++ API alike:
+/// each spec parsed and validated without making anything (every cell carries its spec from here), into
+/// options.strategies; TOIs only with verification. @throws RunRequestRefused naming the spec or "toi".
+void complete_run_request(RunOptions& options, const std::vector<std::string>& specs);
 
 /// Checks that every output of a run can be written (rank 0's: only it writes them), then removes the results the
 /// run writes when it ends (--json, --report's files), so that a run that stops before then leaves none that `check`

@@ -139,17 +139,12 @@ int run_run(RunCommandOptions& o, const Shared& shared) {
   if (!o.answer_folders.empty() && o.app->count("--strategy") == 0) specs.clear();
   for (const std::string& folder : o.answer_folders) specs.push_back("answers:" + folder);
   harness::prepare_run_outputs(run);
-  // The one place a run's specs are parsed: every cell carries its spec from here (validated without making anything).
-  for (const std::string& text : specs) {
-    try {
-      run.strategies.push_back(strategies::parse_strategy_spec(text));
-      strategies::validate(run.strategies.back());
-    } catch (const std::invalid_argument& error) {
-      return refuse("--strategy " + text, error.what());
-    }
-  }
   run.verify = o.verify == "exact";
-  if (run.toi && !run.verify) return refuse("--toi", "TOIs are compared with the exact truth: it needs --verify exact");
+  try {
+    harness::complete_run_request(run, specs);
+  } catch (const harness::RunRequestRefused& refused) {
+    return refuse("--" + refused.asked, refused.what());
+  }
   if (run.interleave && run.repeats < 6 && harness::rank_info().rank == 0) {
     // The exact signed-rank test's smallest p over R pairs is 2/2^R: below 6 no time change can be called at 0.05.
     std::cerr << "run: warning: --interleave with " << run.repeats << " pass" << (run.repeats == 1 ? "" : "es")
