@@ -151,7 +151,7 @@ CellSummary cell_summary(const ccd::harness::CellSummary& s) {
   cell.strategy = s.strategy;
   cell.spec = s.spec;
   cell.thickness = s.thickness;
-  cell.thickness_from_scene = s.thickness_from == "scene";
+  cell.thickness_from_scene = s.thickness_from_scene;
   cell.steps = s.steps;
   cell.reported = s.reported;
   cell.errors = s.errors;

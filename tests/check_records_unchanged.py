@@ -12,8 +12,11 @@ is in MASKED: a field's value there is replaced by "(masked)", so its presence i
 sorted by scene, δ, strategy, kind and step (results.jsonl orders them by when each cell finished). A masked
 field added since the recording (a new time, as setup_ms) is taken as it is: its value would not be compared.
 
-The recorded files were written by main as it was before issue 64 (71f1e20) and must not be rewritten to make a
-change pass: a difference is a change of behaviour, which a change meant to be one states and records again."""
+The same command is then run again without --fresh: every cell is kept, and the summaries must be the first run's,
+marked resumed and without a speed-up.
+
+The recorded files were written by main as it was before issue 64 (71f1e20, `--record`) and are rewritten only for a
+change of behaviour meant as one, which its commit states: a difference is a change of behaviour."""
 
 import gzip
 import json
@@ -31,15 +34,28 @@ MASKED = {
     "stage_ms_mean", "speedup", "setup_ms", "host_peak_bytes", "child_peak_bytes", "finished_at", "machine", "build_type",
     "git_revision", "executable", "provenance", "cell",
 }
+# Masked whole, shape and all (the rest keep their shape: a map's names, a list's length).
+MASKED_WHOLE = {"provenance"}
 # Fields of a cell's key that are provenance.
 MASKED_IN_KEY = {"executable"}
+
+
+def masked_value(value):
+    """A time's value masked, its shape kept: a map's names (the stages), a list's length (the passes)."""
+    if isinstance(value, dict):
+        return {k: "(masked)" for k in value}
+    if isinstance(value, list):
+        return ["(masked)"] * len(value)
+    return "(masked)"
 
 
 def masked(record):
     out = {}
     for name, value in record.items():
-        if name in MASKED:
+        if name in MASKED_WHOLE:
             out[name] = "(masked)"
+        elif name in MASKED:
+            out[name] = masked_value(value)
         elif name == "key" and isinstance(value, dict):
             out[name] = {k: ("(masked)" if k in MASKED_IN_KEY else v) for k, v in value.items()}
         else:
@@ -52,16 +68,16 @@ def order(record):
             record.get("step", -1))
 
 
-def run(ccdbench, work):
+def run(ccdbench, work, fresh=True, name="run.json"):
     cache = os.path.join(work, "cache")
     env = dict(os.environ, CCDBENCH_CACHE_DIR=cache)
     command = [ccdbench, "--threads", "2", "run", "--suite", "ci", "--strategy", STRATEGIES, "--thickness", "scene,0", "--toi",
-               "--repeat", "2", "--fresh", "--json", os.path.join(work, "run.json"), "--out", os.path.join(work, "out")]
+               "--repeat", "2"] + (["--fresh"] if fresh else []) + ["--json", os.path.join(work, name), "--out", os.path.join(work, "out")]
     print("records: " + " ".join(command), flush=True)
     done = subprocess.run(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if done.returncode != 0:
         sys.exit("records: the run failed (exit %d):\n%s" % (done.returncode, done.stdout))
-    with open(os.path.join(work, "run.json")) as f:
+    with open(os.path.join(work, name)) as f:
         summaries = [masked(s) for s in json.load(f)]
     with open(os.path.join(work, "out", "results.jsonl")) as f:
         lines = sorted((masked(json.loads(line)) for line in f if line.strip()), key=order)
@@ -108,6 +124,20 @@ def main(argv):
     ccdbench, recorded = args
     with tempfile.TemporaryDirectory() as work:
         now = run(ccdbench, work)
+        # The same command again keeps every cell (read back, its spec set, written to --json): the summaries are
+        # the first run's, marked resumed and without a speed-up (none between cells of two invocations).
+        kept = None if record else run(ccdbench, work, fresh=False, name="kept.json")
+    if kept:
+        expected = [dict(s, resumed=True, speedup_over=None) for s in now["run.json"]]
+        for i, (a, b) in enumerate(zip(expected, kept["run.json"])):
+            found = first_difference("", a, b)
+            if found:
+                print("records: the kept run's summary %d (%s)%s" % (i + 1, describe(a), found))
+                return 1
+        if len(expected) != len(kept["run.json"]):
+            print("records: the kept run has %d summaries, the first %d" % (len(kept["run.json"]), len(expected)))
+            return 1
+        print("records: a second run kept all %d cells and gave the first run's summaries, resumed" % len(expected))
     if record:
         os.makedirs(recorded, exist_ok=True)
         for name, records in now.items():

@@ -37,11 +37,6 @@ std::vector<double> numbers_of(const nlohmann::json& list) {
   for (const nlohmann::json& v : list) values.push_back(v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>());
   return values;
 }
-nlohmann::json fault_list(const QueryScore& s) {
-  nlohmann::json list = nlohmann::json::array();
-  for (const QueryScore::ErrorQuery& e : s.error_queries) list.push_back({e.index, e.line, e.message});
-  return list;
-}
 nlohmann::json label_list(const QueryScore& s) {
   nlohmann::json list = nlohmann::json::array();
   for (const std::optional<bool>& label : s.labels) list.push_back(label ? nlohmann::json(*label) : nlohmann::json(nullptr));
@@ -56,6 +51,14 @@ nlohmann::json answer_list(const QueryScore& s) {
 }
 
 }  // namespace
+
+void to_json(nlohmann::json& j, const QueryScore::ErrorQuery& e) { j = {{"index", e.index}, {"line", e.line}, {"message", e.message}}; }
+
+void from_json(const nlohmann::json& j, QueryScore::ErrorQuery& e) {
+  e.index = j.at("index").get<std::size_t>();
+  e.line = j.at("line").get<std::size_t>();
+  e.message = j.at("message").get<std::string>();
+}
 
 void to_json(nlohmann::json& j, const QueryScore& s) {
   j = {{"method", s.method},
@@ -77,7 +80,7 @@ void to_json(nlohmann::json& j, const QueryScore& s) {
        {"false_negative_lines", s.false_negative_lines},
        {"errors", s.errors},
        {"changed_between_passes", s.changed_between_passes},
-       {"error_queries", fault_list(s)},
+       {"error_queries", s.error_queries},
        {"answers", answer_list(s)},
        {"exact_toi", number_list(s.exact_toi)},
        {"labels", label_list(s)}};
@@ -104,7 +107,7 @@ void from_json(const nlohmann::json& m, QueryScore& s) {
   s.false_negative_lines = m.at("false_negative_lines").get<std::vector<std::size_t>>();
   s.errors = m.at("errors");
   s.changed_between_passes = m.at("changed_between_passes");
-  for (const nlohmann::json& e : m.at("error_queries")) s.error_queries.push_back({e.at(0), e.at(1), e.at(2)});
+  s.error_queries = m.at("error_queries").get<std::vector<QueryScore::ErrorQuery>>();
   for (const nlohmann::json& a : m.at("answers")) {
     s.answers.push_back(
         {a.at(0).get<bool>(), a.at(1).is_null() ? std::numeric_limits<double>::quiet_NaN() : a.at(1).get<double>(), a.at(2).get<std::string>()});
@@ -147,15 +150,13 @@ Table query_table(const std::vector<QueryScore>& scores, bool markdown) {
                                     fixed(s.ns_per_query, 0)};
     if (with_errors) row.push_back(std::to_string(s.errors));
     if (with_changes) row.push_back(std::to_string(s.changed_between_passes));
-    if (with_toi && s.toi_checked == 0) {
+    const std::optional<ToiErrors> errors = toi_errors_of(s);
+    if (with_toi && !errors) {
       // Nothing checked (no TOI reported on a colliding query): '-', never a 0 nobody measured.
       for (int k = 0; k < 5; ++k) row.push_back("-");
     } else if (with_toi) {
       row.push_back(std::to_string(s.toi_late));
-      row.push_back(significant(s.toi_error_sum / static_cast<double>(s.toi_checked), 3));
-      row.push_back(significant(percentile(s.toi_errors, 50), 3));
-      row.push_back(significant(percentile(s.toi_errors, 99), 3));
-      row.push_back(significant(s.toi_error_max, 3));
+      for (double value : {errors->mean, errors->median, errors->p99, errors->max}) row.push_back(significant(value, 3));
     }
     table.add_row(std::move(row));
   }

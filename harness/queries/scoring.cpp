@@ -68,11 +68,7 @@ nlohmann::json score_row(const QueryScore& s) {
                         {"false_negative_lines", s.false_negative_lines},
                         {"errors", s.errors},
                         {"changed_between_passes", s.changed_between_passes}};
-  if (!s.error_queries.empty()) {
-    row["error_queries"] = nlohmann::json::array();
-    for (const QueryScore::ErrorQuery& e : s.error_queries)
-      row["error_queries"].push_back({{"index", e.index}, {"line", e.line}, {"message", e.message}});
-  }
+  if (!s.error_queries.empty()) row["error_queries"] = s.error_queries;
   if (s.with_toi) {
     const std::optional<ToiErrors> errors = toi_errors_of(s);
     row["toi_checked"] = s.toi_checked;

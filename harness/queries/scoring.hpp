@@ -123,6 +123,8 @@ void append_query_totals(std::vector<QueryScore>& scores, const std::vector<std:
 /// A score whole (sums, not means, every query's answer): its one serializer and reader, what MPI ranks exchange
 /// (queries/records.cpp). What `queries --json` and the report write is a reporter over it (score_row).
 void to_json(nlohmann::json& j, const QueryScore& score);
+void to_json(nlohmann::json& j, const QueryScore::ErrorQuery& error);
+void from_json(const nlohmann::json& j, QueryScore::ErrorQuery& error);
 void from_json(const nlohmann::json& j, QueryScore& score);
 
 /// Scores every method on every file (each method made once); returns per-file scores followed by one "(all)" score

@@ -379,8 +379,8 @@ CellSummary cell_summary(const CellContext& cell, const Passes& passes, const Ju
   summary.host_peak_of = passes.peak_of_cell ? "cell" : "process";
   summary.child_peak_bytes = passes.child_peak;
   summary.reported = totals.reported;
-  summary.judged_by = cell.entry.judging == strategies::Judging::triangle_pairs ? "triangle pairs" : "elementary pairs";
-  summary.thickness_from = cell.data.thickness_from;
+  summary.judged_by = cell.entry.judging;
+  summary.thickness_from_scene = cell.data.thickness_from == "scene";
   summary.verified = cell.options.verify;
   summary.repeats = cell.options.repeats;
   summary.cell = std::filesystem::path(cell.cell_name).stem().string();

@@ -30,13 +30,34 @@ namespace {
 
 /// "fold / full / δ scene's 0.008" or "... / δ 0".
 std::string cell_name(const CellSummary& s, const std::string& spec) {
-  return s.scene + " / " + spec + " / δ " + (s.thickness_from == "scene" ? "scene's " : "") + significant(s.thickness, 6);
+  return s.scene + " / " + spec + " / δ " + (s.thickness_from_scene ? "scene's " : "") + significant(s.thickness, 6);
 }
 
 /// What matches a cell: scene, δ (the scene's own, or the number) and the spec.
 std::string match_key(const CellSummary& s, const std::string& spec) {
-  return s.scene + "|" + (s.thickness_from == "scene" ? std::string("scene") : json(s.thickness).dump()) + "|" + spec;
+  return s.scene + "|" + (s.thickness_from_scene ? std::string("scene") : json(s.thickness).dump()) + "|" + spec;
 }
+
+/// The measures compare shows, in its table's order (column, digits shown: -1 all; scale: what the value is divided
+/// by to be shown) and in --json, and those whose rise is a verdict that got worse. Every measure compare reads is
+/// one of these.
+struct ShownMeasure {
+  const Measure* measure;
+  const char* column;  // nullptr: in --json only
+  int digits;
+  double scale;
+  bool judged;
+};
+const std::vector<ShownMeasure> kShown = {{&measures::missed, "missed", -1, 1, true},
+                                          {&measures::errors, "errors", -1, 1, true},
+                                          {&measures::false_alarms, "false alarms", -1, 1, false},
+                                          {&measures::toi_late, "TOI late", -1, 1, true},
+                                          {&measures::toi_error_median, "TOI error p50", 3, 1, false},
+                                          {&measures::toi_error_p99, "p99", 3, 1, false},
+                                          {&measures::toi_error_max, nullptr, -1, 1, false},
+                                          {&measures::host_peak_bytes, "MiB host peak", 4, 1024.0 * 1024.0, false},
+                                          {&measures::device_bytes, nullptr, -1, 1, false},
+                                          {&measures::ms_per_step, "ms/step", 4, 1, false}};
 
 /// "3 → 4" (or "3" when equal, "-" when unknown on a side).
 std::string change(std::optional<double> before, std::optional<double> after, int digits = -1) {
@@ -52,7 +73,7 @@ std::string digest_in(const std::string& name) {
 }
 
 /// A missed pair's identity: its kind and ids.
-std::string pair_identity(const json& pair) { return pair.at("kind").get<std::string>() + pair.at("ids").dump(); }
+std::string pair_identity(const MissedPair& pair) { return pair.kind() + json(pair.ids).dump(); }
 
 /// The smallest two-sided p-value the exact test can give for samples of n and m: 2 / C(n + m, n).
 double smallest_p(std::size_t n, std::size_t m) {
@@ -70,7 +91,7 @@ struct CellComparison {
   std::vector<std::string> notes;
   std::vector<std::size_t> changed_steps;
   /// The pairs the head misses and the base did not, by step: the records as the head kept them (missed_pair_record).
-  std::vector<std::pair<std::size_t, json>> newly_missed;
+  std::vector<std::pair<std::size_t, MissedPair>> newly_missed;
   std::optional<RankTest> time_test;
   /// Its passes ran in turn with the other side's (one `run --interleave`): tested pair by pair, and gated.
   bool paired = false;
@@ -91,8 +112,9 @@ void compare_steps(const ResultSet& base, const ResultSet& head, CellComparison&
     if (base_step.answers.value_or("") != head_step.answers.value_or("")) cell.changed_steps.push_back(k);
     if (!head_step.verdict || !head_step.verdict->missed_pairs) continue;
     // Each side keeps only its first missed pairs (kKeptMissedPairs): beyond them a pair's status is not known.
-    const json kept_base = base_step.verdict ? base_step.verdict->missed_pairs.value_or(json::array()) : json::array();
-    const json& kept_head = *head_step.verdict->missed_pairs;
+    const std::vector<MissedPair> kept_base =
+        base_step.verdict ? base_step.verdict->missed_pairs.value_or(std::vector<MissedPair>()) : std::vector<MissedPair>();
+    const std::vector<MissedPair>& kept_head = *head_step.verdict->missed_pairs;
     // A step's missed count includes face-shape contacts, which are kept as no pair.
     auto pairs_missed = [](const StepRecord& step) {
       if (!step.verdict) return std::size_t{0};
@@ -103,8 +125,8 @@ void compare_steps(const ResultSet& base, const ResultSet& head, CellComparison&
       continue;
     }
     std::set<std::string> before;
-    for (const json& pair : kept_base) before.insert(pair_identity(pair));
-    for (const json& pair : kept_head) {
+    for (const MissedPair& pair : kept_base) before.insert(pair_identity(pair));
+    for (const MissedPair& pair : kept_head) {
       if (before.count(pair_identity(pair)) == 0) cell.newly_missed.emplace_back(k, pair);
     }
   }
@@ -129,7 +151,9 @@ CellComparison compare_cell(const ResultSet& base_set, const ResultSet& head_set
     cell.notes.push_back("not compared: " + cell.inputs_differ);
     return cell;
   }
-  for (const Measure* measure : {&measures::missed, &measures::errors, &measures::toi_late}) {
+  for (const ShownMeasure& shown : kShown) {
+    if (!shown.judged) continue;
+    const Measure* measure = shown.measure;
     const auto b = measure->of(base), h = measure->of(head);
     if (b && h && *h > *b) {
       cell.worse = true;
@@ -213,20 +237,14 @@ void judge_times(std::vector<CellComparison>& cells, const CompareOptions& optio
 
 Table comparison_table(const std::vector<CellComparison>& cells) {
   using Align = Table::Align;
-  Table table({{"cell"},
-               {"missed", Align::right},
-               {"errors", Align::right},
-               {"false alarms", Align::right},
-               {"TOI late", Align::right},
-               {"TOI error p50", Align::right},
-               {"p99", Align::right},
-               {"MiB host peak", Align::right},
-               {"ms/step", Align::right},
-               {"head/base", Align::right},
-               {"p (Holm)", Align::right},
-               {"verdict"}});
+  std::vector<Table::Column> columns = {{"cell"}};
+  for (const ShownMeasure& shown : kShown) {
+    if (shown.column) columns.push_back({shown.column, Align::right});
+  }
+  for (const char* column : {"head/base", "p (Holm)"}) columns.push_back({column, Align::right});
+  columns.push_back({"verdict"});
+  Table table(std::move(columns));
   for (const CellComparison& c : cells) {
-    auto mib = [](std::optional<double> bytes) { return bytes ? std::optional<double>(*bytes / (1024.0 * 1024.0)) : std::nullopt; };
     std::string verdict = c.worse ? "WORSE" : "same or better";
     if (!c.inputs_differ.empty()) {
       verdict = "NOT COMPARABLE: " + c.inputs_differ;
@@ -236,12 +254,16 @@ Table comparison_table(const std::vector<CellComparison>& cells) {
       verdict += c.slower ? ", slower beyond noise" : c.faster ? ", faster beyond noise" : ", time within noise";
       if (!c.paired && (c.slower || c.faster)) verdict += " (runs apart: not gated)";
     }
-    auto shown = [&](const Measure& m, int digits = -1) { return change(m.of(c.base), m.of(c.head), digits); };
-    table.add_row({c.name, shown(measures::missed), shown(measures::errors), shown(measures::false_alarms), shown(measures::toi_late),
-                   shown(measures::toi_error_median, 3), shown(measures::toi_error_p99, 3),
-                   change(mib(measures::host_peak_bytes.of(c.base)), mib(measures::host_peak_bytes.of(c.head)), 4), shown(measures::ms_per_step, 4),
-                   c.time_test ? fixed(c.ratio, 2) + "x" : "-", c.time_test ? significant(c.p_family, 2) + (c.paired ? " paired" : " apart") : "-",
-                   verdict});
+    std::vector<std::string> row = {c.name};
+    for (const ShownMeasure& shown : kShown) {
+      if (!shown.column) continue;
+      const auto scaled = [&](std::optional<double> v) { return v ? std::optional<double>(*v / shown.scale) : std::nullopt; };
+      row.push_back(change(scaled(shown.measure->of(c.base)), scaled(shown.measure->of(c.head)), shown.digits));
+    }
+    row.push_back(c.time_test ? fixed(c.ratio, 2) + "x" : "-");
+    row.push_back(c.time_test ? significant(c.p_family, 2) + (c.paired ? " paired" : " apart") : "-");
+    row.push_back(verdict);
+    table.add_row(std::move(row));
   }
   return table;
 }
@@ -259,7 +281,7 @@ std::string details(const std::vector<CellComparison>& cells, const std::map<std
       text << (c.changed_steps.size() > 20 ? " ..." : "") << "\n";
     }
     for (const auto& [step, pair] : c.newly_missed)
-      text << "  newly missed at step " << step << ": " << pair["kind"].get<std::string>() << " " << pair["ids"].dump() << "\n";
+      text << "  newly missed at step " << step << ": " << pair.kind() << " " << json(pair.ids).dump() << "\n";
     if (const auto it = written.find(c.name); it != written.end()) {
       // The pairs collide at the cell's δ: they are replayed at it.
       text << "  written to replay: ccdbench queries " << it->second.string() << " --thickness " << significant(c.head.thickness, 17) << "\n";
@@ -294,16 +316,16 @@ std::filesystem::path write_replay(const CellComparison& c, std::size_t number, 
   std::vector<datasets::Query> vertex_face, edge_edge;
   for (const auto& [step, pair] : c.newly_missed) {
     datasets::Query query;
-    const json& rows = pair["rows"];  // 24 finite numbers (checked when read)
+    const std::array<double, 24>& rows = pair.rows;  // 24 finite numbers (checked when read)
     for (int i = 0; i < 8; ++i) {
       for (int k = 0; k < 3; ++k) {
-        const double value = rows[static_cast<std::size_t>(3 * i + k)].get<double>();
+        const double value = rows[static_cast<std::size_t>(3 * i + k)];
         query.rounded[i][k] = value;
         query.exact[i][k] = mpq_class(value);
       }
     }
     query.truth = true;
-    (pair["kind"] == "vf" ? vertex_face : edge_edge).push_back(std::move(query));
+    (pair.vertex_face ? vertex_face : edge_edge).push_back(std::move(query));
   }
   // Labelled at the cell's δ, which the files say (a replay at another δ is told its labels are not for it).
   const double thickness = c.head.thickness;
@@ -338,18 +360,23 @@ void write_comparison_json(const std::filesystem::path& path, const std::vector<
                 {"times_not_comparable", c.times_differ.empty() ? json() : json(c.times_differ)},
                 {"notes", c.notes},
                 {"changed_steps", c.changed_steps}};
-    for (const Measure* m :
-         {&measures::missed, &measures::errors, &measures::false_alarms, &measures::toi_late, &measures::toi_error_median, &measures::toi_error_p99,
-          &measures::toi_error_max, &measures::host_peak_bytes, &measures::device_bytes, &measures::ms_per_step}) {
-      const auto b = m->of(c.base), h = m->of(c.head);
-      row[m->name] = {{"base", b ? json(*b) : json()}, {"head", h ? json(*h) : json()}};
+    for (const ShownMeasure& shown : kShown) {
+      const Measure& m = *shown.measure;
+      // A count is written as the integer the records hold.
+      const auto value = [&](std::optional<double> v) { return !v ? json() : m.count ? json(static_cast<std::uint64_t>(*v)) : json(*v); };
+      row[m.name] = {{"base", value(m.of(c.base))}, {"head", value(m.of(c.head))}};
     }
     if (c.time_test) {
       row["time"] = {{"ratio", c.ratio},   {"p", c.time_test->p},         {"p_family", c.p_family},
                      {"paired", c.paired}, {"statistic", c.time_test->u}, {"test", c.paired ? "wilcoxon signed-rank" : "mann-whitney u"}};
     }
     json missed = json::array();
-    for (const auto& [step, pair] : c.newly_missed) missed.push_back({{"step", step}, {"kind", pair["kind"]}, {"ids", pair["ids"]}});
+    for (const auto& [step, pair] : c.newly_missed) {
+      json entry = pair;
+      entry.erase("rows");  // written to replay, not listed
+      entry["step"] = step;
+      missed.push_back(std::move(entry));
+    }
     row["newly_missed"] = missed;
     document.push_back(row);
   }

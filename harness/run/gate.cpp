@@ -31,6 +31,7 @@ struct GateKey {
     if (thickness) text << std::setprecision(17) << *thickness;
     return text.str();
   }
+  bool operator==(const GateKey&) const = default;
 };
 
 struct BaselineEntry {
@@ -113,7 +114,7 @@ std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::files
       parsed.allow_nondeterministic = entry["allow_nondeterministic"].get<bool>();
     }
     for (const BaselineEntry& other : entries) {
-      if (other.key.scene == parsed.key.scene && other.key.strategy == parsed.key.strategy && other.key.thickness == parsed.key.thickness) {
+      if (other.key == parsed.key) {
         throw InputError(file, where, "repeats the entry for " + parsed.key.describe());
       }
     }
@@ -125,7 +126,8 @@ std::vector<BaselineEntry> parse_baseline(const json& baseline, const std::files
 /// Why a result cannot be gated whatever its entry says, or "": `check` fails it and `--write-baseline` refuses it,
 /// for the same reasons.
 std::string why_not_gateable(const CellSummary& result, const GateOptions& options) {
-  if (!result.verified || !result.verdict) return "not verified (run with --verify exact)";
+  if (!result.verified) return "not verified (run with --verify exact)";
+  if (!result.verdict) return "no colliding or missed count (a `ccdbench run --json` summary, verified)";
   if (result.verdict->colliding == 0) return "no colliding pair in any step, so it cannot miss: this cell gates nothing";
 #if CCDBENCH_GUARD_GATE
   if (!result.errors_counted) return "the results say nothing of errors (made by an older ccdbench: run it again)";
@@ -180,7 +182,7 @@ std::vector<std::string> failures(const CellSummary& result, const BaselineEntry
 /// A result's δ as its name shows it: "scene's 0.0080..." or the number, to 17 digits.
 std::string thickness_shown(const CellSummary& result) {
   std::ostringstream t;
-  t << (result.thickness_from == "scene" ? "scene's " : "") << std::setprecision(17) << result.thickness;
+  t << (result.thickness_from_scene ? "scene's " : "") << std::setprecision(17) << result.thickness;
   return t.str();
 }
 
@@ -189,12 +191,11 @@ GateLine gate_result(const CellSummary& result, const std::vector<BaselineEntry>
                      const GateOptions& options) {
   // Named by the strategy as the run was given it (a plugin's resolved name is long and holds its path).
   GateLine line{result.scene + " / " + result.given() + " / δ " + thickness_shown(result), {}, {}};
-  const bool scene_thickness = result.thickness_from == "scene";
   const BaselineEntry* entry = nullptr;
   std::size_t entries_matched = 0;
   for (std::size_t e = 0; e < entries.size(); ++e) {
     const GateKey& gate = entries[e].key;
-    const bool same_thickness = gate.thickness ? *gate.thickness == result.thickness : scene_thickness;
+    const bool same_thickness = gate.thickness ? *gate.thickness == result.thickness : result.thickness_from_scene;
     // By the resolved name, or by the spec as the run was given it: a plugin's resolved name holds its absolute
     // path and its file's digest, which a baseline kept in a plugin's own repository cannot know.
     const bool same_strategy = gate.strategy == result.strategy || gate.strategy == result.given();
@@ -316,14 +317,13 @@ json write_baseline(const std::vector<GateResults>& results, const BaselineMargi
       // The strategy as the user gave it: a plugin's resolved name holds its absolute path and its file's digest,
       // which would tie the baseline to one checkout and one build.
       BaselineEntry entry;
-      entry.key = {result.scene, result.given(), result.thickness_from == "scene" ? std::nullopt : std::optional<double>(result.thickness)};
+      entry.key = {result.scene, result.given(), result.thickness_from_scene ? std::nullopt : std::optional<double>(result.thickness)};
       const std::string name = result.scene + " / " + entry.key.strategy + " / δ " + thickness_json(entry.key).dump();
       // What check would refuse whatever the entry, an entry cannot make pass: refused here for the same reason.
       if (const std::string why = why_not_gateable(result, options); !why.empty())
         throw InputError(file.file, where, name + ": " + why + " (check refuses it too)");
       for (const BaselineEntry& other : entries) {
-        if (other.key.scene == entry.key.scene && other.key.strategy == entry.key.strategy && other.key.thickness == entry.key.thickness)
-          throw InputError(file.file, where, name + ": a second result for one cell");
+        if (other.key == entry.key) throw InputError(file.file, where, name + ": a second result for one cell");
       }
       const CellVerdict& verdict = *result.verdict;
       entry.max_missed = margin.allow(verdict.missed);

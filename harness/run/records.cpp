@@ -50,7 +50,26 @@ void expect_kind(const json& j, const char* kind) {
   }
 }
 
+/// How the records spell a cell's δ's origin and what a cell is judged by.
+constexpr const char* kThicknessFromScene = "scene";
+constexpr const char* kThicknessFromCommandLine = "command line";
+constexpr const char* kJudgedByTrianglePairs = "triangle pairs";
+constexpr const char* kJudgedByElementaryPairs = "elementary pairs";
+
+/// The TOI verdict is read where a record has its late count (the one the gate and compare judge).
+bool has_toi(const json& j) { return j.contains("toi_late"); }
+
 }  // namespace
+
+void to_json(json& j, const MissedPair& p) { j = {{"kind", p.kind()}, {"ids", p.ids}, {"rows", p.rows}}; }
+
+void from_json(const json& j, MissedPair& p) {
+  const std::string kind = j.at("kind").get<std::string>();
+  if (kind != "vf" && kind != "ee") throw std::invalid_argument("a missed pair's kind is \"vf\" or \"ee\", not \"" + kind + "\"");
+  p.vertex_face = kind == "vf";
+  p.ids = j.at("ids").get<std::vector<std::size_t>>();
+  p.rows = j.at("rows").get<std::array<double, 24>>();
+}
 
 VerdictCounts& VerdictCounts::operator+=(const VerdictCounts& other) {
   colliding += other.colliding;
@@ -130,7 +149,7 @@ const json& step_fields() {
     every.errors = 1;
     StepVerdict verdict;
     verdict.colliding_face_shape = verdict.missed_face_shape = 0;
-    verdict.missed_pairs = json::array();
+    verdict.missed_pairs = std::vector<MissedPair>();
     verdict.toi.emplace();
     every.verdict = verdict;
     return json(every);
@@ -169,8 +188,8 @@ void from_json(const json& j, StepRecord& r) {
   if (has_verdict(j)) {
     StepVerdict v;
     read_counts(j, v);
-    if (j.contains("missed_pairs")) v.missed_pairs = j.at("missed_pairs");
-    if (j.contains("toi_checked") || j.contains("toi_late")) {
+    if (j.contains("missed_pairs")) v.missed_pairs = j.at("missed_pairs").get<std::vector<MissedPair>>();
+    if (has_toi(j)) {
       v.toi.emplace();
       v.toi->checked = j.value("toi_checked", std::size_t{0});
       v.toi->late = j.value("toi_late", std::size_t{0});
@@ -209,13 +228,14 @@ void to_json(json& j, const CellSummary& s) {
        {"host_peak_bytes", s.host_peak_bytes},
        {"host_peak_of", s.host_peak_of},
        {"reported", s.reported},
-       {"judged_by", s.judged_by},
-       {"thickness_from", s.thickness_from},
+       {"judged_by", s.judged_by == strategies::Judging::triangle_pairs ? kJudgedByTrianglePairs : kJudgedByElementaryPairs},
+       {"thickness_from", s.thickness_from_scene ? kThicknessFromScene : kThicknessFromCommandLine},
        {"verified", s.verified},
        {"repeats", s.repeats},
        {"cell", s.cell},
-       {"errors", s.errors},
        {"finished_at", s.finished_at}};
+  // A summary read back without its errors counted is written so again: never as 0 errors.
+  if (s.errors_counted) j["errors"] = s.errors;
   if (const std::optional<CellVerdict>& v = s.verdict) {
     put_counts(j, *v);
     j.update(json{{"miss_causes", v->miss_causes},
@@ -254,7 +274,7 @@ void from_json(const json& j, CellSummary& s) {
   s.vertices = j.value("vertices", std::size_t{0});
   s.steps = j.value("steps", std::size_t{0});
   s.thickness = j.at("thickness").get<double>();
-  s.thickness_from = j.value("thickness_from", std::string("scene"));
+  s.thickness_from_scene = j.value("thickness_from", std::string(kThicknessFromScene)) == kThicknessFromScene;
   s.ms_per_step = j.value("ms_per_step", 0.0);
   s.ms_per_step_mean = j.value("ms_per_step_mean", s.ms_per_step);
   s.unattributed_ms_mean = j.value("unattributed_ms_mean", 0.0);
@@ -276,7 +296,8 @@ void from_json(const json& j, CellSummary& s) {
   s.host_peak_of = j.value("host_peak_of", std::string("process"));
   s.child_peak_bytes = j.value("child_peak_bytes", 0.0);
   s.reported = j.value("reported", std::size_t{0});
-  s.judged_by = j.value("judged_by", std::string("elementary pairs"));
+  s.judged_by = j.value("judged_by", std::string(kJudgedByElementaryPairs)) == kJudgedByTrianglePairs ? strategies::Judging::triangle_pairs
+                                                                                                      : strategies::Judging::elementary_pairs;
   s.verified = j.value("verified", false);
   s.repeats = j.value("repeats", 1);
   s.cell = j.value("cell", std::string());
@@ -293,7 +314,7 @@ void from_json(const json& j, CellSummary& s) {
     v.miss_causes = j.value("miss_causes", json::object());
     v.colliding_by_objects = j.value("colliding_by_objects", std::map<std::string, std::size_t>{});
     v.faces_in_contact_by_objects = j.value("faces_in_contact_by_objects", std::map<std::string, std::size_t>{});
-    if (j.contains("toi_checked") || j.contains("toi_late")) {
+    if (has_toi(j)) {
       v.toi.emplace();
       v.toi->checked = j.value("toi_checked", std::size_t{0});
       v.toi->late = j.value("toi_late", std::size_t{0});
@@ -336,15 +357,16 @@ const CellVerdict::Toi* toi_of(const CellSummary& s) { return s.verdict && s.ver
 
 namespace measures {
 
-const Measure missed{"missed", [](const CellSummary& s) { return maybe(s.verdict.has_value(), s.verdict ? double(s.verdict->missed) : 0); }};
-const Measure errors{"errors", [](const CellSummary& s) { return maybe(s.errors_counted, double(s.errors)); }};
+const Measure missed{"missed", [](const CellSummary& s) { return maybe(s.verdict.has_value(), s.verdict ? double(s.verdict->missed) : 0); }, true};
+const Measure errors{"errors", [](const CellSummary& s) { return maybe(s.errors_counted, double(s.errors)); }, true};
 const Measure false_alarms{"false_alarms",
-                           [](const CellSummary& s) { return maybe(s.verdict.has_value(), s.verdict ? double(s.verdict->false_alarms) : 0); }};
-const Measure toi_late{"toi_late", [](const CellSummary& s) { return maybe(toi_of(s) != nullptr, toi_of(s) ? double(toi_of(s)->late) : 0); }};
+                           [](const CellSummary& s) { return maybe(s.verdict.has_value(), s.verdict ? double(s.verdict->false_alarms) : 0); }, true};
+const Measure toi_late{"toi_late", [](const CellSummary& s) { return maybe(toi_of(s) != nullptr, toi_of(s) ? double(toi_of(s)->late) : 0); }, true};
 const Measure toi_error_median{"toi_error_median", [](const CellSummary& s) { return toi_of(s) ? toi_of(s)->error_median : std::nullopt; }};
 const Measure toi_error_p99{"toi_error_p99", [](const CellSummary& s) { return toi_of(s) ? toi_of(s)->error_p99 : std::nullopt; }};
 const Measure toi_error_max{"toi_error_max", [](const CellSummary& s) { return maybe(toi_of(s) != nullptr, toi_of(s) ? toi_of(s)->error_max : 0); }};
-const Measure host_peak_bytes{"host_peak_bytes", [](const CellSummary& s) { return std::optional<double>(s.host_peak_bytes); }};
+// 0: not measured (a record without it); a process always has some.
+const Measure host_peak_bytes{"host_peak_bytes", [](const CellSummary& s) { return maybe(s.host_peak_bytes > 0, s.host_peak_bytes); }};
 const Measure device_bytes{"device_bytes", [](const CellSummary& s) { return std::optional<double>(s.device_bytes); }};
 const Measure ms_per_step{"ms_per_step", [](const CellSummary& s) { return std::optional<double>(s.ms_per_step); }};
 

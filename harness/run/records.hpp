@@ -4,8 +4,11 @@
 /// one serializer (to_json) and one reader (from_json); the cell files, results.jsonl, --json, --report and the
 /// exchange between MPI ranks all go through them, so a field is added in one place.
 
+#include "strategies/strategy.hpp"
+
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cstddef>
 #include <map>
 #include <optional>
@@ -45,10 +48,21 @@ struct VerdictCounts {
   VerdictCounts& operator+=(const VerdictCounts& other);
 };
 
+/// A missed pair as a step record keeps it: its kind, its ids (v, f; or a0, a1, b0, b1) and its 24 coordinates
+/// (Tight-Inclusion's order), so that compare can write the pairs a change newly misses as query files without the
+/// scene.
+struct MissedPair {
+  bool vertex_face = true;
+  std::vector<std::size_t> ids;
+  std::array<double, 24> rows{};
+  /// Its kind as the records spell it: "vf" or "ee".
+  const char* kind() const { return vertex_face ? "vf" : "ee"; }
+};
+
 /// The verdict of one step against the exact truth (--verify exact).
 struct StepVerdict : VerdictCounts {
   /// The first kKeptMissedPairs missed pairs with their coordinates (missed_pair_records), when any was missed.
-  std::optional<nlohmann::json> missed_pairs;
+  std::optional<std::vector<MissedPair>> missed_pairs;
   /// With --toi.
   struct Toi {
     std::size_t checked = 0, late = 0;
@@ -105,7 +119,8 @@ struct CellSummary {
   const std::string& given() const { return spec.empty() ? strategy : spec; }
   std::size_t triangles = 0, vertices = 0, steps = 0;
   double thickness = 0;
-  std::string thickness_from;  // "scene" or "command line"
+  /// Whether δ is the scene's own (else the command line's): what check and compare match a cell's δ by.
+  bool thickness_from_scene = true;
   double ms_per_step = 0, ms_per_step_mean = 0, unattributed_ms_mean = 0;
   /// A cell's start, outside its timed steps: making the strategy and its init on the first frame (trees, an OpenCL
   /// context, program and device buffers, a plugin's load or its child process), median over the passes, ms. What a
@@ -125,7 +140,7 @@ struct CellSummary {
   /// cell that started none.
   double child_peak_bytes = 0;
   std::size_t reported = 0;
-  std::string judged_by;  // "elementary pairs" or "triangle pairs"
+  strategies::Judging judged_by = strategies::Judging::elementary_pairs;
   bool verified = false;
   int repeats = 1;
   std::string cell;  // the cell file's stem
@@ -164,6 +179,8 @@ struct CellRecord {
 struct Measure {
   const char* name;
   std::optional<double> (*of)(const CellSummary& s);
+  /// A count (written as an integer), not a quantity.
+  bool count = false;
 };
 
 namespace measures {
@@ -186,6 +203,8 @@ struct RunResult {
   std::vector<LeftOut> left_out;
 };
 
+void to_json(nlohmann::json& j, const MissedPair& p);
+void from_json(const nlohmann::json& j, MissedPair& p);
 void to_json(nlohmann::json& j, const RecordEnvironment& e);
 void from_json(const nlohmann::json& j, RecordEnvironment& e);
 void to_json(nlohmann::json& j, const StepRecord& r);

@@ -96,9 +96,9 @@ const std::vector<RunColumn>& run_columns() {
   using Align = Table::Align;
   static const std::vector<RunColumn> columns = {
       {"scene", Align::left, always, [](const CellSummary& s) { return s.scene + (s.resumed ? " (resumed)" : ""); }},
-      {"δ", Align::right, always,
-       [](const CellSummary& s) { return significant(s.thickness, 3) + (s.thickness_from == "scene" ? " (scene's)" : ""); }},
-      {"strategy", Align::left, always, [](const CellSummary& s) { return s.given() + (s.judged_by == "triangle pairs" ? kTrianglePairMark : ""); }},
+      {"δ", Align::right, always, [](const CellSummary& s) { return significant(s.thickness, 3) + (s.thickness_from_scene ? " (scene's)" : ""); }},
+      {"strategy", Align::left, always,
+       [](const CellSummary& s) { return s.given() + (s.judged_by == strategies::Judging::triangle_pairs ? kTrianglePairMark : ""); }},
       {"ms/step", Align::right, always, [](const CellSummary& s) { return fixed(s.ms_per_step, 3); }},
       {"vs full", Align::right, always,
        [](const CellSummary& s) { return s.speedup && s.speedup->ratio ? fixed(*s.speedup->ratio, 2) + "x" : std::string("-"); }},

@@ -118,32 +118,34 @@ Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::S
 namespace {
 
 template <class Pair>
-json pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const Pair& pair) {
+MissedPair pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const Pair& pair) {
   const auto rows = pair_rows(scene.topology(), x0, x1, pair);
-  json coordinates = json::array();
-  for (const Vec3& row : rows) {
-    for (int k = 0; k < 3; ++k) coordinates.push_back(row[k]);
+  MissedPair record;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    for (int k = 0; k < 3; ++k) record.rows[3 * i + static_cast<std::size_t>(k)] = rows[i][k];
   }
   if constexpr (std::is_same_v<Pair, VertexFacePair>) {
-    return {{"kind", "vf"}, {"ids", {pair.v, pair.f}}, {"rows", coordinates}};
+    record.ids = {pair.v, pair.f};
   } else {
-    return {{"kind", "ee"}, {"ids", {pair.a.v0, pair.a.v1, pair.b.v0, pair.b.v1}}, {"rows", coordinates}};
+    record.vertex_face = false;
+    record.ids = {pair.a.v0, pair.a.v1, pair.b.v0, pair.b.v1};
   }
+  return record;
 }
 
 }  // namespace
 
-json missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const VertexFacePair& pair) {
+MissedPair missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const VertexFacePair& pair) {
   return pair_record(scene, x0, x1, pair);
 }
 
-json missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const EdgeEdgePair& pair) {
+MissedPair missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const EdgeEdgePair& pair) {
   return pair_record(scene, x0, x1, pair);
 }
 
-json missed_pair_records(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const CollisionSet& truth,
-                         const CollisionSet& reported, std::size_t limit) {
-  json records = json::array();
+std::vector<MissedPair> missed_pair_records(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const CollisionSet& truth,
+                                            const CollisionSet& reported, std::size_t limit) {
+  std::vector<MissedPair> records;
   const CollisionSet missed = set_difference(truth, reported);
   for (const auto& c : missed.vertex_face()) {
     if (records.size() >= limit) return records;

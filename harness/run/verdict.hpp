@@ -5,6 +5,7 @@
 
 #include "core/collision_set.hpp"
 #include "core/scene.hpp"
+#include "harness/run/records.hpp"
 #include "strategies/registry.hpp"
 
 #include <nlohmann/json.hpp>
@@ -41,12 +42,12 @@ Verdict judge(const Scene& scene, const CollisionSet& truth, const strategies::S
 
 /// A missed pair as results keep it (a step record's `missed_pairs`): its kind, its ids and its 24 coordinates, so
 /// that `compare` can write the pairs a change newly misses as query files without the scene.
-nlohmann::json missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const VertexFacePair& pair);
-nlohmann::json missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const EdgeEdgePair& pair);
+MissedPair missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const VertexFacePair& pair);
+MissedPair missed_pair_record(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const EdgeEdgePair& pair);
 
 /// The first `limit` missed pairs of a step (vertex-face, then edge-edge, each in pair order) as records.
-nlohmann::json missed_pair_records(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const CollisionSet& truth,
-                                   const CollisionSet& reported, std::size_t limit);
+std::vector<MissedPair> missed_pair_records(const Scene& scene, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, const CollisionSet& truth,
+                                            const CollisionSet& reported, std::size_t limit);
 
 /// What a step reported, in the unit it is judged by.
 std::size_t reported_count(const strategies::StepResult& result, strategies::Judging judging);

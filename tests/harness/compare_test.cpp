@@ -135,6 +135,9 @@ TEST_F(Compare, OneMoreMissedPairExits1NamingTheCellAndThePair) {
   EXPECT_TRUE(document["cells"][0]["worse"]);
   ASSERT_EQ(document["cells"][0]["newly_missed"].size(), 1u);
   EXPECT_EQ(document["cells"][0]["newly_missed"][0]["ids"], nlohmann::json({1, 2, 7, 8}));
+  // Counts are written as the integers the records hold.
+  EXPECT_EQ(document["cells"][0]["missed"], nlohmann::json({{"base", 1}, {"head", 2}}));
+  EXPECT_TRUE(document["cells"][0]["missed"]["head"].is_number_unsigned()) << document["cells"][0].dump();
   // The pair written to replay, as a query file `queries` reads.
   const std::filesystem::path replay = dir_ / "replay";
   ASSERT_TRUE(std::filesystem::exists(replay)) << result.output;
@@ -342,6 +345,24 @@ TEST_F(Compare, AVerdictTheHeadLacksIsWorseAndRecordsOfSchema1MatchByResolvedNam
   const auto lacking = compare(base_file, dir_ / "unverified.jsonl");
   EXPECT_EQ(lacking.exit_code, 1) << lacking.output;
   EXPECT_NE(lacking.output.find("the head has no missed"), std::string::npos) << lacking.output;
+  // TOIs checked without their late count (a record made by hand) are not 0 late.
+  auto with_tois = [&](const char* name, bool late) {
+    std::string lines;
+    std::istringstream records(base.lines());
+    for (std::string line; std::getline(records, line);) {
+      nlohmann::json record = nlohmann::json::parse(line);
+      if (record["record"] == "summary") {
+        record["toi_checked"] = 30;
+        if (late) record["toi_late"] = 0;
+      }
+      lines += record.dump() + "\n";
+    }
+    testing::write_text(dir_ / name, lines);
+    return dir_ / name;
+  };
+  const auto no_late = compare(with_tois("late.jsonl", true), with_tois("checked.jsonl", false));
+  EXPECT_EQ(no_late.exit_code, 1) << no_late.output;
+  EXPECT_NE(no_late.output.find("the head has no toi_late"), std::string::npos) << no_late.output;
   // Schema 1 (no spec): matched by the resolved name, and still compared.
   SyntheticCell worse = base;
   worse.missed_pairs[0] = {{"vf", {1, 1}}};

@@ -1,5 +1,6 @@
 // `ccdbench check`: the CI gate must be able to fail, and fails whenever a cell gates nothing.
 
+#include "harness/run/record_fields.hpp"
 #include "tests/support/cli.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -15,7 +16,8 @@ using testing::run_ccdbench;
 nlohmann::json summary(const std::string& strategy, std::size_t missed, std::size_t colliding, const std::string& thickness_from = "scene",
                        double thickness = 0.01) {
   return {{"scene", "s"},     {"strategy", strategy},    {"thickness", thickness}, {"thickness_from", thickness_from}, {"verified", true},
-          {"missed", missed}, {"missed_culled", missed}, {"missed_tested", 0},     {"colliding", colliding},           {"errors", 0}};
+          {"missed", missed}, {"missed_culled", missed}, {"missed_tested", 0},     {"colliding", colliding},           {"errors", 0},
+          {"steps", 4}};
 }
 
 nlohmann::json entry(const std::string& strategy, const nlohmann::json& max_missed, const nlohmann::json& thickness = "scene") {
@@ -85,6 +87,18 @@ TEST_F(Gate, ErrorsAndNondeterminismFailACellUnlessItsEntryAllowsThem) {
   EXPECT_EQ(check({allowing}, {erring}).exit_code, 2);
 }
 
+// A summary read back without its errors counted is written back so (the C++ API hands its record on, a kept cell
+// is rewritten): never as 0 errors, which the gate would take.
+TEST(Records, ASummaryWithoutErrorsIsWrittenBackWithoutThem) {
+  nlohmann::json record = summary("plugin:p", 0, 10);
+  record.erase("errors");
+  const harness::CellSummary read = harness::read_summary(record, "r.json", "entry 0", harness::SummaryUse::gate);
+  EXPECT_FALSE(read.errors_counted);
+  EXPECT_FALSE(nlohmann::json(read).contains("errors")) << nlohmann::json(read).dump();
+  record["errors"] = 0;
+  EXPECT_EQ(nlohmann::json(harness::read_summary(record, "r.json", "entry 0", harness::SummaryUse::gate))["errors"], 0);
+}
+
 TEST_F(Gate, FailsEmptyResults) {
   const auto empty = check({entry("full", 0)}, {});
   EXPECT_EQ(empty.exit_code, 1);
@@ -134,6 +148,11 @@ TEST_F(Gate, PinsStepsCollidingAndLateToisAndRefusesAmbiguousEntries) {
   const auto no_toi = check({pinned}, {result});
   EXPECT_EQ(no_toi.exit_code, 1);
   EXPECT_NE(no_toi.output.find("run with --toi"), std::string::npos) << no_toi.output;
+  // Checked TOIs without their late count say nothing of late ones: never 0 late.
+  result["toi_checked"] = 5;
+  const auto no_late = check({pinned}, {result});
+  EXPECT_EQ(no_late.exit_code, 1) << no_late.output;
+  EXPECT_NE(no_late.output.find("run with --toi"), std::string::npos) << no_late.output;
   result["toi_late"] = 2;
   EXPECT_EQ(check({pinned}, {result}).exit_code, 1);
   result["toi_late"] = 0;
@@ -167,6 +186,21 @@ TEST_F(Gate, MalformedFilesExitTwoAndAFailedGateOne) {
   EXPECT_NE(broken.output.find("broken.json:line 1: malformed JSON"), std::string::npos) << broken.output;
   const auto not_summaries = check({entry("full", 0)}, {nlohmann::json{{"scene", "s"}}});
   EXPECT_EQ(not_summaries.exit_code, 2) << not_summaries.output;
+  // Every field the reader reads is checked, named where it is wrong; a summary without its steps is not one of
+  // `run` (they would be read as 0, which a baseline could then pin).
+  nlohmann::json no_steps = summary("full", 0, 10);
+  no_steps.erase("steps");
+  const auto stepless = check({entry("full", 0)}, {no_steps});
+  EXPECT_EQ(stepless.exit_code, 2) << stepless.output;
+  EXPECT_NE(stepless.output.find("results.json:entry 0: a summary without 'steps'"), std::string::npos) << stepless.output;
+  for (const auto& [field, bad] : std::vector<std::pair<std::string, nlohmann::json>>{
+           {"triangles", "x"}, {"counters", {{"nf", {{"mean", 1}}}}}, {"miss_causes", 5}, {"toi_checked", -3}, {"colliding_face_shape", -1}}) {
+    nlohmann::json malformed = summary("full", 0, 10);
+    malformed[field] = bad;
+    const auto refused = check({entry("full", 0)}, {malformed});
+    EXPECT_EQ(refused.exit_code, 2) << field << ": " << refused.output;
+    EXPECT_NE(refused.output.find("results.json:entry 0." + field + ": must be "), std::string::npos) << refused.output;
+  }
   const auto missing = run_ccdbench("check --baseline " + quoted(dir_ / "baseline.json") + " " + quoted(dir_ / "none.json"));
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
   EXPECT_EQ(check({entry("full", 0)}, {summary("full", 1, 10)}).exit_code, 1);
