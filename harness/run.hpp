@@ -29,7 +29,7 @@ std::string scene_file_label(const std::filesystem::path& path);
 
 /// A run asked for that cannot be: what was asked ("strategy SPEC", "toi") and why.
 struct RunRequestRefused : std::invalid_argument {
-  RunRequestRefused(std::string asked, const std::string& why) : std::invalid_argument(why), asked(std::move(asked)) {}
+  RunRequestRefused(std::string what_asked, const std::string& why) : std::invalid_argument(why), asked(std::move(what_asked)) {}
   std::string asked;
 };
 

@@ -371,12 +371,8 @@ void write_comparison_json(const std::filesystem::path& path, const std::vector<
                      {"paired", c.paired}, {"statistic", c.time_test->u}, {"test", c.paired ? "wilcoxon signed-rank" : "mann-whitney u"}};
     }
     json missed = json::array();
-    for (const auto& [step, pair] : c.newly_missed) {
-      json entry = pair;
-      entry.erase("rows");  // written to replay, not listed
-      entry["step"] = step;
-      missed.push_back(std::move(entry));
-    }
+    // Listed by kind and ids; their coordinates are in the replay files.
+    for (const auto& [step, pair] : c.newly_missed) missed.push_back({{"step", step}, {"kind", pair.kind()}, {"ids", pair.ids}});
     row["newly_missed"] = missed;
     document.push_back(row);
   }
