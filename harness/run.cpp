@@ -314,11 +314,14 @@ void Benchmark::plan_scene(std::size_t s) {
   if (pending.empty()) return;
   // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
   for (const Pending& cell : pending) strategies::check_scene(*cell.spec, scene);
+  // Under MPI the largest cells go first (WorkItem::cost): a cell's work grows with its triangles and steps. A truth
+  // step is given its scene's cell's cost: the cells wait for it, so a large scene's truth must not be left for last.
+  const double cell_cost = static_cast<double>(scene.topology().num_faces()) * static_cast<double>(steps);
   std::vector<std::size_t> truth_items;
   if (options_.verify) {
     for (std::size_t k = 0; k < steps; ++k) {
       truth_items.push_back(items_.size());
-      items_.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}, {"threads", worker_threads()}}.dump(), {}});
+      items_.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}, {"threads", worker_threads()}}.dump(), {}, cell_cost});
       planned_.push_back({source.label, k, steps, {}});
     }
   }
@@ -335,14 +338,14 @@ void Benchmark::plan_scene(std::size_t s) {
       task["cells"].push_back(cell_task(cell));
       item.cells.push_back({cell.slot, std::move(cell.file), std::move(cell.key)});
     }
-    items_.push_back({task.dump(), truth_items});
+    items_.push_back({task.dump(), truth_items, cell_cost * static_cast<double>(pending.size())});
     planned_.push_back(std::move(item));
     return;
   }
   for (Pending& cell : pending) {
     json task = cell_task(cell);
     task.update({{"kind", "cell"}, {"scene", s}, {"threads", worker_threads()}});
-    items_.push_back({task.dump(), truth_items});
+    items_.push_back({task.dump(), truth_items, cell_cost});
     planned_.push_back({source.label, 0, steps, {{cell.slot, std::move(cell.file), std::move(cell.key)}}});
   }
 }

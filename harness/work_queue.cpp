@@ -193,13 +193,12 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
   LocalChannel channel;
   std::thread local([&] { local_worker(channel, items, work); });
   auto next_item = [&]() -> std::optional<std::size_t> {
+    std::vector<bool> waiting(items.size()), finished(items.size());
     for (std::size_t i = 0; i < items.size(); ++i) {
-      if (state[i] != State::waiting) continue;
-      bool ready = true;
-      for (const std::size_t before : items[i].after) ready = ready && state.at(before) == State::finished;
-      if (ready) return i;
+      waiting[i] = state[i] == State::waiting;
+      finished[i] = state[i] == State::finished;
     }
-    return std::nullopt;
+    return next_ready_item(items, waiting, finished);
   };
   try {
     while (stopped < g_ranks.size) {
@@ -288,6 +287,17 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
 #endif
 
 }  // namespace
+
+std::optional<std::size_t> next_ready_item(const std::vector<WorkItem>& items, const std::vector<bool>& waiting, const std::vector<bool>& finished) {
+  std::optional<std::size_t> next;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (!waiting[i]) continue;
+    bool ready = true;
+    for (const std::size_t before : items[i].after) ready = ready && finished.at(before);
+    if (ready && (!next || items[i].cost > items[*next].cost)) next = i;
+  }
+  return next;
+}
 
 RankSession::RankSession(int& argc, char**& argv) {
 #if CCDBENCH_WITH_MPI

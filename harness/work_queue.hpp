@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,7 +60,15 @@ void say_on_termination(const std::string& message);
 struct WorkItem {
   std::string payload;
   std::vector<std::size_t> after;
+  /// An estimate of the item's work, in any unit its plan shares: of the items ready, ranks are handed the costliest
+  /// first (ties in plan order), so that a long item does not start last and run alone while the other ranks idle
+  /// (longest processing time first). One process runs the items in plan order whatever their cost.
+  double cost = 0;
 };
+
+/// Of the items not handed out yet (`waiting`) whose items to wait for have `finished`, the one rank 0 hands out next:
+/// the costliest, the first in plan order among equals; nullopt when none is ready.
+std::optional<std::size_t> next_ready_item(const std::vector<WorkItem>& items, const std::vector<bool>& waiting, const std::vector<bool>& finished);
 
 /// Carries out one item's payload on the rank that took it; returns the result, sent back to rank 0.
 using WorkFunction = std::function<std::string(const std::string& payload)>;
