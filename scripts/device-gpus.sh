@@ -67,3 +67,14 @@ for r, cells in runs.items():
     same = cells == base
     print("answers with %s rank(s): %d cells, %s as one process's" % (r, len(cells), "the same" if same else "NOT the same"))
 EOF
+# Where each run's time went, from its records: every cell's start (setup_ms: making the strategy, its init on the
+# first frame) and its timed steps, summed over the cells (over every rank's).
+python3 - "$out" << 'EOF2'
+import glob, json, os, statistics, sys
+for path in sorted(glob.glob(os.path.join(sys.argv[1], "r*-t*.json"))):
+    cells = json.load(open(path))
+    setup = [c.get("setup_ms", 0.0) for c in cells]
+    timed = sum(c["ms_per_step_mean"] * c["steps"] * c.get("repeats", 1) for c in cells)
+    print("%s: %d cells; their starts %.1f s (median %.0f ms, max %.0f ms); their timed steps %.1f s" % (
+        os.path.basename(path)[:-5], len(cells), sum(setup) / 1e3, statistics.median(setup), max(setup), timed / 1e3))
+EOF2
