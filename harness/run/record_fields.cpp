@@ -42,8 +42,15 @@ const std::vector<RecordField> kEnvironmentFields = {{"machine", FieldKind::stri
                                                      {"provenance", FieldKind::object, false},   {"threads", FieldKind::count, false},
                                                      {"rank", FieldKind::count, false},          {"schema", FieldKind::count, false}};
 
-/// Every field of a summary that its reader reads (records.cpp from_json), checked before it reads them: a reader
-/// then never meets a field of another kind. Its identity and step count are required.
+/// The counts of a verdict (VerdictCounts), in a step record and in a summary.
+const std::vector<RecordField> kVerdictFields = {{"colliding", FieldKind::count, false},        {"missed", FieldKind::count, false},
+                                                 {"missed_culled", FieldKind::count, false},    {"missed_tested", FieldKind::count, false},
+                                                 {"false_alarms", FieldKind::count, false},     {"colliding_face_shape", FieldKind::count, false},
+                                                 {"missed_face_shape", FieldKind::count, false}};
+
+/// Every field of a summary that its reader reads (records.cpp from_json) beside its verdict's counts and its
+/// environment, checked before it reads them: a reader then never meets a field of another kind. Its identity and
+/// step count are required.
 const std::vector<RecordField> kSummaryFields = {{"scene", FieldKind::string, true},
                                                  {"strategy", FieldKind::string, true},
                                                  {"thickness", FieldKind::number, true},
@@ -74,13 +81,6 @@ const std::vector<RecordField> kSummaryFields = {{"scene", FieldKind::string, tr
                                                  {"verified", FieldKind::boolean, false},
                                                  {"repeats", FieldKind::count, false},
                                                  {"cell", FieldKind::string, false},
-                                                 {"colliding", FieldKind::count, false},
-                                                 {"missed", FieldKind::count, false},
-                                                 {"missed_culled", FieldKind::count, false},
-                                                 {"missed_tested", FieldKind::count, false},
-                                                 {"false_alarms", FieldKind::count, false},
-                                                 {"colliding_face_shape", FieldKind::count, false},
-                                                 {"missed_face_shape", FieldKind::count, false},
                                                  {"miss_causes", FieldKind::counts_by_name, false},
                                                  {"colliding_by_objects", FieldKind::counts_by_name, false},
                                                  {"faces_in_contact_by_objects", FieldKind::counts_by_name, false},
@@ -101,7 +101,8 @@ const std::vector<RecordField> kSummaryFields = {{"scene", FieldKind::string, tr
                                                  {"speedup", FieldKind::number_or_null, false},
                                                  {"speedup_over", FieldKind::string_or_null, false}};
 
-/// Every field of a step record that its reader reads but its strategy's counters (every other field: numbers).
+/// Every field of a step record that its reader reads beside its verdict's counts and its environment, but its
+/// strategy's counters (every other field: numbers).
 const std::vector<RecordField> kStepFields = {{"scene", FieldKind::string, true},
                                               {"thickness", FieldKind::number, true},
                                               {"strategy", FieldKind::string, true},
@@ -118,13 +119,6 @@ const std::vector<RecordField> kStepFields = {{"scene", FieldKind::string, true}
                                               {"answers", FieldKind::string, false},
                                               {"errors", FieldKind::count, false},
                                               {"error_first", FieldKind::string, false},
-                                              {"colliding", FieldKind::count, false},
-                                              {"missed", FieldKind::count, false},
-                                              {"missed_culled", FieldKind::count, false},
-                                              {"missed_tested", FieldKind::count, false},
-                                              {"false_alarms", FieldKind::count, false},
-                                              {"colliding_face_shape", FieldKind::count, false},
-                                              {"missed_face_shape", FieldKind::count, false},
                                               {"toi_checked", FieldKind::count, false},
                                               {"toi_late", FieldKind::count, false},
                                               {"toi_error_max", FieldKind::number, false}};
@@ -175,7 +169,7 @@ void check_fields(const json& record, const std::vector<RecordField>& fields, bo
                   const std::string& where, const char* what) {
   if (!record.is_object()) throw InputError(file, where, std::string("a ") + what + " must be an object");
   std::vector<RecordField> every = fields;
-  every.insert(every.end(), kEnvironmentFields.begin(), kEnvironmentFields.end());
+  for (const std::vector<RecordField>* shared : {&kVerdictFields, &kEnvironmentFields}) every.insert(every.end(), shared->begin(), shared->end());
   for (const RecordField& field : every) {
     if (!record.contains(field.name)) {
       if (field.required || (compared && field.compared))
