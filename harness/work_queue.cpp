@@ -185,21 +185,13 @@ void local_worker(LocalChannel& channel, const std::vector<WorkItem>& items, con
 }
 
 void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, const DoneFunction& done) {
-  enum class State { waiting, running, finished };
-  std::vector<State> state(items.size(), State::waiting);
+  // Each item waiting (not handed out yet), then running, then finished: what next_ready_item reads.
+  std::vector<bool> waiting(items.size(), true), finished(items.size(), false);
   std::size_t unassigned = items.size();
   std::deque<int> idle;  // ranks asking for work; 0 is rank 0's own worker thread
   int stopped = 0;
   LocalChannel channel;
   std::thread local([&] { local_worker(channel, items, work); });
-  auto next_item = [&]() -> std::optional<std::size_t> {
-    std::vector<bool> waiting(items.size()), finished(items.size());
-    for (std::size_t i = 0; i < items.size(); ++i) {
-      waiting[i] = state[i] == State::waiting;
-      finished[i] = state[i] == State::finished;
-    }
-    return next_ready_item(items, waiting, finished);
-  };
   try {
     while (stopped < g_ranks.size) {
       bool progressed = false;
@@ -212,7 +204,7 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
         }
         if (message->bytes.at(0) == '\1') {
           const std::size_t index = get_u64(message->bytes, 1);
-          state.at(index) = State::finished;
+          finished.at(index) = true;
           done(index, message->bytes.substr(9), message->source);
         }
         idle.push_back(message->source);
@@ -236,13 +228,13 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
       }
       if (local_result) {
         progressed = true;
-        state.at(local_result->first) = State::finished;
+        finished.at(local_result->first) = true;
         done(local_result->first, local_result->second, 0);
         std::lock_guard lock(channel.mutex);
         channel.wants_work = true;
       }
       for (auto rank = idle.begin(); rank != idle.end();) {
-        const std::optional<std::size_t> item = next_item();
+        const std::optional<std::size_t> item = next_ready_item(items, waiting, finished);
         if (!item && unassigned > 0) break;  // the rest waits for running items
         progressed = true;
         if (!item) {
@@ -255,7 +247,7 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
           }
           ++stopped;
         } else {
-          state[*item] = State::running;
+          waiting[*item] = false;
           --unassigned;
           if (*rank == 0) {
             std::lock_guard lock(channel.mutex);

@@ -168,16 +168,16 @@ const char* kind_name(FieldKind kind) {
 void check_fields(const json& record, const std::vector<RecordField>& fields, bool compared, const std::filesystem::path& file,
                   const std::string& where, const char* what) {
   if (!record.is_object()) throw InputError(file, where, std::string("a ") + what + " must be an object");
-  std::vector<RecordField> every = fields;
-  for (const std::vector<RecordField>* shared : {&kVerdictFields, &kEnvironmentFields}) every.insert(every.end(), shared->begin(), shared->end());
-  for (const RecordField& field : every) {
-    if (!record.contains(field.name)) {
-      if (field.required || (compared && field.compared))
-        throw InputError(file, where, std::string("a ") + what + " without '" + field.name + "': not a result of `run`");
-      continue;
-    }
-    if (!has_kind(record[field.name], field.kind)) {
-      throw InputError(file, where + "." + field.name, std::string("must be ") + kind_name(field.kind) + ", got " + record[field.name].dump());
+  for (const std::vector<RecordField>* list : {&fields, &kVerdictFields, &kEnvironmentFields}) {
+    for (const RecordField& field : *list) {
+      if (!record.contains(field.name)) {
+        if (field.required || (compared && field.compared))
+          throw InputError(file, where, std::string("a ") + what + " without '" + field.name + "': not a result of `run`");
+        continue;
+      }
+      if (!has_kind(record[field.name], field.kind)) {
+        throw InputError(file, where + "." + field.name, std::string("must be ") + kind_name(field.kind) + ", got " + record[field.name].dump());
+      }
     }
   }
 }
