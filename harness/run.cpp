@@ -122,8 +122,8 @@ class Benchmark {
   void run_all();
 
   /// The cells in the order of --strategy (kept or computed), each summary with the spec as given and its speed-up,
-  /// and the cells left out.
-  RunResult result() const;
+  /// and the cells left out: moved out, once the run has ended.
+  RunResult take_result();
 
  private:
   void say(const std::string& text) {
@@ -404,14 +404,15 @@ void Benchmark::run_all() {
   say_on_termination({});
 }
 
-RunResult Benchmark::result() const {
+RunResult Benchmark::take_result() {
   RunResult result;
   for (std::size_t c = 0; c < cells_.size(); ++c) {
-    result.cells.push_back(*cells_[c]);
+    result.cells.push_back(std::move(*cells_[c]));
     result.cells.back().summary.spec = cell_specs_[c];
   }
+  cells_.clear();
   attach_speedups(result.cells);
-  result.left_out = left_out_;
+  result.left_out = std::move(left_out_);
   return result;
 }
 
@@ -458,7 +459,7 @@ RunResult run_benchmark(const RunOptions& options) {
     return {};
   }
   benchmark.run_all();
-  return benchmark.result();
+  return benchmark.take_result();
 }
 
 }  // namespace ccd::harness
