@@ -9,8 +9,15 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <ostream>
+#include <stdexcept>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace ccd::harness {
 namespace {
@@ -94,8 +101,78 @@ void write_cell(const std::filesystem::path& file, json cell) {
   out.commit();
 }
 
-void rebuild_results_log(const std::filesystem::path& out, std::ostream& warnings) {
-  const datasets::FileLock lock(out / ".results.lock");
+namespace {
+
+std::string finished_at_of(const json& cell) {
+  const json& summary = cell["summary"];
+  return summary.contains("finished_at") && summary["finished_at"].is_string() ? summary["finished_at"].get<std::string>() : "";
+}
+
+/// A cell's lines in the log: its step records, then its summary.
+std::string log_lines(const json& cell) {
+  std::string text;
+  for (const json& step : cell["steps"]) text += step.dump() + '\n';
+  return text + cell["summary"].dump() + '\n';
+}
+
+ResultsLog::FileState state_of(const struct ::stat& info) {
+  return ResultsLog::FileState{static_cast<unsigned long long>(info.st_ino), static_cast<unsigned long long>(info.st_size),
+                               static_cast<long long>(info.st_mtim.tv_sec) * 1000000000LL + info.st_mtim.tv_nsec};
+}
+
+std::optional<ResultsLog::FileState> state_of(const std::filesystem::path& file) {
+  struct ::stat info {};
+  if (::stat(file.c_str(), &info) != 0) return std::nullopt;
+  return state_of(info);
+}
+
+/// Appends `text` to `file` in one piece: a write that fails part-way (a full disk) is cut back off, so the file
+/// never ends in half a line that this process could have taken back. @returns the file's state after it.
+ResultsLog::FileState append_whole(const std::filesystem::path& file, const std::string& text) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(file.string() + ": cannot be opened to append: " + std::strerror(errno));
+  struct ::stat before {};
+  ::fstat(fd, &before);
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ::ssize_t wrote = ::write(fd, text.data() + done, text.size() - done);
+    if (wrote < 0 && errno == EINTR) continue;
+    if (wrote <= 0) {
+      const int error = errno;
+      [[maybe_unused]] const int cut = ::ftruncate(fd, before.st_size);
+      ::close(fd);
+      throw std::runtime_error(file.string() + ": a cell's lines could not be appended: " + std::strerror(error));
+    }
+    done += static_cast<std::size_t>(wrote);
+  }
+  struct ::stat after {};
+  ::fstat(fd, &after);
+  ::close(fd);
+  return state_of(after);
+}
+
+}  // namespace
+
+void ResultsLog::add(const std::filesystem::path& file, const json& cell, std::ostream& warnings) {
+  const datasets::FileLock lock(out_ / ".results.lock");
+  const std::filesystem::path log = out_ / "results.jsonl";
+  const std::string name = file.filename().string();
+  const std::string finished = finished_at_of(cell);
+  if (!written_ || state_of(log) != written_ || names_.count(name) != 0 || finished < last_finished_) {
+    rebuild(warnings);
+    return;
+  }
+  written_ = append_whole(log, log_lines(cell));
+  names_.insert(name);
+  last_finished_ = finished;
+}
+
+void ResultsLog::finish(std::ostream& warnings) {
+  const datasets::FileLock lock(out_ / ".results.lock");
+  if (!written_ || state_of(out_ / "results.jsonl") != written_) rebuild(warnings);
+}
+
+void ResultsLog::rebuild(std::ostream& warnings) {
   struct Finished {
     std::string finished_at;
     std::string name;
@@ -103,13 +180,12 @@ void rebuild_results_log(const std::filesystem::path& out, std::ostream& warning
   };
   std::vector<Finished> cells;
   std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(out / "cells", error)) {
+  for (const auto& entry : std::filesystem::directory_iterator(out_ / "cells", error)) {
     const std::string name = entry.path().filename().string();
     if (!entry.is_regular_file() || entry.path().extension() != ".json" || name.find(".tmp.") != std::string::npos) continue;
     try {
       json cell = load_cell(entry.path());
-      const json& summary = cell["summary"];
-      std::string finished = summary.contains("finished_at") && summary["finished_at"].is_string() ? summary["finished_at"].get<std::string>() : "";
+      std::string finished = finished_at_of(cell);
       cells.push_back({std::move(finished), name, std::move(cell)});
     } catch (const InputError& bad) {
       warnings << "ccdbench: warning: " << bad.what() << "; left out of results.jsonl\n";
@@ -117,12 +193,17 @@ void rebuild_results_log(const std::filesystem::path& out, std::ostream& warning
   }
   std::sort(cells.begin(), cells.end(),
             [](const Finished& a, const Finished& b) { return std::tie(a.finished_at, a.name) < std::tie(b.finished_at, b.name); });
-  datasets::AtomicFile lines(out / "results.jsonl", std::ios::out);
+  const std::filesystem::path log = out_ / "results.jsonl";
+  datasets::AtomicFile lines(log, std::ios::out);
+  names_.clear();
+  last_finished_.clear();
   for (const Finished& finished : cells) {
-    for (const json& step : finished.cell["steps"]) lines.stream() << step.dump() << '\n';
-    lines.stream() << finished.cell["summary"].dump() << '\n';
+    lines.stream() << log_lines(finished.cell);
+    names_.insert(finished.name);
+    last_finished_ = std::max(last_finished_, finished.finished_at);
   }
   lines.commit();
+  written_ = state_of(log);
 }
 
 }  // namespace ccd::harness

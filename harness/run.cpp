@@ -166,6 +166,8 @@ class Benchmark {
   /// This run's id (rank 0's start time and process): what the interleaved cells of one of its scenes share.
   const std::string run_id_ = utc_now() + "-" + std::to_string(::getpid());
   std::optional<Progress> progress_;
+  /// OUT/results.jsonl, each cell added as it finishes (rank 0 alone writing).
+  ResultsLog results_log_{options_.out};
   std::vector<std::optional<CellRecord>> cells_;
   std::vector<std::string> cell_specs_;  // each cell's spec as --strategy gave it (the table's short name)
   std::vector<WorkItem> items_;
@@ -289,8 +291,9 @@ std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const stra
   // (compare and check match cells by it), rank 0 alone writing.
   if (kept->summary.spec != spec.text) {
     kept->summary.spec = spec.text;
-    write_cell(file, json(*kept));
-    rebuild_results_log(options_.out, std::cerr);
+    const json document = *kept;
+    write_cell(file, document);
+    results_log_.add(file, document, std::cerr);
   }
   kept->summary.resumed = true;
   say("run: " + source.label + " / " + key.strategy +
@@ -369,7 +372,9 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
     PlannedCell& planned = item.cells[c];
     CellRecord cell = result.at(c).get<CellRecord>();
     cell.summary.key = planned.key.to_json();
-    write_cell(planned.file, json(cell));
+    const json document = cell;
+    write_cell(planned.file, document);
+    results_log_.add(planned.file, document, std::cerr);
     ++cells_done_;
     ++cells_finished_;
     progress_->update(static_cast<double>(cells_finished_), cell_total_,
@@ -380,8 +385,6 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
     }
     cells_[planned.slot] = std::move(cell);
   }
-  // Once for the item's cells (every cell file of OUT is read again).
-  rebuild_results_log(options_.out, std::cerr);
 }
 
 void Benchmark::run_all() {
@@ -393,6 +396,7 @@ void Benchmark::run_all() {
       plan_scene(s);
       distribute(items_, work(), done);
     }
+    results_log_.finish(std::cerr);
     return;
   }
   for (std::size_t s = 0; s < variants_.size(); ++s) plan_scene(s);
@@ -402,6 +406,7 @@ void Benchmark::run_all() {
                      (options_.out / "cells").string() + "; the same command again, with any number of ranks, runs only the rest\n");
   distribute(items_, work(), done);
   say_on_termination({});
+  results_log_.finish(std::cerr);
 }
 
 RunResult Benchmark::take_result() {

@@ -9,6 +9,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <set>
 #include <thread>
 
@@ -163,6 +164,33 @@ TEST_F(Resume, ResultsKeepEveryCellOfEveryRunIntoOneFolder) {
   }
   EXPECT_EQ(full, 1u);
   EXPECT_EQ(apccd, 1u);
+}
+
+// A run appends each cell's lines to results.jsonl as it finishes: a cell computed again (--fresh) must replace its
+// lines, not add a second copy of them.
+TEST_F(Resume, ACellComputedAgainReplacesItsLinesInTheResults) {
+  const std::string scene = "run --scene " + quoted(fold_scene("s", {{"resolution", 6}, {"frames", 4}}));
+  run(scene + " --strategy full,apccd");
+  const std::vector<nlohmann::json> first = testing::read_json_lines(dir_ / "out/results.jsonl");
+  run(scene + " --strategy apccd,full --fresh");
+  const std::vector<nlohmann::json> again = testing::read_json_lines(dir_ / "out/results.jsonl");
+  ASSERT_EQ(again.size(), first.size()) << "3 steps and a summary for each of 2 cells";
+  std::map<std::string, std::size_t> summaries;
+  for (const auto& record : again) summaries[record["strategy"].get<std::string>().substr(0, 5)] += record["record"] == "summary" ? 1 : 0;
+  EXPECT_EQ(summaries, (std::map<std::string, std::size_t>{{"apccd", 1}, {"full+", 1}}));
+  // Cells in the order they finished: the rerun's apccd before its full.
+  EXPECT_EQ(again.back()["strategy"].get<std::string>().substr(0, 5), "full+");
+}
+
+// A run killed while appending leaves half a line: the next run into the folder rebuilds the log, even when it computes
+// nothing (every cell kept).
+TEST_F(Resume, AResultsLogCutShortIsRepairedByTheNextRun) {
+  const std::string scene = "run --scene " + quoted(fold_scene("s", {{"resolution", 6}, {"frames", 4}}));
+  run(scene + " --strategy full,apccd");
+  const std::string whole = testing::read_text(dir_ / "out/results.jsonl");
+  std::ofstream(dir_ / "out/results.jsonl", std::ios::binary | std::ios::trunc) << whole.substr(0, whole.size() - 40);
+  EXPECT_TRUE(resumed(run(scene + " --strategy full")));
+  EXPECT_EQ(testing::read_text(dir_ / "out/results.jsonl"), whole);
 }
 
 // Two runs into one --out at the same time: neither may drop the other's lines.
