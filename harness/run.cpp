@@ -62,7 +62,15 @@ class SceneStore {
     data->steps = data->sequence.num_steps();
     if (options_.max_steps > 0) data->steps = std::min(data->steps, options_.max_steps);
     if (data->steps == 0) throw InputError(source.label, {}, "the scene has no steps (one frame)");
-    for (std::size_t k = 0; k <= data->steps; ++k) data->frames.push_back(data->sequence.frame(k));
+    // The same scene at another δ has the same frames: copied, not read and checked again (a paper scene's 100 PLY
+    // frames take longer to read than its cell takes on a GPU).
+    const auto sibling =
+        std::find_if(loaded_.begin(), loaded_.end(), [&](const auto& held) { return variants_[held.first].source == variant.source; });
+    if (sibling != loaded_.end()) {
+      data->frames = sibling->second->frames;
+    } else {
+      for (std::size_t k = 0; k <= data->steps; ++k) data->frames.push_back(data->sequence.frame(k));
+    }
     data->truth.resize(data->steps);
     data->has_truth.assign(data->steps, false);
     loaded_.emplace_front(index, std::move(data));
@@ -320,11 +328,14 @@ void Benchmark::plan_scene(std::size_t s) {
   // Under MPI the largest cells go first (WorkItem::cost): a cell's work grows with its triangles and steps. A truth
   // step is given its scene's cell's cost: the cells wait for it, so a large scene's truth must not be left for last.
   const double cell_cost = static_cast<double>(scene.topology().num_faces()) * static_cast<double>(steps);
+  // A scene's items at every δ are one group: a rank that holds its frames takes the next of them (SceneStore shares
+  // the frames between its δ).
+  const std::size_t group = static_cast<std::size_t>(variants_[s].source - options_.scenes.data());
   std::vector<std::size_t> truth_items;
   if (options_.verify) {
     for (std::size_t k = 0; k < steps; ++k) {
       truth_items.push_back(items_.size());
-      items_.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}, {"threads", worker_threads()}}.dump(), {}, cell_cost});
+      items_.push_back({json{{"kind", "truth"}, {"scene", s}, {"step", k}, {"threads", worker_threads()}}.dump(), {}, cell_cost, group});
       planned_.push_back({source.label, k, steps, {}});
     }
   }
@@ -341,14 +352,14 @@ void Benchmark::plan_scene(std::size_t s) {
       task["cells"].push_back(cell_task(cell));
       item.cells.push_back({cell.slot, std::move(cell.file), std::move(cell.key)});
     }
-    items_.push_back({task.dump(), truth_items, cell_cost * static_cast<double>(pending.size())});
+    items_.push_back({task.dump(), truth_items, cell_cost * static_cast<double>(pending.size()), group});
     planned_.push_back(std::move(item));
     return;
   }
   for (Pending& cell : pending) {
     json task = cell_task(cell);
     task.update({{"kind", "cell"}, {"scene", s}, {"threads", worker_threads()}});
-    items_.push_back({task.dump(), truth_items, cell_cost});
+    items_.push_back({task.dump(), truth_items, cell_cost, group});
     planned_.push_back({source.label, 0, steps, {{cell.slot, std::move(cell.file), std::move(cell.key)}}});
   }
 }

@@ -189,6 +189,7 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
   std::vector<bool> waiting(items.size(), true), finished(items.size(), false);
   std::size_t unassigned = items.size();
   std::deque<int> idle;  // ranks asking for work; 0 is rank 0's own worker thread
+  std::vector<std::optional<std::size_t>> last_group(static_cast<std::size_t>(g_ranks.size));  // of each rank's last item
   int stopped = 0;
   LocalChannel channel;
   std::thread local([&] { local_worker(channel, items, work); });
@@ -234,7 +235,7 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
         channel.wants_work = true;
       }
       for (auto rank = idle.begin(); rank != idle.end();) {
-        const std::optional<std::size_t> item = next_ready_item(items, waiting, finished);
+        const std::optional<std::size_t> item = next_ready_item(items, waiting, finished, last_group[static_cast<std::size_t>(*rank)]);
         if (!item && unassigned > 0) break;  // the rest waits for running items
         progressed = true;
         if (!item) {
@@ -249,6 +250,7 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
         } else {
           waiting[*item] = false;
           --unassigned;
+          last_group[static_cast<std::size_t>(*rank)] = items[*item].group;
           if (*rank == 0) {
             std::lock_guard lock(channel.mutex);
             channel.assignment.emplace(*item, std::string());
@@ -280,13 +282,16 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
 
 }  // namespace
 
-std::optional<std::size_t> next_ready_item(const std::vector<WorkItem>& items, const std::vector<bool>& waiting, const std::vector<bool>& finished) {
+std::optional<std::size_t> next_ready_item(const std::vector<WorkItem>& items, const std::vector<bool>& waiting, const std::vector<bool>& finished,
+                                           std::optional<std::size_t> group) {
   std::optional<std::size_t> next;
+  const auto in_group = [&](std::size_t i) { return group && items[i].group == group; };
   for (std::size_t i = 0; i < items.size(); ++i) {
     if (!waiting[i]) continue;
     bool ready = true;
     for (const std::size_t before : items[i].after) ready = ready && finished.at(before);
-    if (ready && (!next || items[i].cost > items[*next].cost)) next = i;
+    if (!ready) continue;
+    if (!next || items[i].cost > items[*next].cost || (items[i].cost == items[*next].cost && in_group(i) && !in_group(*next))) next = i;
   }
   return next;
 }

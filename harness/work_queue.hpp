@@ -64,11 +64,17 @@ struct WorkItem {
   /// first (ties in plan order), so that a long item does not start last and run alone while the other ranks idle
   /// (longest processing time first). One process runs the items in plan order whatever their cost.
   double cost = 0;
+  /// Items of one group share what a rank loads for them (a scene's frames): of the costliest ready items, a rank is
+  /// handed one of the group it worked on last, so that it does not load another scene while one it holds has equal
+  /// work left (the paper sweep's cells of one scene at two δ cost the same).
+  std::optional<std::size_t> group;
 };
 
-/// Of the items not handed out yet (`waiting`) whose items to wait for have `finished`, the one rank 0 hands out next:
-/// the costliest, the first in plan order among equals; nullopt when none is ready.
-std::optional<std::size_t> next_ready_item(const std::vector<WorkItem>& items, const std::vector<bool>& waiting, const std::vector<bool>& finished);
+/// Of the items not handed out yet (`waiting`) whose items to wait for have `finished`, the one rank 0 hands out next
+/// to a rank that worked last on `group`: the costliest; among equals, one of `group`; then the first in plan order.
+/// nullopt when none is ready.
+std::optional<std::size_t> next_ready_item(const std::vector<WorkItem>& items, const std::vector<bool>& waiting, const std::vector<bool>& finished,
+                                           std::optional<std::size_t> group = std::nullopt);
 
 /// Carries out one item's payload on the rank that took it; returns the result, sent back to rank 0.
 using WorkFunction = std::function<std::string(const std::string& payload)>;

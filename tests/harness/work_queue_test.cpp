@@ -25,5 +25,23 @@ TEST(WorkQueue, HandsOutTheCostliestReadyItemFirst) {
   EXPECT_FALSE(next_ready_item(items, only_large, none).has_value());
 }
 
+// Of equally costly items, a rank gets one of the scene it worked on last: the paper sweep's cells of one scene at
+// two δ cost the same, and a rank that took the other scene's would load its 100 frames for nothing. Cost still comes
+// first: a costlier item of another scene goes before.
+TEST(WorkQueue, OfEqualCostsARankKeepsToItsScene) {
+  const std::vector<WorkItem> items = {{"a", {}, 5, 0}, {"b", {}, 5, 1}, {"a again", {}, 5, 0}, {"c", {}, 9, 2}, {"b again", {}, 5, 1}};
+  std::vector<bool> waiting(items.size(), true), finished(items.size(), false);
+  auto take = [&](std::optional<std::size_t> group) {
+    const std::optional<std::size_t> next = next_ready_item(items, waiting, finished, group);
+    waiting.at(next.value()) = false;
+    return items[*next].payload;
+  };
+  EXPECT_EQ(take(1), "c");
+  EXPECT_EQ(take(1), "b");
+  EXPECT_EQ(take(1), "b again");
+  EXPECT_EQ(take(1), "a") << "none of its scene left: plan order";
+  EXPECT_EQ(take(std::nullopt), "a again");
+}
+
 }  // namespace
 }  // namespace ccd::harness
