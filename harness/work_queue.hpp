@@ -67,7 +67,7 @@ struct WorkItem {
   /// Items of one group share what a rank loads for them (a scene's frames): of the costliest ready items, a rank is
   /// handed one of the group it worked on last, so that it does not load another scene while one it holds has equal
   /// work left (the paper sweep's cells of one scene at two δ cost the same).
-  std::optional<std::size_t> group;
+  std::optional<std::size_t> group = std::nullopt;
 };
 
 /// Of the items not handed out yet (`waiting`) whose items to wait for have `finished`, the one rank 0 hands out next

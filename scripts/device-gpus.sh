@@ -24,6 +24,13 @@ echo "machine: $cores cores, $gpus GPUs ($(nvidia-smi --query-gpu=name --format=
 "$bin" devices | grep -E '^[0-9]+:' || true
 # Warm: the suite's frames generated and the kernels compiled once, outside the timed runs.
 "$bin" --threads "$cores" run --suite "$suite" --strategy "$strategy" --thickness "$thickness" --verify none --max-steps 1 --fresh --out /tmp/gpus-warm > /dev/null 2>&1
+stamp() {  # each line of stdin after the ms since $1 (date +%s%N)
+  local line now
+  while IFS= read -r line; do
+    now=${EPOCHREALTIME/./}
+    printf '%6d %s\n' $(((now * 1000 - $1) / 1000000)) "$line"
+  done
+}
 printf '%-6s %-8s %-10s %-24s %s\n' ranks threads wall_ms "devices by rank" "busiest 100 ms per GPU (%)"
 for ranks in ${RANKS:-1 $gpus}; do
   threads=$((cores / ranks))
@@ -36,9 +43,12 @@ for ranks in ${RANKS:-1 $gpus}; do
   nvidia-smi --query-gpu=index,utilization.gpu --format=csv,noheader,nounits -lms 100 > "$out/$name.smi" &
   sampler=$!
   start=$(date +%s%N)
+  # The log's lines with the ms since the launch: when each cell ended, on which rank.
   "${launch[@]}" run --suite "$suite" --strategy "$strategy" --thickness "$thickness" --verify none --fresh --out "/tmp/gpus-$name" --json "$out/$name.json" \
-    > "$out/$name.txt" 2> "$out/$name.log"
+    > "$out/$name.txt" 2> >(stamp "$start" > "$out/$name.log")
   wall=$((($(date +%s%N) - start) / 1000000))
+  wait $! 2> /dev/null || true
+  echo "$wall" > "$out/$name.wall"
   kill "$sampler" 2> /dev/null || true
   wait "$sampler" 2> /dev/null || true
   devices=$(python3 - "$out/$name.json" << 'EOF'
@@ -68,13 +78,24 @@ for r, cells in runs.items():
     print("answers with %s rank(s): %d cells, %s as one process's" % (r, len(cells), "the same" if same else "NOT the same"))
 EOF
 # Where each run's time went, from its records: every cell's start (setup_ms: making the strategy, its init on the
-# first frame) and its timed steps, summed over the cells (over every rank's).
+# first frame) and its timed steps, summed over the cells (over every rank's); each rank's own work (its cells' starts
+# and steps) against the wall time; and from the stamped log, when the first cell ended and how long the last cells
+# ran with ranks idle.
 python3 - "$out" << 'EOF2'
-import glob, json, os, statistics, sys
+import glob, json, os, re, statistics, sys
 for path in sorted(glob.glob(os.path.join(sys.argv[1], "r*-t*.json"))):
+    name = path[:-5]
     cells = json.load(open(path))
     setup = [c.get("setup_ms", 0.0) for c in cells]
     timed = sum(c["ms_per_step_mean"] * c["steps"] * c.get("repeats", 1) for c in cells)
-    print("%s: %d cells; their starts %.1f s (median %.0f ms, max %.0f ms); their timed steps %.1f s" % (
-        os.path.basename(path)[:-5], len(cells), sum(setup) / 1e3, statistics.median(setup), max(setup), timed / 1e3))
+    own = {}
+    for c in cells:
+        own[c["rank"]] = own.get(c["rank"], 0.0) + c.get("setup_ms", 0.0) + c["ms_per_step_mean"] * c["steps"] * c.get("repeats", 1)
+    wall = float(open(name + ".wall").read()) if os.path.exists(name + ".wall") else float("nan")
+    ends = [int(line.split()[0]) for line in open(name + ".log") if re.search(r"pass \d+ of \d+ done|: cell \d+ of \d+ done", line)] if os.path.exists(name + ".log") else []
+    print("%s: %d cells; their starts %.1f s (median %.0f ms, max %.0f ms); their timed steps %.1f s; each rank's own work %s s of %.1f s wall" % (
+        os.path.basename(name), len(cells), sum(setup) / 1e3, statistics.median(setup), max(setup), timed / 1e3,
+        "/".join("%.1f" % (v / 1e3) for _, v in sorted(own.items())), wall / 1e3))
+    if ends:
+        print("   first cell ended at %.1f s, last at %.1f s" % (min(ends) / 1e3, max(ends) / 1e3))
 EOF2
