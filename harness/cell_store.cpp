@@ -158,10 +158,13 @@ void ResultsLog::add(const std::filesystem::path& file, const json& cell, std::o
   const std::filesystem::path log = out_ / "results.jsonl";
   const std::string name = file.filename().string();
   const std::string finished = finished_at_of(cell);
-  if (!written_ || state_of(log) != written_ || names_.count(name) != 0 || finished < last_finished_) {
+  if (!written_ || state_of(log) != written_ || finished < last_finished_) {
     rebuild(warnings);
     return;
   }
+  // A cell computed again: its earlier lines stay until the run's end (every reader takes a cell's latest summary and
+  // steps), so that a rerun of a whole sweep with --fresh does not rebuild the log after each cell.
+  if (names_.count(name) != 0) stale_ = true;
   written_ = append_whole(log, log_lines(cell));
   names_.insert(name);
   last_finished_ = finished;
@@ -169,7 +172,7 @@ void ResultsLog::add(const std::filesystem::path& file, const json& cell, std::o
 
 void ResultsLog::finish(std::ostream& warnings) {
   const datasets::FileLock lock(out_ / ".results.lock");
-  if (!written_ || state_of(out_ / "results.jsonl") != written_) rebuild(warnings);
+  if (!written_ || stale_ || state_of(out_ / "results.jsonl") != written_) rebuild(warnings);
 }
 
 void ResultsLog::rebuild(std::ostream& warnings) {
@@ -197,6 +200,7 @@ void ResultsLog::rebuild(std::ostream& warnings) {
   datasets::AtomicFile lines(log, std::ios::out);
   names_.clear();
   last_finished_.clear();
+  stale_ = false;
   for (const Finished& finished : cells) {
     lines.stream() << log_lines(finished.cell);
     names_.insert(finished.name);

@@ -64,20 +64,21 @@ void write_cell(const std::filesystem::path& file, nlohmann::json cell);
 /// them, under an exclusive lock of OUT/.results.lock, so that two runs writing into one OUT at once never drop each
 /// other's lines. Corrupt cell files are left out with a warning.
 ///
-/// A run adds each cell as it finishes. The cell is appended when the log is still as this run left it, the cell is
-/// new to it and finished after every cell in it: a sweep of hundreds of cells must not parse every cell file again
-/// after each one (that made a run quadratic in its cells: on four GPUs, rank 0 spent more time rebuilding the log
-/// than handing out cells). Otherwise (another run wrote the log, a cell was computed again, the first cell of a
-/// run) the log is rebuilt from every cell file, cells in the order they finished.
+/// A run adds each cell as it finishes. The cell is appended when the log is still as this run left it and the cell
+/// finished after every cell in it: a sweep of hundreds of cells must not parse every cell file again after each one
+/// (that made a run quadratic in its cells, on rank 0's coordinating thread under MPI). Otherwise (another run wrote
+/// the log, the first cell of a run) the log is rebuilt from every cell file, cells in the order they finished. A
+/// cell computed again is appended too, its earlier lines left until the run's end (every reader takes a cell's latest
+/// summary and steps), when the log is rebuilt without them.
 class ResultsLog {
  public:
   explicit ResultsLog(std::filesystem::path out) : out_(std::move(out)) {}
 
   /// The cell just written to `file` (in OUT/cells), as written: appended, or the whole log rebuilt.
   void add(const std::filesystem::path& file, const nlohmann::json& cell, std::ostream& warnings);
-  /// At the end of a run: rebuilds the log unless this run wrote it last and no one changed it since. An append cut
-  /// short (a run killed while writing it leaves half a line) is repaired by the next run into OUT, even one that
-  /// computes nothing.
+  /// At the end of a run: rebuilds the log unless this run wrote it last, appended no cell it held already, and no one
+  /// changed it since. An append cut short (a run killed while writing it leaves half a line) is repaired by the next
+  /// run into OUT, even one that computes nothing.
   void finish(std::ostream& warnings);
 
   /// The log's identity as a process last left it: inode, size and modification time.
@@ -94,6 +95,8 @@ class ResultsLog {
   /// The cell files the log holds and the latest `finished_at` among them, when this run wrote it last (else empty).
   std::set<std::string> names_;
   std::string last_finished_;
+  /// The log holds an earlier copy of a cell appended again: rebuilt at the run's end.
+  bool stale_ = false;
   std::optional<FileState> written_;
 };
 
