@@ -45,9 +45,8 @@ for ranks in ${RANKS:-1 $gpus}; do
   start=$(date +%s%N)
   # The log's lines with the ms since the launch: when each cell ended, on which rank.
   "${launch[@]}" run --suite "$suite" --strategy "$strategy" --thickness "$thickness" --verify none --fresh --out "/tmp/gpus-$name" --json "$out/$name.json" \
-    > "$out/$name.txt" 2> >(stamp "$start" > "$out/$name.log")
+    2>&1 > "$out/$name.txt" | stamp "$start" > "$out/$name.log"
   wall=$((($(date +%s%N) - start) / 1000000))
-  wait $! 2> /dev/null || true
   echo "$wall" > "$out/$name.wall"
   kill "$sampler" 2> /dev/null || true
   wait "$sampler" 2> /dev/null || true
