@@ -54,6 +54,19 @@ FileLock::~FileLock() {
   ::close(fd_);
 }
 
+SharedFileLock::SharedFileLock(const std::filesystem::path& path) : fd_(::open(path.c_str(), O_RDONLY | O_CLOEXEC)) {
+  if (fd_ >= 0 && ::flock(fd_, LOCK_SH) != 0) {
+    ::close(fd_);
+    fd_ = -1;
+  }
+}
+
+SharedFileLock::~SharedFileLock() {
+  if (fd_ < 0) return;
+  ::flock(fd_, LOCK_UN);
+  ::close(fd_);
+}
+
 void require_writable_directory(const std::filesystem::path& directory) {
   std::error_code error;
   if (std::filesystem::exists(directory, error) && !std::filesystem::is_directory(directory, error)) {

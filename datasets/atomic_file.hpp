@@ -43,6 +43,20 @@ class FileLock {
   int fd_;
 };
 
+/// A shared advisory lock (flock) on `path` where that file exists and can be opened, held until destruction; nothing
+/// otherwise (a folder the reader may not write, a run that never took FileLock there): what a reader takes of a file
+/// that FileLock's holders append to in place (results.jsonl), so that it never reads half of an append.
+class SharedFileLock {
+ public:
+  explicit SharedFileLock(const std::filesystem::path& path);
+  ~SharedFileLock();
+  SharedFileLock(const SharedFileLock&) = delete;
+  SharedFileLock& operator=(const SharedFileLock&) = delete;
+
+ private:
+  int fd_;
+};
+
 /// Writes `document` (pretty-printed) to `path` atomically: the one writer of JSON result files (reports, --json,
 /// scene.json of generated scenes).
 void write_json_file(const std::filesystem::path& path, const nlohmann::json& document);

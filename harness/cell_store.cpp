@@ -108,6 +108,12 @@ std::string finished_at_of(const json& cell) {
   return summary.contains("finished_at") && summary["finished_at"].is_string() ? summary["finished_at"].get<std::string>() : "";
 }
 
+/// What a reader of the log takes a cell's latest lines by: its scene, δ and strategy (run/result_set.hpp's steps_key).
+std::string reader_key(const json& cell) {
+  const json& summary = cell["summary"];
+  return summary.value("scene", "") + '\n' + summary.value("thickness", json()).dump() + '\n' + summary.value("strategy", "");
+}
+
 /// A cell's lines in the log: its step records, then its summary.
 std::string log_lines(const json& cell) {
   std::string text;
@@ -132,13 +138,17 @@ ResultsLog::FileState append_whole(const std::filesystem::path& file, const std:
   const int fd = ::open(file.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
   if (fd < 0) throw std::runtime_error(file.string() + ": cannot be opened to append: " + std::strerror(errno));
   struct ::stat before {};
-  ::fstat(fd, &before);
+  if (::fstat(fd, &before) != 0) {
+    const int error = errno;
+    ::close(fd);
+    throw std::runtime_error(file.string() + ": cannot be read before appending: " + std::strerror(error));
+  }
   std::size_t done = 0;
   while (done < text.size()) {
     const ::ssize_t wrote = ::write(fd, text.data() + done, text.size() - done);
     if (wrote < 0 && errno == EINTR) continue;
     if (wrote <= 0) {
-      const int error = errno;
+      const int error = wrote == 0 ? ENOSPC : errno;  // a write of nothing sets no errno
       [[maybe_unused]] const int cut = ::ftruncate(fd, before.st_size);
       ::close(fd);
       throw std::runtime_error(file.string() + ": a cell's lines could not be appended: " + std::strerror(error));
@@ -158,7 +168,12 @@ void ResultsLog::add(const std::filesystem::path& file, const json& cell, std::o
   const std::filesystem::path log = out_ / "results.jsonl";
   const std::string name = file.filename().string();
   const std::string finished = finished_at_of(cell);
-  if (!written_ || state_of(log) != written_ || finished < last_finished_) {
+  const std::string key = reader_key(cell);
+  // A reader takes a cell's summary by the latest finished_at among those of its scene, δ and strategy, and its steps
+  // by the last lines: a cell that finished before another of its key already in the log goes in its place (a
+  // rebuild). Cells of other keys may come in any order (under MPI they reach rank 0 out of order).
+  const auto latest = latest_.find(key);
+  if (!written_ || state_of(log) != written_ || (latest != latest_.end() && finished < latest->second)) {
     rebuild(warnings);
     return;
   }
@@ -167,12 +182,14 @@ void ResultsLog::add(const std::filesystem::path& file, const json& cell, std::o
   if (names_.count(name) != 0) stale_ = true;
   written_ = append_whole(log, log_lines(cell));
   names_.insert(name);
-  last_finished_ = finished;
+  latest_[key] = finished;
 }
 
 void ResultsLog::finish(std::ostream& warnings) {
+  const std::filesystem::path log = out_ / "results.jsonl";
+  if (!written_ && !std::filesystem::exists(log)) return;  // nothing to repair, and a run that finished no cell writes none
   const datasets::FileLock lock(out_ / ".results.lock");
-  if (!written_ || stale_ || state_of(out_ / "results.jsonl") != written_) rebuild(warnings);
+  if (!written_ || stale_ || state_of(log) != written_) rebuild(warnings);
 }
 
 void ResultsLog::rebuild(std::ostream& warnings) {
@@ -197,14 +214,17 @@ void ResultsLog::rebuild(std::ostream& warnings) {
   std::sort(cells.begin(), cells.end(),
             [](const Finished& a, const Finished& b) { return std::tie(a.finished_at, a.name) < std::tie(b.finished_at, b.name); });
   const std::filesystem::path log = out_ / "results.jsonl";
-  datasets::AtomicFile lines(log, std::ios::out);
+  // Until the new log is in place, this run knows nothing of it: a failed commit leaves no state to append after.
+  written_.reset();
   names_.clear();
-  last_finished_.clear();
+  latest_.clear();
   stale_ = false;
+  datasets::AtomicFile lines(log, std::ios::out);
   for (const Finished& finished : cells) {
     lines.stream() << log_lines(finished.cell);
     names_.insert(finished.name);
-    last_finished_ = std::max(last_finished_, finished.finished_at);
+    std::string& latest = latest_[reader_key(finished.cell)];
+    latest = std::max(latest, finished.finished_at);
   }
   lines.commit();
   written_ = state_of(log);

@@ -15,6 +15,7 @@
 
 #include <filesystem>
 #include <iosfwd>
+#include <map>
 #include <optional>
 #include <set>
 #include <span>
@@ -65,20 +66,22 @@ void write_cell(const std::filesystem::path& file, nlohmann::json cell);
 /// other's lines. Corrupt cell files are left out with a warning.
 ///
 /// A run adds each cell as it finishes. The cell is appended when the log is still as this run left it and the cell
-/// finished after every cell in it: a sweep of hundreds of cells must not parse every cell file again after each one
-/// (that made a run quadratic in its cells, on rank 0's coordinating thread under MPI). Otherwise (another run wrote
-/// the log, the first cell of a run) the log is rebuilt from every cell file, cells in the order they finished. A
-/// cell computed again is appended too, its earlier lines left until the run's end (every reader takes a cell's latest
-/// summary and steps), when the log is rebuilt without them.
+/// finished after every cell of its scene, δ and strategy in it: a sweep of hundreds of cells must not parse every
+/// cell file again after each one (that made a run quadratic in its cells, on rank 0's coordinating thread under
+/// MPI). Otherwise (another run wrote the log, the first cell of a run, a cell older than one of its key) the log is
+/// rebuilt from every cell file, cells in the order they finished. A cell computed again is appended too, its earlier
+/// lines left until the run's end (every reader takes a cell's latest summary and steps), when the log is rebuilt
+/// without them. Appended cells are in the order they reached the writer.
 class ResultsLog {
  public:
   explicit ResultsLog(std::filesystem::path out) : out_(std::move(out)) {}
 
   /// The cell just written to `file` (in OUT/cells), as written: appended, or the whole log rebuilt.
   void add(const std::filesystem::path& file, const nlohmann::json& cell, std::ostream& warnings);
-  /// At the end of a run: rebuilds the log unless this run wrote it last, appended no cell it held already, and no one
-  /// changed it since. An append cut short (a run killed while writing it leaves half a line) is repaired by the next
-  /// run into OUT, even one that computes nothing.
+  /// At the end of a run, or when it stops on an error: rebuilds the log unless this run wrote it last, appended no
+  /// cell it held already, and no one changed it since. An append cut short (a run killed while writing it leaves half
+  /// a line) is repaired by the next run into OUT, even one that computes nothing. Where there is no log and this run
+  /// added no cell, it writes none.
   void finish(std::ostream& warnings);
 
   /// The log's identity as a process last left it: inode, size and modification time.
@@ -94,7 +97,8 @@ class ResultsLog {
   std::filesystem::path out_;
   /// The cell files the log holds and the latest `finished_at` among them, when this run wrote it last (else empty).
   std::set<std::string> names_;
-  std::string last_finished_;
+  /// By a reader's key (scene, δ, strategy): the latest finished_at in the log.
+  std::map<std::string, std::string> latest_;
   /// The log holds an earlier copy of a cell appended again: rebuilt at the run's end.
   bool stale_ = false;
   std::optional<FileState> written_;

@@ -66,7 +66,9 @@ class SceneStore {
     // frames take longer to read than its cell takes on a GPU).
     const auto sibling =
         std::find_if(loaded_.begin(), loaded_.end(), [&](const auto& held) { return variants_[held.first].source == variant.source; });
-    if (sibling != loaded_.end()) {
+    // (Checked against the scene as loaded now: one whose files changed between the two loads is read again.)
+    const std::size_t vertices = data->sequence.scene().topology().num_vertices();
+    if (sibling != loaded_.end() && sibling->second->frames.size() == data->steps + 1 && sibling->second->frames[0].size() == vertices) {
       data->frames = sibling->second->frames;
     } else {
       for (std::size_t k = 0; k <= data->steps; ++k) data->frames.push_back(data->sequence.frame(k));
@@ -401,11 +403,21 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
 void Benchmark::run_all() {
   const DoneFunction done = [this](std::size_t index, const std::string& text, int rank) { item_done(index, text, rank); };
   if (rank_info().size == 1) {
-    for (std::size_t s = 0; s < variants_.size(); ++s) {
-      items_.clear();
-      planned_.clear();
-      plan_scene(s);
-      distribute(items_, work(), done);
+    try {
+      for (std::size_t s = 0; s < variants_.size(); ++s) {
+        items_.clear();
+        planned_.clear();
+        plan_scene(s);
+        distribute(items_, work(), done);
+      }
+    } catch (...) {
+      // A run that stops on an error still leaves the log as the cell files hold it (a cell computed again once).
+      try {
+        results_log_.finish(std::cerr);
+      } catch (const std::exception& error) {
+        std::cerr << "ccdbench: warning: results.jsonl was not rebuilt: " << error.what() << "\n";
+      }
+      throw;
     }
     results_log_.finish(std::cerr);
     return;

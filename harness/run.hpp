@@ -44,7 +44,7 @@ void complete_run_request(RunOptions& options, const std::vector<std::string>& s
 void prepare_run_outputs(const RunOptions& options);
 
 /// Runs the cells. Prints nothing but its progress (on stderr); every finished cell is written to --out at once
-/// (its cell file, and results.jsonl rebuilt). The table, --json and --report are reporters over the result
+/// (its cell file, and its lines in results.jsonl: harness/cell_store.hpp's ResultsLog). The table, --json and --report are reporters over the result
 /// (report_run, run/tables.hpp). Its strategies are validated specs (strategies::validate).
 RunResult run_benchmark(const RunOptions& options);
 

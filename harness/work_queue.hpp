@@ -61,7 +61,7 @@ struct WorkItem {
   std::string payload;
   std::vector<std::size_t> after;
   /// An estimate of the item's work, in any unit its plan shares: of the items ready, ranks are handed the costliest
-  /// first (ties in plan order), so that a long item does not start last and run alone while the other ranks idle
+  /// first (ties: see `group`), so that a long item does not start last and run alone while the other ranks idle
   /// (longest processing time first). One process runs the items in plan order whatever their cost.
   double cost = 0;
   /// Items of one group share what a rank loads for them (a scene's frames): of the costliest ready items, a rank is

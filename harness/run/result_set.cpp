@@ -1,6 +1,7 @@
 #include "harness/run/result_set.hpp"
 
 #include "core/error.hpp"
+#include "datasets/atomic_file.hpp"
 #include "datasets/input_file.hpp"
 
 #include <fstream>
@@ -37,6 +38,8 @@ ResultSet read_result_set(const std::filesystem::path& given, SummaryUse use) {
   set.path = given;
   std::filesystem::path file = given;
   if (std::filesystem::is_directory(given)) file = given / "results.jsonl";
+  // A run appends to its --out's results.jsonl under the folder's lock (harness/cell_store.hpp): read between appends.
+  const datasets::SharedFileLock between_appends(file.parent_path() / ".results.lock");
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file, {}, std::filesystem::is_directory(given) ? "no results.jsonl: not a run's --out folder" : "cannot be read");
   std::vector<CellSummary> summaries;
@@ -50,6 +53,9 @@ ResultSet read_result_set(const std::filesystem::path& given, SummaryUse use) {
       try {
         record = json::parse(line);
       } catch (const json::parse_error& error) {
+        // A line without its end is the last, cut short: a run killed while it appended a cell.
+        if (in.eof())
+          throw InputError(file, where, "cut short (a run was killed while it wrote this line); the next run into its folder rebuilds the log");
         throw InputError(file, where, std::string("not JSON: ") + error.what());
       }
       const std::string kind = record_kind(record);

@@ -1,16 +1,21 @@
 // Resumed cells (`ccdbench run --out`): a cell is reused only when everything its numbers depend on is the same,
 // a corrupt cell file is an error, and results.jsonl keeps every finished cell of every run into the folder.
 
+#include "datasets/atomic_file.hpp"
 #include "datasets/procedural_scenes.hpp"
+#include "harness/cell_store.hpp"
 #include "tests/support/cli.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
+#include <future>
 #include <map>
 #include <set>
+#include <sstream>
 #include <thread>
 
 namespace ccd {
@@ -189,8 +194,83 @@ TEST_F(Resume, AResultsLogCutShortIsRepairedByTheNextRun) {
   run(scene + " --strategy full,apccd");
   const std::string whole = testing::read_text(dir_ / "out/results.jsonl");
   std::ofstream(dir_ / "out/results.jsonl", std::ios::binary | std::ios::trunc) << whole.substr(0, whole.size() - 40);
+  // Until then a reader says what happened and how it is repaired.
+  const testing::CommandResult cut = run_ccdbench("compare " + quoted(dir_ / "out") + " " + quoted(dir_ / "out"));
+  EXPECT_EQ(cut.exit_code, 2) << cut.output;
+  EXPECT_NE(cut.output.find("cut short"), std::string::npos) << cut.output;
   EXPECT_TRUE(resumed(run(scene + " --strategy full")));
   EXPECT_EQ(testing::read_text(dir_ / "out/results.jsonl"), whole);
+}
+
+// A reader of an --out folder waits while a run appends to its results.jsonl (the folder's lock): it never reads half
+// of a cell's lines.
+TEST_F(Resume, AReaderWaitsForAnAppendToEnd) {
+  const std::string scene = "run --scene " + quoted(fold_scene("s", {{"resolution", 6}, {"frames", 4}}));
+  run(scene + " --strategy full,apccd");
+  const std::string whole = testing::read_text(dir_ / "out/results.jsonl");
+  std::future<testing::CommandResult> reader;
+  {
+    const datasets::FileLock appending(dir_ / "out/.results.lock");
+    std::ofstream(dir_ / "out/results.jsonl", std::ios::binary | std::ios::trunc) << whole.substr(0, whole.size() - 40);
+    reader = std::async(std::launch::async, [&] { return run_ccdbench("compare " + quoted(dir_ / "out") + " " + quoted(dir_ / "out")); });
+    EXPECT_EQ(reader.wait_for(std::chrono::milliseconds(500)), std::future_status::timeout) << "the reader did not wait for the lock";
+    std::ofstream(dir_ / "out/results.jsonl", std::ios::binary | std::ios::trunc) << whole;
+  }
+  const testing::CommandResult read = reader.get();
+  EXPECT_EQ(read.exit_code, 0) << read.output;
+}
+
+// A run that stops on an error (here a later scene that does not load) after computing a cell again leaves the log
+// as the cell files hold it: one copy of each cell.
+TEST_F(Resume, ARunStoppedByAnErrorLeavesOneCopyOfEachCell) {
+  const std::string scene = quoted(fold_scene("s", {{"resolution", 6}, {"frames", 4}}));
+  run("run --scene " + scene + " --strategy full,apccd");
+  std::filesystem::create_directories(dir_ / "bad");
+  std::ofstream(dir_ / "bad/scene.json") << "{\"objects\": ";
+  const testing::CommandResult stopped =
+      run_ccdbench("run --scene " + scene + " --scene " + quoted(dir_ / "bad") + " --strategy full,apccd --fresh --out " + quoted(dir_ / "out"));
+  ASSERT_EQ(stopped.exit_code, 2) << stopped.output;
+  std::size_t summaries = 0;
+  for (const auto& record : testing::read_json_lines(dir_ / "out/results.jsonl")) summaries += record["record"] == "summary" ? 1 : 0;
+  EXPECT_EQ(summaries, 2u) << "full and apccd, each once";
+}
+
+// Under MPI, cells reach rank 0 out of the order they finished. A cell of another scene, δ or strategy is appended
+// where it arrives; one that finished before a cell of its own key already in the log is put in its place by a
+// rebuild: a reader takes a key's summary by finished_at and its steps by the last lines, which must be one cell's.
+TEST_F(Resume, ACellOlderThanOneOfItsKeyGoesInItsPlace) {
+  const std::filesystem::path out = dir_ / "log";
+  std::filesystem::create_directories(out / "cells");
+  const auto cell = [&](const std::string& name, const std::string& strategy, const std::string& finished) {
+    const nlohmann::json record = {
+        {"key", {{"cell", name}}},
+        {"summary", {{"record", "summary"}, {"scene", "s"}, {"thickness", 0.0}, {"strategy", strategy}, {"finished_at", finished}}},
+        {"steps", nlohmann::json::array({{{"record", "step"}, {"step", 0}, {"of", name}}})}};
+    harness::write_cell(out / "cells" / (name + ".json"), record);
+    return std::pair{out / "cells" / (name + ".json"), record};
+  };
+  const auto finished_in_order = [&] {
+    std::vector<std::string> order;
+    for (const auto& record : testing::read_json_lines(out / "results.jsonl")) {
+      if (record["record"] == "summary") order.push_back(record["finished_at"]);
+    }
+    return order;
+  };
+  harness::ResultsLog log(out);
+  std::ostringstream warnings;
+  const auto [a, a_cell] = cell("a", "full", "2026-01-01T00:00:02.000000Z");
+  log.add(a, a_cell, warnings);
+  const auto [b, b_cell] = cell("b", "apccd", "2026-01-01T00:00:01.000000Z");
+  log.add(b, b_cell, warnings);
+  EXPECT_EQ(finished_in_order(), (std::vector<std::string>{"2026-01-01T00:00:02.000000Z", "2026-01-01T00:00:01.000000Z"}))
+      << "another key: appended where it arrived";
+  const auto [c, c_cell] = cell("c", "full", "2026-01-01T00:00:01.500000Z");
+  log.add(c, c_cell, warnings);
+  log.finish(warnings);
+  EXPECT_EQ(finished_in_order(),
+            (std::vector<std::string>{"2026-01-01T00:00:01.000000Z", "2026-01-01T00:00:01.500000Z", "2026-01-01T00:00:02.000000Z"}))
+      << "older than full's cell in the log: rebuilt in the order the cells finished";
+  EXPECT_EQ(warnings.str(), "");
 }
 
 // Two runs into one --out at the same time: neither may drop the other's lines.
