@@ -4,6 +4,7 @@
 #include "datasets/atomic_file.hpp"
 #include "datasets/content_hash.hpp"
 #include "datasets/input_file.hpp"
+#include "harness/run/result_set.hpp"
 #include "harness/truth_cache.hpp"
 #include "strategies/registry.hpp"
 
@@ -108,10 +109,10 @@ std::string finished_at_of(const json& cell) {
   return summary.contains("finished_at") && summary["finished_at"].is_string() ? summary["finished_at"].get<std::string>() : "";
 }
 
-/// What a reader of the log takes a cell's latest lines by: its scene, δ and strategy (run/result_set.hpp's steps_key).
+/// What a reader of the log takes a cell's latest lines by: its scene, δ and strategy, the reader's own key.
 std::string reader_key(const json& cell) {
   const json& summary = cell["summary"];
-  return summary.value("scene", "") + '\n' + summary.value("thickness", json()).dump() + '\n' + summary.value("strategy", "");
+  return steps_key(summary.value("scene", std::string()), summary.value("thickness", 0.0), summary.value("strategy", std::string()));
 }
 
 /// A cell's lines in the log: its step records, then its summary.
