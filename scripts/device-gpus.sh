@@ -78,18 +78,18 @@ for r, cells in runs.items():
 EOF
 # Where each run's time went, from its records: every cell's start (setup_ms: making the strategy, its init on the
 # first frame) and its timed steps, summed over the cells (over every rank's); each rank's own work (its cells' starts
-# and steps) against the wall time; and from the stamped log, when the first cell ended and how long the last cells
-# ran with ranks idle.
+# and steps) against the wall time; and from the stamped log, when the first and the last cell ended.
 python3 - "$out" << 'EOF2'
 import glob, json, os, re, statistics, sys
 for path in sorted(glob.glob(os.path.join(sys.argv[1], "r*-t*.json"))):
     name = path[:-5]
     cells = json.load(open(path))
     setup = [c.get("setup_ms", 0.0) for c in cells]
-    timed = sum(c["ms_per_step_mean"] * c["steps"] * c.get("repeats", 1) for c in cells)
+    steps = [c["ms_per_step_mean"] * c["steps"] * c.get("repeats", 1) for c in cells]
+    timed = sum(steps)
     own = {}
-    for c in cells:
-        own[c["rank"]] = own.get(c["rank"], 0.0) + c.get("setup_ms", 0.0) + c["ms_per_step_mean"] * c["steps"] * c.get("repeats", 1)
+    for c, start, stepped in zip(cells, setup, steps):
+        own[c["rank"]] = own.get(c["rank"], 0.0) + start + stepped
     wall = float(open(name + ".wall").read()) if os.path.exists(name + ".wall") else float("nan")
     ends = [int(line.split()[0]) for line in open(name + ".log") if re.search(r"pass \d+ of \d+ done|: cell \d+ of \d+ done", line)] if os.path.exists(name + ".log") else []
     print("%s: %d cells; their starts %.1f s (median %.0f ms, max %.0f ms); their timed steps %.1f s; each rank's own work %s s of %.1f s wall" % (
