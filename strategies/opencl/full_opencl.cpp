@@ -54,17 +54,22 @@ struct Chunks {
 /// (device=all, device=0+1) has one of these per device, each taking ranges of the step's queries.
 class DeviceWorker {
  public:
-  DeviceWorker(opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device, const BackendChoice& backend, bool separation_filter)
-      : pipeline_(std::move(narrow_phase), std::move(device), backend, "full:backend=opencl"), separation_filter_(separation_filter) {}
+  /// `ranges`: how many ranges the step's queries are dealt into (1 on one device).
+  DeviceWorker(opencl::NarrowPhaseChoice narrow_phase, opencl::DeviceInfo device, const BackendChoice& backend, bool separation_filter,
+               std::size_t ranges = 1)
+      : pipeline_(std::move(narrow_phase), std::move(device), backend, "full:backend=opencl"),
+        separation_filter_(separation_filter),
+        ranges_(ranges) {}
 
   opencl::DevicePipeline& pipeline() { return pipeline_; }
   const opencl::DevicePipeline& pipeline() const { return pipeline_; }
   std::size_t query_count() const { return queries_.count; }
+  const std::vector<std::size_t>& range_starts() const { return queries_.range_starts; }
   const opencl::ChunkRoom& room() const { return room_; }
 
   void init(const Scene& scene, std::span<const Vec3> first_frame) {
     pipeline_.init(scene, first_frame);
-    pipeline_.make_queries(queries_, true, true, false);
+    pipeline_.make_queries(queries_, true, true, false, ranges_);
     opencl::Context& context = pipeline_.context();
     // Static objects are fitted once, here, over frame 0 (as the CPU does): every leaf and every level now.
     node_boxes_.reserve(context, std::max<std::size_t>(pipeline_.node_count(), 1) * 6 * sizeof(double));
@@ -169,6 +174,7 @@ class DeviceWorker {
   /// The ranges that fit last (queries, candidates): where the next step starts.
   std::size_t query_span_ = static_cast<std::size_t>(-1), candidate_span_ = static_cast<std::size_t>(-1);
   bool separation_filter_ = false;
+  std::size_t ranges_ = 1;
   opencl::Queries queries_;
   opencl::DevicePositions positions_;
   Buffer node_boxes_;
@@ -177,9 +183,10 @@ class DeviceWorker {
 
 /// How many ranges of a step's queries each device of several takes on average: enough that a faster device takes
 /// more of them and a slower one sets no more than its share of the step's end (each range costs a traversal launch
-/// and a few small downloads), few enough that each range fills a device (a range of the 1M-triangle ball is tens of
-/// thousands of queries).
-constexpr std::size_t kRangesPerDevice = 8;
+/// and a few small downloads), few enough that each range fills a device. The queries are dealt into the ranges
+/// (DevicePipeline::make_queries), so ranges cost alike and a device's share needs only a few: the 1M-triangle
+/// ball's ranges cut in query order, 8 a device, cost unevenly and filled a GPU less well (reports/gpus).
+constexpr std::size_t kRangesPerDevice = 2;
 
 class FullOpenCl final : public Strategy {
  public:
@@ -192,7 +199,8 @@ class FullOpenCl final : public Strategy {
     const std::shared_ptr<const narrowphase::NarrowPhase> host(std::move(narrow_phase.host));
     for (opencl::DeviceInfo& device : devices) {
       opencl::NarrowPhaseChoice narrow{std::make_unique<SharedNarrowPhase>(host), narrow_phase.form};
-      workers_.push_back(std::make_unique<DeviceWorker>(std::move(narrow), std::move(device), backend, separation_filter));
+      workers_.push_back(
+          std::make_unique<DeviceWorker>(std::move(narrow), std::move(device), backend, separation_filter, devices.size() * kRangesPerDevice));
     }
   }
 
@@ -240,16 +248,15 @@ class FullOpenCl final : public Strategy {
     } else {
       // Each device takes the next range of queries until none is left: the answers are the same as on one device
       // (each range's pairs are those its queries find in the whole step, and the set is put in order at the end).
-      const std::size_t queries = workers_[0]->query_count();
-      const std::size_t range = std::max<std::size_t>(1, queries / (workers_.size() * kRangesPerDevice));
+      const std::vector<std::size_t>& starts = workers_[0]->range_starts();
       std::atomic<std::size_t> next{0};
       std::vector<Chunks> parts(workers_.size());
       std::vector<StepResult> partial(workers_.size());
       run_on_every_device([&](DeviceWorker& worker, std::size_t k) {
         if (audit) parts[k].tested.emplace();
         worker.begin(step, events[k]);
-        for (std::size_t first = next.fetch_add(range); first < queries; first = next.fetch_add(range)) {
-          worker.run_queries(first, std::min(first + range, queries), step, partial[k], events[k], parts[k]);
+        for (std::size_t r = next.fetch_add(1); r + 1 < starts.size(); r = next.fetch_add(1)) {
+          worker.run_queries(starts[r], starts[r + 1], step, partial[k], events[k], parts[k]);
         }
         // A device that got no range has only its upload and refit queued: done before its events are read.
         worker.pipeline().context().finish();

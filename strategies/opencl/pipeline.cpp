@@ -120,8 +120,11 @@ DevicePipeline::DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device
 void DevicePipeline::init(const Scene& scene, std::span<const Vec3> first_frame) {
   scene_ = &scene;
   group_ = group_size_for(device_);
-  context_ = std::make_unique<Context>(device_, kernel_defines(group_, backend_.sub_boxes));
-  check_device_arithmetic(*context_);
+  context_ = lease_context(device_, kernel_defines(group_, backend_.sub_boxes));
+  if (!context_->arithmetic_checked) {
+    check_device_arithmetic(*context_);
+    context_->arithmetic_checked = true;
+  }
   const MeshTopology& topology = scene.topology();
   const std::size_t faces = topology.num_faces();
   std::vector<cl_uint> face_corners(3 * faces), face_edges(3 * faces);
@@ -228,49 +231,6 @@ void DevicePipeline::build_hierarchies(const Scene& scene, std::span<const Vec3>
   upload(context, all_.offsets, all_offsets.data(), all_offsets.size());
   upload(context, moving_.offsets, moving_offsets.data(), moving_offsets.size());
   context.finish();
-}
-
-void DevicePipeline::make_queries(Queries& queries, bool self, bool pairs, bool offsets) {
-  const Scene& scene = *scene_;
-  std::vector<cl_uint> q_leaf, q_face;
-  std::vector<cl_int> q_root, q_offset;
-  std::vector<cl_uchar> q_mode;
-  // mode: 0 pair, 1 self, 2 pair with the query's box swept by the offset, 3 pair with the tree's boxes swept.
-  auto add = [&](ObjectId from, ObjectId into, cl_uchar mode, cl_int offset) {
-    const SceneObject& object = scene.object(from);
-    if (roots_[into] < 0 || roots_[from] < 0) return;
-    for (FaceId f = object.first_face; f < object.first_face + object.num_faces; ++f) {
-      q_leaf.push_back(leaf_node_[f]);
-      q_face.push_back(f);
-      q_root.push_back(roots_[into]);
-      q_mode.push_back(mode);
-      q_offset.push_back(offset);
-    }
-  };
-  if (self) {
-    for (ObjectId id = 0; id < scene.objects().size(); ++id) {
-      if (scene.object(id).self_collision) add(id, id, 1, -1);
-    }
-  }
-  if (pairs) {
-    const auto& collidable = scene.collidable_pairs();
-    for (std::size_t i = 0; i < collidable.size(); ++i) {
-      const auto [a, b] = collidable[i];
-      const cl_int index = offsets ? static_cast<cl_int>(i) : -1;
-      if (scene.object(a).num_faces >= scene.object(b).num_faces) {
-        add(a, b, offsets ? 3 : 0, index);  // a's faces against b's tree: b's boxes are swept
-      } else {
-        add(b, a, offsets ? 2 : 0, index);  // b's faces against a's tree: the query (b's) box is swept
-      }
-    }
-  }
-  queries.count = q_leaf.size();
-  upload(*context_, queries.leaf, q_leaf.data(), q_leaf.size());
-  upload(*context_, queries.face, q_face.data(), q_face.size());
-  upload(*context_, queries.root, q_root.data(), q_root.size());
-  upload(*context_, queries.mode, q_mode.data(), q_mode.size());
-  upload(*context_, queries.offset_index, q_offset.data(), q_offset.size());
-  context_->finish();
 }
 
 void DevicePipeline::refit(const RefitPlan& plan, const Buffer& x0, const Buffer& x1, double inflation, const Buffer* budget,

@@ -102,8 +102,15 @@ struct Decided {
 struct Queries {
   Buffer leaf, face, root, mode, offset_index;
   std::size_t count = 0;
+  /// Where each of the ranges the queries were dealt into starts, and the end: {0, count} for one range.
+  std::vector<std::size_t> range_starts;
   std::size_t bytes() const { return leaf.bytes() + face.bytes() + root.bytes() + mode.bytes() + offset_index.bytes(); }
 };
+
+/// The order that deals blocks of `count` queries round-robin into `ranges` ranges (block j to range j mod ranges),
+/// and where each range starts in it (plus the end): each range holds every part of the step alike
+/// (DevicePipeline::make_queries).
+std::pair<std::vector<std::size_t>, std::vector<std::size_t>> deal_into_ranges(std::size_t count, std::size_t ranges);
 
 /// A step's positions on the device, in two buffers that swap roles: x1 of one step is x0 of the next, so a step
 /// that follows the last uploads x1 only.
@@ -183,7 +190,9 @@ class DevicePipeline {
   /// collidable pair, the faces of the larger object against the smaller one's tree: the other way round, a
   /// two-triangle ground would be two work items walking the whole cloth). With `offsets`, pair queries sweep by
   /// the pair's translation box (index = position in the scene's collidable pairs, for (a, b): b relative to a).
-  void make_queries(Queries& queries, bool self, bool pairs, bool offsets);
+  /// With `ranges` > 1 (a step on several devices), the queries are dealt into that many ranges of equal work
+  /// (Queries::range_starts; see kDealtBlock).
+  void make_queries(Queries& queries, bool self, bool pairs, bool offsets, std::size_t ranges = 1);
 
   /// Leaf boxes of the plan over x0 -> x1, widened by `inflation` plus, with `budget` (per vertex), the largest
   /// budget of the face's corners; then every level of the plan.
@@ -256,7 +265,7 @@ class DevicePipeline {
   strategies::BackendChoice backend_;
   std::string label_;
   const Scene* scene_ = nullptr;
-  std::unique_ptr<Context> context_;
+  ContextLease context_;
   std::size_t group_ = 256;
   std::size_t node_count_ = 0;
   std::vector<cl_uint> leaf_node_;

@@ -216,7 +216,7 @@ void require_double_precision(const DeviceInfo& device) {
   }
 }
 
-Context::Context(const DeviceInfo& device, const std::string& defines) : device_(device) {
+Context::Context(const DeviceInfo& device, const std::string& defines) : device_(device), defines_(defines) {
   require_double_precision(device);
   cl_int status = CL_SUCCESS;
   context_ = clCreateContext(nullptr, 1, &device_.id, nullptr, nullptr, &status);
@@ -266,6 +266,51 @@ Context::Context(const DeviceInfo& device, const std::string& defines) : device_
       }
     }
   }
+}
+
+namespace {
+
+/// Contexts finished strategies gave back, per device and build defines (lease_context). Never destroyed: at the
+/// process's exit an OpenCL implementation may already be tearing itself down (PoCL's own static destructors), and
+/// releasing a context then can crash; the process's end frees what it holds.
+struct ContextPool {
+  std::mutex mutex;
+  std::map<std::pair<cl_device_id, std::string>, std::vector<std::unique_ptr<Context>>> idle;
+};
+ContextPool& context_pool() {
+  static ContextPool* const pool = new ContextPool;
+  return *pool;
+}
+/// Idle contexts kept per device and defines: --interleave holds one per strategy of a scene at once (a run's
+/// strategies are a handful); more than that are released.
+constexpr std::size_t kIdleContextsKept = 4;
+
+}  // namespace
+
+ContextLease lease_context(const DeviceInfo& device, const std::string& defines) {
+  require_double_precision(device);
+  {
+    ContextPool& pool = context_pool();
+    std::lock_guard lock(pool.mutex);
+    const auto idle = pool.idle.find({device.id, defines});
+    if (idle != pool.idle.end() && !idle->second.empty()) {
+      ContextLease lease(idle->second.back().release());
+      idle->second.pop_back();
+      lease->device_ = device;  // the caller's description of the same device
+      return lease;
+    }
+  }
+  return ContextLease(new Context(device, defines));
+}
+
+void ContextReturn::operator()(Context* context) const {
+  std::unique_ptr<Context> owned(context);
+  // A queue in error (a kernel that failed, a device lost) is not handed to the next strategy: released here.
+  if (owned == nullptr || clFinish(owned->queue()) != CL_SUCCESS) return;
+  ContextPool& pool = context_pool();
+  std::lock_guard lock(pool.mutex);
+  std::vector<std::unique_ptr<Context>>& idle = pool.idle[{owned->device().id, owned->defines()}];
+  if (idle.size() < kIdleContextsKept) idle.push_back(std::move(owned));
 }
 
 Context::~Context() {

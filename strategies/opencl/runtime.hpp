@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// A small runtime over the OpenCL C API (ocl-icd and the distribution's headers): device listing and choice, one
-/// context and in-order profiling queue per user, programs built from the kernels embedded at build time (and
+/// context and in-order profiling queue per user at a time (kept for the next: lease_context), programs built from the kernels embedded at build time (and
 /// their binaries cached per device, so a second strategy on one device does not compile again), buffers that
 /// grow and are reused, and per-stage device times from events.
 ///
@@ -14,6 +14,7 @@
 #include <CL/cl.h>
 
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -75,6 +76,20 @@ std::vector<DeviceInfo> choose_devices(const std::vector<DeviceInfo>& devices, c
 /// @throws std::invalid_argument saying what the device lacks.
 void require_double_precision(const DeviceInfo& device);
 
+class Context;
+/// Gives a leased context back to the process's pool (lease_context).
+struct ContextReturn {
+  void operator()(Context* context) const;
+};
+using ContextLease = std::unique_ptr<Context, ContextReturn>;
+
+/// A context on `device` with the program built with `defines`: one a finished strategy gave back, else a new one.
+/// Each strategy holds its own while it lives (no two share a queue or a kernel's arguments); given back, a context
+/// waits for the next strategy on that device. Making one (context, queue, program from the cached binary, the
+/// arithmetic self-test) and releasing it took 0.15-0.3 s a cell on NVIDIA's driver, as long as a paper scene's
+/// steps; a sweep makes one per cell. A context whose queue reports an error when given back is released, not kept.
+ContextLease lease_context(const DeviceInfo& device, const std::string& defines);
+
 /// One context and one in-order queue with profiling on a device, and the program built for it.
 class Context {
  public:
@@ -86,15 +101,21 @@ class Context {
   Context& operator=(const Context&) = delete;
 
   const DeviceInfo& device() const { return device_; }
+  const std::string& defines() const { return defines_; }
   cl_context context() const { return context_; }
   cl_command_queue queue() const { return queue_; }
   /// The kernel named `name` (created once).
   cl_kernel kernel(const std::string& name);
   /// Waits for every enqueued command.
   void finish();
+  /// Whether the device's arithmetic passed check_device_arithmetic in this context (a kept context is not checked
+  /// again: its device and program are the same).
+  bool arithmetic_checked = false;
 
  private:
+  friend ContextLease lease_context(const DeviceInfo& device, const std::string& defines);
   DeviceInfo device_;
+  std::string defines_;
   cl_context context_ = nullptr;
   cl_command_queue queue_ = nullptr;
   cl_program program_ = nullptr;

@@ -17,12 +17,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <iostream>
 #include <map>
+#include <numeric>
 #include <sstream>
 
 namespace ccd {
@@ -509,6 +511,53 @@ TEST(OpenClDevice, ADeviceWithoutDoublePrecisionIsRefusedSayingSo) {
   EXPECT_THROW(opencl::require_double_precision(device), std::invalid_argument);
   device.fp64_denormals = true;
   EXPECT_NO_THROW(opencl::require_double_precision(device));
+}
+
+// A sweep makes a strategy per cell: the context each one leases is the one the last gave back, not a new one, and
+// two strategies alive at once never share one (their queues and kernels' arguments are their own).
+TEST(OpenClDevice, AContextGivenBackIsTheNextLeaseAndTwoHeldAtOnceAreTwo) {
+  const opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), "");
+  const std::string defines = opencl::kernel_defines(64, 0);
+  opencl::Context* first_held = nullptr;
+  {
+    opencl::ContextLease first = opencl::lease_context(device, defines);
+    first_held = first.get();
+    first->arithmetic_checked = true;  // as a strategy leaves it; a new context starts unchecked
+    opencl::ContextLease second = opencl::lease_context(device, defines);
+    EXPECT_NE(second.get(), first.get());
+    EXPECT_FALSE(second->arithmetic_checked);
+    EXPECT_NE(second->context(), first->context());
+  }
+  // Both are idle now; the next lease takes one of them (the last given back: `first`, released after `second`).
+  opencl::ContextLease again = opencl::lease_context(device, defines);
+  EXPECT_EQ(again.get(), first_held);
+  EXPECT_TRUE(again->arithmetic_checked) << "a new context, not the one given back";
+}
+
+// A step on several devices deals its queries into ranges: every query once, and each range holds every part of the
+// step alike (a contact-rich run of faces is spread over all of them), whatever the count.
+TEST(OpenClDevice, QueriesAreDealtIntoRangesOfEveryPartOfTheStep) {
+  for (const auto& [count, ranges] : std::vector<std::pair<std::size_t, std::size_t>>{{1'000'000, 8}, {300, 4}, {5, 8}, {0, 2}, {4096, 1}}) {
+    SCOPED_TRACE(std::to_string(count) + " queries into " + std::to_string(ranges) + " ranges");
+    const auto [order, starts] = opencl::deal_into_ranges(count, ranges);
+    ASSERT_EQ(starts.size(), ranges + 1);
+    EXPECT_EQ(starts.front(), 0u);
+    EXPECT_EQ(starts.back(), count);
+    std::vector<std::size_t> sorted = order;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<std::size_t> every(count);
+    std::iota(every.begin(), every.end(), 0);
+    EXPECT_EQ(sorted, every) << "not every query once";
+    if (count < 1000) continue;
+    for (std::size_t r = 0; r < ranges; ++r) {
+      // A range's queries come from each eighth of the step, in about equal numbers.
+      std::vector<std::size_t> per_eighth(8);
+      for (std::size_t k = starts[r]; k < starts[r + 1]; ++k) ++per_eighth[order[k] * 8 / count];
+      const auto [low, high] = std::minmax_element(per_eighth.begin(), per_eighth.end());
+      EXPECT_GT(*low, 0u) << "range " << r;
+      EXPECT_LE(*high - *low, 2 * 1024u) << "range " << r;
+    }
+  }
 }
 
 TEST(OpenClDevice, ChoiceByIndexOrNameAndClearErrors) {
