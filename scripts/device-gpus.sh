@@ -7,7 +7,8 @@
 # scripts/device-carry.sh first (the device machine has no OpenMPI of its own).
 # Usage: scripts/device-gpus.sh OUT_DIR   (SUITE=paper, RANKS="1 GPUS": the rank counts to run, STRATEGY: the specs,
 #        e.g. with device=0 to put every rank on one GPU as before; THICKNESS=scene: the δ list, e.g. scene,0 for the
-#        issue's sweep of 36 cells with STRATEGY=full:backend=opencl,full+cubic64:backend=opencl,apccd:backend=opencl)
+#        issue's sweep of 36 cells with STRATEGY=full:backend=opencl,full+cubic64:backend=opencl,apccd:backend=opencl;
+#        THREADS: each rank's worker threads, the machine's cores shared out over the ranks if not given)
 set -euo pipefail
 out=${1:?usage: device-gpus.sh OUT_DIR}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -33,7 +34,7 @@ stamp() {  # each line of stdin after the ms since $1 (date +%s%N)
 }
 printf '%-6s %-8s %-10s %-24s %s\n' ranks threads wall_ms "devices by rank" "busiest 100 ms per GPU (%)"
 for ranks in ${RANKS:-1 $gpus}; do
-  threads=$((cores / ranks))
+  threads=${THREADS:-$((cores / ranks))}
   name=r$ranks-t$threads
   if [[ $ranks == 1 ]]; then
     launch=("$bin" --threads "$threads")
