@@ -87,6 +87,10 @@ class Strategy {
   /// The scene's label in results, told before init: a strategy that reads answers made elsewhere (answers:DIR)
   /// finds the scene's files by it; the others ignore it.
   virtual void name_scene(const std::string& /*label*/) {}
+  /// Readies what does not depend on a scene, for strategies made after this one is gone: a device's context (kept
+  /// by the OpenCL backend for the next strategy on that device; opencl::lease_context). What an MPI rank does while
+  /// rank 0 plans. Nothing for most strategies.
+  virtual void prepare() {}
   /// Prepares for `scene`; `first_frame` holds frame 0's global positions.
   virtual void init(const Scene& scene, std::span<const Vec3> first_frame) = 0;
   /// One step, in order. With `audit`, also returns the elementary pairs tested (outside the timed stages).

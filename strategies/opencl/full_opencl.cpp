@@ -227,6 +227,10 @@ class FullOpenCl final : public Strategy {
     return "full+" + narrow.host->name() + (separation_filter_ ? ":filter=on" : "") + first.backend().resolved(device_name(), narrow.conservative());
   }
 
+  void prepare() override {
+    for (const auto& worker : workers_) worker->pipeline().prepare();
+  }
+
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
     if (workers_.size() == 1) {
       workers_[0]->init(scene, first_frame);

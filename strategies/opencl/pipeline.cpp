@@ -117,14 +117,19 @@ void DevicePositions::finish(const StepView& step) {
 DevicePipeline::DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, strategies::BackendChoice backend, std::string label)
     : narrow_phase_(std::move(narrow_phase)), device_(std::move(device)), backend_(std::move(backend)), label_(std::move(label)) {}
 
-void DevicePipeline::init(const Scene& scene, std::span<const Vec3> first_frame) {
-  scene_ = &scene;
+void DevicePipeline::prepare() {
+  if (context_) return;
   group_ = group_size_for(device_);
   context_ = lease_context(device_, kernel_defines(group_, backend_.sub_boxes));
   if (!context_->arithmetic_checked) {
     check_device_arithmetic(*context_);
     context_->arithmetic_checked = true;
   }
+}
+
+void DevicePipeline::init(const Scene& scene, std::span<const Vec3> first_frame) {
+  scene_ = &scene;
+  prepare();
   const MeshTopology& topology = scene.topology();
   const std::size_t faces = topology.num_faces();
   std::vector<cl_uint> face_corners(3 * faces), face_edges(3 * faces);

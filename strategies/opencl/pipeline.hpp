@@ -148,6 +148,8 @@ class DevicePipeline {
   /// `label` names the strategy in errors ("full:backend=opencl"); `backend` its backend keys.
   DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, strategies::BackendChoice backend, std::string label);
 
+  /// The context (leased: lease_context) and the device's arithmetic self-test, once.
+  void prepare();
   /// Context, self-test, topology, masks and the flattened hierarchies (shape only; boxes come from refits).
   void init(const Scene& scene, std::span<const Vec3> first_frame);
 

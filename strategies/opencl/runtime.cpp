@@ -3,6 +3,7 @@
 #include "strategies/opencl/kernel_source.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
@@ -287,6 +288,10 @@ constexpr std::size_t kIdleContextsKept = 4;
 
 }  // namespace
 
+std::atomic<std::size_t> g_contexts_made{0};
+
+std::size_t contexts_made() { return g_contexts_made.load(); }
+
 ContextLease lease_context(const DeviceInfo& device, const std::string& defines) {
   require_double_precision(device);
   {
@@ -300,7 +305,9 @@ ContextLease lease_context(const DeviceInfo& device, const std::string& defines)
       return lease;
     }
   }
-  return ContextLease(new Context(device, defines));
+  ContextLease made(new Context(device, defines));
+  ++g_contexts_made;
+  return made;
 }
 
 void ContextReturn::operator()(Context* context) const {

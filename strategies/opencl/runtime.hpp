@@ -90,6 +90,9 @@ using ContextLease = std::unique_ptr<Context, ContextReturn>;
 /// steps; a sweep makes one per cell. A context whose queue reports an error when given back is released, not kept.
 ContextLease lease_context(const DeviceInfo& device, const std::string& defines);
 
+/// How many contexts this process has made (not leased again): what a test of the pool counts.
+std::size_t contexts_made();
+
 /// One context and one in-order queue with profiling on a device, and the program built for it.
 class Context {
  public:

@@ -534,6 +534,23 @@ TEST(OpenClDevice, AContextGivenBackIsTheNextLeaseAndTwoHeldAtOnceAreTwo) {
   EXPECT_TRUE(again->arithmetic_checked) << "a new context, not the one given back";
 }
 
+// What an MPI rank does while rank 0 plans: a strategy prepared and gone leaves its device's context, checked, for the
+// first strategy on that device, which makes none of its own (fails when prepare readies nothing).
+TEST(OpenClDevice, APreparedStrategyLeavesItsContextToTheNextOnItsDevice) {
+  const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
+  const auto frames = testing::all_frames(loaded);
+  std::vector<std::unique_ptr<strategies::Strategy>> running;  // each holds its context: none idle for the next
+  for (const std::string spec : {"full:backend=opencl", "apccd:backend=opencl"}) {
+    SCOPED_TRACE(spec);
+    strategies::make_strategy(spec)->prepare();
+    const std::size_t made = opencl::contexts_made();
+    running.push_back(strategies::make_strategy(spec));
+    running.back()->init(loaded.scene(), frames[0]);
+    running.back()->step({&loaded.scene(), 0, frames[0], frames[1]}, false);
+    EXPECT_EQ(opencl::contexts_made(), made) << "the strategy made a context of its own";
+  }
+}
+
 // A step on several devices deals its queries into ranges: every query once, and each range holds every part of the
 // step alike (a contact-rich run of faces is spread over all of them), whatever the count.
 TEST(OpenClDevice, QueriesAreDealtIntoRangesOfEveryPartOfTheStep) {

@@ -35,6 +35,8 @@ class ApccdOpenCl final : public Strategy {
     return apccd_name(settings_, narrow.host->name()) + pipeline_.backend().resolved(pipeline_.device().name, narrow.conservative());
   }
 
+  void prepare() override { pipeline_.prepare(); }
+
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
     scene_ = &scene;
     pipeline_.init(scene, first_frame);
