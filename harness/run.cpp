@@ -65,20 +65,32 @@ std::vector<std::vector<Vec3>> read_frames(const datasets::SceneSequence& sequen
   return frames;
 }
 
-/// Makes each OpenCL strategy of the run and readies its devices (Strategy::prepare): the context it leaves is the
-/// one the first cell on that device takes. A GPU's first context was a rank's longest start of a cell (0.3-0.4 s on
-/// an H200 with four ranks making theirs at once); made while rank 0 plans, it costs no cell's time. An error is
-/// left to the cell that meets it again, which reports it with its scene.
-void prepare_devices(const std::vector<strategies::StrategySpec>& specs) {
-  for (const strategies::StrategySpec& spec : specs) {
-    const auto backend = spec.own.find("backend");
-    if (backend == spec.own.end() || backend->second != "opencl") continue;
-    try {
-      strategies::make_strategy(spec)->prepare();
-    } catch (...) {  // (see above)
-    }
-  }
-}
+/// Makes each OpenCL strategy of the run on a thread of its own and readies its devices (Strategy::prepare): the
+/// context it leaves is the one the first cell on that device takes. A GPU's first context was a rank's longest start
+/// of a cell (0.3-0.4 s on an H200 with four ranks making theirs at once); made while rank 0 plans, it costs no cell's
+/// time. The rank asks for work meanwhile (a cell that comes first makes a context of its own: a small run is not
+/// held up), and the thread is joined when the run ends. An error is left to the cell that meets it again, which
+/// reports it with its scene.
+class DeviceWarmUp {
+ public:
+  explicit DeviceWarmUp(const std::vector<strategies::StrategySpec>& specs)
+      : thread_([&specs] {
+          for (const strategies::StrategySpec& spec : specs) {
+            const auto backend = spec.own.find("backend");
+            if (backend == spec.own.end() || backend->second != "opencl") continue;
+            try {
+              strategies::make_strategy(spec)->prepare();
+            } catch (...) {  // (see above)
+            }
+          }
+        }) {}
+  ~DeviceWarmUp() { thread_.join(); }
+  DeviceWarmUp(const DeviceWarmUp&) = delete;
+  DeviceWarmUp& operator=(const DeviceWarmUp&) = delete;
+
+ private:
+  std::thread thread_;
+};
 
 /// The scenes this rank has loaded, by index in the run's variants: loaded when a work item first needs one, and
 /// at most kKept at once (a rank may alternate between scenes when the work queue hands out cells of several).
@@ -440,23 +452,14 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
 void Benchmark::run_all() {
   const DoneFunction done = [this](std::size_t index, const std::string& text, int rank) { item_done(index, text, rank); };
   // Every rank readies its devices while rank 0 plans (a process alone, while it plans its first scene).
-  std::thread devices([this] { prepare_devices(options_.strategies); });
-  struct JoinOnExit {  // (a plan that throws still waits for the thread)
-    std::thread& thread;
-    ~JoinOnExit() {
-      if (thread.joinable()) thread.join();
-    }
-  } join_on_exit{devices};
-  const auto devices_ready = [&devices] {
-    if (devices.joinable()) devices.join();
-  };
+  // Every rank readies its devices while rank 0 plans (a process alone, while it plans its first scene).
+  const DeviceWarmUp warm_up(options_.strategies);
   if (rank_info().size == 1) {
     try {
       for (std::size_t s = 0; s < variants_.size(); ++s) {
         items_.clear();
         planned_.clear();
         plan_scene(s);
-        devices_ready();
         distribute(items_, work(), done);
       }
     } catch (...) {
@@ -476,7 +479,6 @@ void Benchmark::run_all() {
   for (const PlannedItem& item : planned_) cell_count_ += item.cells.size();
   say_on_termination("run: stopped before every cell finished (a rank died, or the run was interrupted): finished cells are kept in " +
                      (options_.out / "cells").string() + "; the same command again, with any number of ranks, runs only the rest\n");
-  devices_ready();
   distribute(items_, work(), done);
   say_on_termination({});
   results_log_.finish(std::cerr);
@@ -533,7 +535,7 @@ RunResult run_benchmark(const RunOptions& options) {
   prepare_run_outputs(options);
   Benchmark benchmark(options);
   if (rank_info().rank != 0) {
-    prepare_devices(options.strategies);  // while rank 0 plans
+    const DeviceWarmUp warm_up(options.strategies);  // while rank 0 plans
     distribute({}, benchmark.work(), {});
     return {};
   }
