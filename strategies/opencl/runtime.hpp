@@ -86,8 +86,9 @@ using ContextLease = std::unique_ptr<Context, ContextReturn>;
 /// A context on `device` with the program built with `defines`: one a finished strategy gave back, else a new one.
 /// Each strategy holds its own while it lives (no two share a queue or a kernel's arguments); given back, a context
 /// waits for the next strategy on that device. Making one (context, queue, program from the cached binary, the
-/// arithmetic self-test) and releasing it took 0.15-0.3 s a cell on NVIDIA's driver, as long as a paper scene's
-/// steps; a sweep makes one per cell. A context whose queue reports an error when given back is released, not kept.
+/// arithmetic self-test) and releasing it took about 0.14-0.2 s a cell on an H200 (reports/gpus), as long as many a
+/// paper scene's steps; a sweep made one per cell. A context whose queue reports an error when given back is
+/// released, not kept.
 ContextLease lease_context(const DeviceInfo& device, const std::string& defines);
 
 /// How many contexts this process has made (not leased again): what a test of the pool counts.
