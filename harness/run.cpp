@@ -68,9 +68,10 @@ std::vector<std::vector<Vec3>> read_frames(const datasets::SceneSequence& sequen
 /// Makes each OpenCL strategy of the run on a thread of its own and readies its devices (Strategy::prepare): the
 /// context it leaves is the one the first cell on that device takes. A GPU's first context was a rank's longest start
 /// of a cell (0.3-0.4 s on an H200 with four ranks making theirs at once); made while rank 0 plans, it costs no cell's
-/// time. The rank asks for work meanwhile (a cell that comes first makes a context of its own: a small run is not
-/// held up), and the thread is joined when the run ends. An error is left to the cell that meets it again, which
-/// reports it with its scene.
+/// time. An MPI rank asks for work meanwhile (a cell that comes first makes a context of its own, or waits for the
+/// program the warm-up is building: a small run's cells are not all left to rank 0); a process alone waits for it
+/// before its first cell (wait). The thread is joined when the run ends at the latest. An error is left to the cell
+/// that meets it again, which reports it with its scene.
 class DeviceWarmUp {
  public:
   explicit DeviceWarmUp(const std::vector<strategies::StrategySpec>& specs)
@@ -84,7 +85,10 @@ class DeviceWarmUp {
             }
           }
         }) {}
-  ~DeviceWarmUp() { thread_.join(); }
+  ~DeviceWarmUp() { wait(); }
+  void wait() {
+    if (thread_.joinable()) thread_.join();
+  }
   DeviceWarmUp(const DeviceWarmUp&) = delete;
   DeviceWarmUp& operator=(const DeviceWarmUp&) = delete;
 
@@ -451,15 +455,16 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
 
 void Benchmark::run_all() {
   const DoneFunction done = [this](std::size_t index, const std::string& text, int rank) { item_done(index, text, rank); };
-  // Every rank readies its devices while rank 0 plans (a process alone, while it plans its first scene).
-  // Every rank readies its devices while rank 0 plans (a process alone, while it plans its first scene).
-  const DeviceWarmUp warm_up(options_.strategies);
+  // Rank 0 readies its devices while it plans; a process alone while it plans its first scene, waiting for them
+  // before the first cell (its planning is shorter than a GPU's first context: the cell would make its own).
+  DeviceWarmUp warm_up(options_.strategies);
   if (rank_info().size == 1) {
     try {
       for (std::size_t s = 0; s < variants_.size(); ++s) {
         items_.clear();
         planned_.clear();
         plan_scene(s);
+        warm_up.wait();
         distribute(items_, work(), done);
       }
     } catch (...) {

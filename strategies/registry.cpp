@@ -51,6 +51,9 @@ class WithNarrowPhaseNotes final : public Strategy {
   std::string name() const override { return inner_->name(); }
   void check_scene(const Scene& scene) const override { inner_->check_scene(scene); }
   void name_scene(const std::string& label) override { inner_->name_scene(label); }
+  void prepare() override {
+    on_its_threads([&] { inner_->prepare(); });
+  }
   void init(const Scene& scene, std::span<const Vec3> first_frame) override {
     on_its_threads([&] { inner_->init(scene, first_frame); });
   }

@@ -118,10 +118,11 @@ DevicePipeline::DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device
     : narrow_phase_(std::move(narrow_phase)), device_(std::move(device)), backend_(std::move(backend)), label_(std::move(label)) {}
 
 void DevicePipeline::prepare() {
-  if (context_) return;
-  group_ = group_size_for(device_);
-  context_ = lease_context(device_, kernel_defines(group_, backend_.sub_boxes));
-  if (!context_->arithmetic_checked) {
+  if (!context_) {
+    group_ = group_size_for(device_);
+    context_ = lease_context(device_, kernel_defines(group_, backend_.sub_boxes));
+  }
+  if (!context_->arithmetic_checked) {  // (again, after a check that threw: a refused device stays refused)
     check_device_arithmetic(*context_);
     context_->arithmetic_checked = true;
   }

@@ -286,11 +286,21 @@ ContextPool& context_pool() {
 /// strategies are a handful); more than that are released.
 constexpr std::size_t kIdleContextsKept = 4;
 
-}  // namespace
-
+/// Contexts made by lease_context (contexts_made).
 std::atomic<std::size_t> g_contexts_made{0};
 
+}  // namespace
+
 std::size_t contexts_made() { return g_contexts_made.load(); }
+
+void release_idle_contexts() {
+  std::map<std::pair<cl_device_id, std::string>, std::vector<std::unique_ptr<Context>>> idle;
+  {
+    ContextPool& pool = context_pool();
+    std::lock_guard lock(pool.mutex);
+    idle.swap(pool.idle);
+  }  // (released here, outside the pool's lock)
+}
 
 ContextLease lease_context(const DeviceInfo& device, const std::string& defines) {
   require_double_precision(device);

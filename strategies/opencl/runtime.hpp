@@ -86,13 +86,16 @@ using ContextLease = std::unique_ptr<Context, ContextReturn>;
 /// A context on `device` with the program built with `defines`: one a finished strategy gave back, else a new one.
 /// Each strategy holds its own while it lives (no two share a queue or a kernel's arguments); given back, a context
 /// waits for the next strategy on that device. Making one (context, queue, program from the cached binary, the
-/// arithmetic self-test) and releasing it took about 0.14-0.2 s a cell on an H200 (reports/gpus), as long as many a
-/// paper scene's steps; a sweep made one per cell. A context whose queue reports an error when given back is
+/// arithmetic self-test) and releasing it took 0.14 s a cell on an H200 (reports/gpus), as long as many a paper
+/// scene's steps; a sweep made one per cell. A context whose queue reports an error when given back is
 /// released, not kept.
 ContextLease lease_context(const DeviceInfo& device, const std::string& defines);
 
 /// How many contexts this process has made (not leased again): what a test of the pool counts.
 std::size_t contexts_made();
+
+/// Releases every idle context (those leased now are kept when given back): the next lease makes a new one.
+void release_idle_contexts();
 
 /// One context and one in-order queue with profiling on a device, and the program built for it.
 class Context {

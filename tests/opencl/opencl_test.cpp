@@ -516,6 +516,7 @@ TEST(OpenClDevice, ADeviceWithoutDoublePrecisionIsRefusedSayingSo) {
 // A sweep makes a strategy per cell: the context each one leases is the one the last gave back, not a new one, and
 // two strategies alive at once never share one (their queues and kernels' arguments are their own).
 TEST(OpenClDevice, AContextGivenBackIsTheNextLeaseAndTwoHeldAtOnceAreTwo) {
+  opencl::release_idle_contexts();  // (whatever tests before this one in the process left)
   const opencl::DeviceInfo device = opencl::choose_device(opencl::list_devices(), "");
   const std::string defines = opencl::kernel_defines(64, 0);
   opencl::Context* first_held = nullptr;
@@ -539,6 +540,7 @@ TEST(OpenClDevice, AContextGivenBackIsTheNextLeaseAndTwoHeldAtOnceAreTwo) {
 TEST(OpenClDevice, APreparedStrategyLeavesItsContextToTheNextOnItsDevice) {
   const datasets::SceneSequence loaded = harness::suite_scenes("ci").front().load();
   const auto frames = testing::all_frames(loaded);
+  opencl::release_idle_contexts();                             // (whatever tests before this one in the process left)
   std::vector<std::unique_ptr<strategies::Strategy>> running;  // each holds its context: none idle for the next
   for (const std::string spec : {"full:backend=opencl", "apccd:backend=opencl"}) {
     SCOPED_TRACE(spec);
@@ -572,7 +574,10 @@ TEST(OpenClDevice, QueriesAreDealtIntoRangesOfEveryPartOfTheStep) {
       for (std::size_t k = starts[r]; k < starts[r + 1]; ++k) ++per_eighth[order[k] * 8 / count];
       const auto [low, high] = std::minmax_element(per_eighth.begin(), per_eighth.end());
       EXPECT_GT(*low, 0u) << "range " << r;
-      EXPECT_LE(*high - *low, 2 * 1024u) << "range " << r;
+      // Blocks are dealt whole (up to 1024 queries), and an eighth's edge cuts one: a range's eighths differ by at
+      // most two blocks.
+      constexpr std::size_t kTwoBlocks = 2 * 1024;
+      EXPECT_LE(*high - *low, kTwoBlocks) << "range " << r;
     }
   }
 }
