@@ -21,6 +21,7 @@
 #include <iostream>
 #include <list>
 #include <memory>
+#include <optional>
 #include <thread>
 
 namespace ccd::harness {
@@ -69,8 +70,9 @@ std::vector<std::vector<Vec3>> read_frames(const datasets::SceneSequence& sequen
 /// context it leaves is the one the first cell on that device takes. A GPU's first context was a rank's longest start
 /// of a cell (0.3-0.4 s on an H200 with four ranks making theirs at once); made while rank 0 plans, it costs no cell's
 /// time. An MPI rank asks for work meanwhile (a cell that comes first makes a context of its own, or waits for the
-/// program the warm-up is building: a small run's cells are not all left to rank 0); a process alone waits for it
-/// before its first cell (wait). The thread is joined when the run ends at the latest. An error is left to the cell
+/// program the warm-up is building: a small run's cells are not all left to rank 0); a process alone readies its
+/// devices before its first cell (wait), so that the cell's start is the cell's own. The thread is joined when the run
+/// ends at the latest. An error is left to the cell
 /// that meets it again, which reports it with its scene.
 class DeviceWarmUp {
  public:
@@ -455,16 +457,21 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
 
 void Benchmark::run_all() {
   const DoneFunction done = [this](std::size_t index, const std::string& text, int rank) { item_done(index, text, rank); };
-  // Rank 0 readies its devices while it plans; a process alone while it plans its first scene, waiting for them
-  // before the first cell (its planning is shorter than a GPU's first context: the cell would make its own).
-  DeviceWarmUp warm_up(options_.strategies);
+  // Rank 0 readies its devices while it plans every scene. A process alone readies them before its first cell to
+  // run, and waits: planning a scene is shorter than a GPU's first context (the cell would make one of its own), and
+  // a run whose cells are all kept makes none.
+  std::optional<DeviceWarmUp> warm_up;
+  if (rank_info().size > 1) warm_up.emplace(options_.strategies);
   if (rank_info().size == 1) {
     try {
       for (std::size_t s = 0; s < variants_.size(); ++s) {
         items_.clear();
         planned_.clear();
         plan_scene(s);
-        warm_up.wait();
+        if (!items_.empty() && !warm_up) {
+          warm_up.emplace(options_.strategies);
+          warm_up->wait();
+        }
         distribute(items_, work(), done);
       }
     } catch (...) {
