@@ -72,8 +72,7 @@ std::vector<std::vector<Vec3>> read_frames(const datasets::SceneSequence& sequen
 /// time. An MPI rank asks for work meanwhile (a cell that comes first makes a context of its own, or waits for the
 /// program the warm-up is building: a small run's cells are not all left to rank 0); a process alone readies its
 /// devices before its first cell (wait), so that the cell's start is the cell's own. The thread is joined when the run
-/// ends at the latest. An error is left to the cell
-/// that meets it again, which reports it with its scene.
+/// ends at the latest. An error is left to the cell that meets it again, which reports it with its scene.
 class DeviceWarmUp {
  public:
   explicit DeviceWarmUp(const std::vector<strategies::StrategySpec>& specs)
@@ -457,12 +456,10 @@ void Benchmark::item_done(std::size_t index, const std::string& text, int rank) 
 
 void Benchmark::run_all() {
   const DoneFunction done = [this](std::size_t index, const std::string& text, int rank) { item_done(index, text, rank); };
-  // Rank 0 readies its devices while it plans every scene. A process alone readies them before its first cell to
-  // run, and waits: planning a scene is shorter than a GPU's first context (the cell would make one of its own), and
-  // a run whose cells are all kept makes none.
-  std::optional<DeviceWarmUp> warm_up;
-  if (rank_info().size > 1) warm_up.emplace(options_.strategies);
   if (rank_info().size == 1) {
+    // A process alone readies its devices before its first cell to run, and waits: planning a scene is shorter than
+    // a GPU's first context (the cell would make one of its own), and a run whose cells are all kept makes none.
+    std::optional<DeviceWarmUp> warm_up;
     try {
       for (std::size_t s = 0; s < variants_.size(); ++s) {
         items_.clear();
@@ -486,6 +483,7 @@ void Benchmark::run_all() {
     results_log_.finish(std::cerr);
     return;
   }
+  const DeviceWarmUp warm_up(options_.strategies);  // while rank 0 plans every scene
   for (std::size_t s = 0; s < variants_.size(); ++s) plan_scene(s);
   cell_count_ = 0;
   for (const PlannedItem& item : planned_) cell_count_ += item.cells.size();

@@ -275,8 +275,9 @@ namespace {
 /// process's exit an OpenCL implementation may already be tearing itself down (PoCL's own static destructors), and
 /// releasing a context then can crash; the process's end frees what it holds.
 struct ContextPool {
+  using Idle = std::map<std::pair<cl_device_id, std::string>, std::vector<std::unique_ptr<Context>>>;
   std::mutex mutex;
-  std::map<std::pair<cl_device_id, std::string>, std::vector<std::unique_ptr<Context>>> idle;
+  Idle idle;
 };
 ContextPool& context_pool() {
   static ContextPool* const pool = new ContextPool;
@@ -294,7 +295,7 @@ std::atomic<std::size_t> g_contexts_made{0};
 std::size_t contexts_made() { return g_contexts_made.load(); }
 
 void release_idle_contexts() {
-  std::map<std::pair<cl_device_id, std::string>, std::vector<std::unique_ptr<Context>>> idle;
+  ContextPool::Idle idle;
   {
     ContextPool& pool = context_pool();
     std::lock_guard lock(pool.mutex);
