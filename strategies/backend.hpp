@@ -12,7 +12,8 @@
 namespace ccd::strategies {
 
 /// Sub-boxes a work item holds for one conservative query by default (private memory, 56 bytes each); a query that
-/// needs more is handed on to a second pass that decides it from the start with the same code.
+/// needs more is handed on to the deep pass, which decides it from the start with the same code and kDeepSubBoxFactor
+/// times the sub-boxes in device memory (opencl/pipeline.hpp).
 inline constexpr long kDefaultDeviceSubBoxes = 48;
 
 /// The device memory a step may use (memory=): a share of the device's global memory ("75%", the default) or bytes

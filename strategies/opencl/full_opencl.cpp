@@ -355,9 +355,11 @@ class FullOpenCl final : public Strategy {
     d.given_up += part.decided.given_up;
     d.second_pass += part.decided.second_pass;
     d.third_pass += part.decided.third_pass;
+    d.deep_pass += part.decided.deep_pass;
     d.on_host += part.decided.on_host;
     d.second_pass_ms += part.decided.second_pass_ms;
     d.third_pass_ms += part.decided.third_pass_ms;
+    d.deep_pass_ms += part.decided.deep_pass_ms;
     if (into.tested && part.tested) {
       TestedPairs& t = *into.tested;
       t.vertex_face.insert(t.vertex_face.end(), part.tested->vertex_face.begin(), part.tested->vertex_face.end());

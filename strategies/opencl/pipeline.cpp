@@ -126,6 +126,9 @@ void DevicePipeline::prepare() {
     check_device_arithmetic(*context_);
     context_->arithmetic_checked = true;
   }
+  // The deep pass's program too, so that no step's time holds a build: on an H200 its first build took 12.8 s
+  // (NVIDIA's own cache keeps it for later processes), inside the first step whose queries overflowed.
+  if (narrow_phase_.conservative()) context_->kernel("narrow_conservative_deep", Context::Build::deep);
 }
 
 void DevicePipeline::init(const Scene& scene, std::span<const Vec3> first_frame) {
@@ -352,7 +355,7 @@ void DevicePipeline::launch_conservative(const Buffer& pairs, std::size_t count,
 }
 
 void DevicePipeline::device_pass(StageEvents& events, const std::vector<std::size_t>& which, long limit, const std::vector<cl_uint4>& pairs,
-                                 std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1) {
+                                 std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1, bool deep) {
   Context& context = *context_;
   std::vector<cl_uint4> retry(which.size());
   for (std::size_t j = 0; j < which.size(); ++j) retry[j] = pairs[which[j]];
@@ -360,7 +363,11 @@ void DevicePipeline::device_pass(StageEvents& events, const std::vector<std::siz
   upload(context, retry_pairs_, retry.data(), retry.size(), events.add("narrow phase"));
   reserve_pairs(retry_status_, retry.size(), 1);
   reserve_pairs(retry_toi_, retry.size(), sizeof(double));
-  launch_conservative(retry_pairs_, retry.size(), limit, retry_status_, retry_toi_, x0, x1, events);
+  if (deep) {
+    launch_deep(retry_pairs_, retry.size(), x0, x1, events);
+  } else {
+    launch_conservative(retry_pairs_, retry.size(), limit, retry_status_, retry_toi_, x0, x1, events);
+  }
   std::vector<cl_uchar> retry_status(retry.size());
   std::vector<double> retry_toi(retry.size());
   download(context, retry_status_, retry_status.data(), retry.size(), events.add("download"));
@@ -409,10 +416,11 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
   download(context, out_toi_, toi.data(), kept, events.add("download"));
   // Queries the device handed back, decided by the same code: those given up after device_iterations (status 2)
   // in tiers on the device, a second pass that gives up after kSecondPassIterations (most finish there, side by
-  // side), then the rest in a pass without a limit; those out of a work item's sub-boxes (status 3, which no device
-  // pass mends) on the host, as is whatever a later pass hands back so. (Until issue 51 the host also took up to 2
-  // given-up queries a thread instead of a device pass; searches now end in a few hundred sub-boxes at most, and
-  // the narrow phase stays on the device.)
+  // side), then the rest in a pass without a limit; those out of a work item's sub-boxes (status 3, which no pass
+  // with the same sub-boxes mends) in the deep pass, with kDeepSubBoxFactor times as many in device memory; on the
+  // host whatever that too hands back. (Until issue 51 the host also took up to 2 given-up queries a thread instead
+  // of a device pass. Until issue 66 the host took every status 3: 6,400 queries a step of the paper's pile at
+  // δ = 0, a third of its time on 64 cores and two thirds on 16, reports/gpus.)
   std::vector<std::size_t> given_up;
   for (std::size_t i = 0; i < kept; ++i) {
     if (status[i] >= 2) given_up.push_back(i);
@@ -425,7 +433,7 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
     }
     return left;
   };
-  std::size_t second_pass = 0, third_pass = 0;
+  std::size_t second_pass = 0, third_pass = 0, deep = 0;
   if (conservative) {
     // Each later pass's wall time (it ends with a blocking download): part of the "narrow phase" stage, counted
     // apart so that the latency of a few long queries shows (reports/narrowphase/stages.md).
@@ -441,6 +449,8 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
       (limit > 0 ? second_pass : third_pass) = left.size();
       timed_pass(limit, limit > 0 ? into.second_pass_ms : into.third_pass_ms);
     }
+    // What is left overflowed a work item's sub-boxes (status 3): the deep pass, with more of them in device memory.
+    deep = deep_pass(events, handed_back(false), pairs, status, toi, x0, x1, into.deep_pass_ms);
   }
   const std::vector<std::size_t> on_host = handed_back(false);
   {
@@ -469,6 +479,7 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
   into.given_up += given_up.size();
   into.second_pass += second_pass;
   into.third_pass += third_pass;
+  into.deep_pass += deep;
   into.on_host += on_host.size();
 }
 
@@ -501,6 +512,8 @@ void DevicePipeline::collect(const Decided& decided, strategies::StepResult& res
   result.counters.extra.emplace_back("device_third_pass_pairs", static_cast<double>(decided.third_pass));
   result.counters.extra.emplace_back("device_second_pass_ms", decided.second_pass_ms);
   result.counters.extra.emplace_back("device_third_pass_ms", decided.third_pass_ms);
+  result.counters.extra.emplace_back("device_deep_pass_pairs", static_cast<double>(decided.deep_pass));
+  result.counters.extra.emplace_back("device_deep_pass_ms", decided.deep_pass_ms);
   result.counters.extra.emplace_back("host_decided_pairs", static_cast<double>(decided.on_host));
 }
 
@@ -530,10 +543,11 @@ void DevicePipeline::sort_tested(strategies::TestedPairs& tested) {
 
 std::size_t DevicePipeline::bytes() const {
   std::size_t total = 0;
-  for (const Buffer* b :
-       {&keep_,       &faces_,         &face_edges_, &edges_,         &masks_,       &children_,       &node_face_,    &max_face_, &leaf_node_buffer_,
-        &all_.leaves, &moving_.leaves, &all_.levels, &moving_.levels, &all_.offsets, &moving_.offsets, &vertex_boxes_, &counter_,  &status_,
-        &toi_,        &out_.buffer,    &out_status_, &out_toi_,       &retry_pairs_, &retry_status_,   &retry_toi_}) {
+  for (const Buffer* b : {&keep_,          &faces_,       &face_edges_,       &edges_,        &masks_,         &children_,
+                          &node_face_,     &max_face_,    &leaf_node_buffer_, &all_.leaves,   &moving_.leaves, &all_.levels,
+                          &moving_.levels, &all_.offsets, &moving_.offsets,   &vertex_boxes_, &counter_,       &status_,
+                          &toi_,           &out_.buffer,  &out_status_,       &out_toi_,      &retry_pairs_,   &retry_status_,
+                          &retry_toi_,     &deep_store_}) {
     total += b->bytes();
   }
   return total;

@@ -70,10 +70,24 @@ struct DeviceList {
 /// What a fill returns when its count passed 2^32 entries in one range (a budgeted list: fill a smaller range).
 inline constexpr std::size_t kListOverflow = static_cast<std::size_t>(-1);
 
+/// The deep pass's sub-box store, in device bytes per elementary pair of a budgeted chunk (part of
+/// kBytesPerElementary). The queries that overflow a work item's sub-boxes are few (about 6,400 a step in the
+/// paper's pile at δ = 0, reports/gpus), each needing kDeepSubBoxFactor * kSubBoxBytes (43 kB at the default
+/// sub_boxes); a chunk whose store has no room for one query leaves them to the host.
+inline constexpr std::size_t kDeepStoreBytesPerElementary = 8;
 /// Device bytes a chunk of a step holds per elementary pair: the expansion's list (16), the filter's flag and kept
-/// list (1 + 16), the narrow phase's status and TOI (1 + 8), what it keeps (16 + 1 + 8) and the retries of the
-/// queries it gives up (16 + 1 + 8); and per candidate triangle pair (its two faces).
-inline constexpr std::size_t kBytesPerElementary = 92;
+/// list (1 + 16), the narrow phase's status and TOI (1 + 8), what it keeps (16 + 1 + 8), the retries of the
+/// queries it gives up (16 + 1 + 8) and the deep pass's store; and per candidate triangle pair (its two faces).
+inline constexpr std::size_t kBytesPerElementary = 92 + kDeepStoreBytesPerElementary;
+/// The deep pass (DevicePipeline::deep_pass) gives each query that overflowed a work item's sub-boxes this many
+/// times as many, in device memory: 768 at the default 48, six times the host's first try (128, inclusion.cpp), so
+/// that nearly every such query ends on the device; one that overflows these too is decided on the host.
+inline constexpr std::size_t kDeepSubBoxFactor = 16;
+/// The most device memory the deep pass's store takes at once (without a tighter budget): 256 MiB, room for 6,000
+/// queries at 768 sub-boxes, as many as one step of the paper's pile hands back; more run in turn.
+inline constexpr std::size_t kDeepStoreMaxBytes = std::size_t{256} << 20;
+/// Bytes of one sub-box on the device (ccd_sub_box in narrowphase/shared/sub_boxes.h: six doubles and a counter).
+inline constexpr std::size_t kSubBoxBytes = 56;
 inline constexpr std::size_t kBytesPerCandidate = 2 * sizeof(cl_uint);
 /// A chunk has room for at least one query's candidate pairs (a face against its neighbours and what it sweeps
 /// through: a few dozen in the densest public step) and one candidate's elementary pairs (15).
@@ -91,9 +105,9 @@ struct ChunkRoom {
 struct Decided {
   std::vector<cl_uint4> pairs;
   std::vector<double> toi;
-  std::size_t given_up = 0, second_pass = 0, third_pass = 0, on_host = 0;
+  std::size_t given_up = 0, second_pass = 0, third_pass = 0, deep_pass = 0, on_host = 0;
   /// Wall time of the later device passes (within the "narrow phase" stage).
-  double second_pass_ms = 0, third_pass_ms = 0;
+  double second_pass_ms = 0, third_pass_ms = 0, deep_pass_ms = 0;
 };
 
 /// Traversal queries: face q_face[i] (its leaf q_leaf[i], whose box is the query) against the tree rooted at
@@ -148,7 +162,8 @@ class DevicePipeline {
   /// `label` names the strategy in errors ("full:backend=opencl"); `backend` its backend keys.
   DevicePipeline(NarrowPhaseChoice narrow_phase, DeviceInfo device, strategies::BackendChoice backend, std::string label);
 
-  /// The context (leased: lease_context) and the device's arithmetic self-test, once.
+  /// The context (leased: lease_context) and the device's arithmetic self-test, once; for a conservative narrow phase,
+  /// the deep pass's program too.
   void prepare();
   /// Context, self-test, topology, masks and the flattened hierarchies (shape only; boxes come from refits).
   void init(const Scene& scene, std::span<const Vec3> first_frame);
@@ -259,8 +274,25 @@ class DevicePipeline {
   void build_hierarchies(const Scene& scene, std::span<const Vec3> first_frame);
   void launch_conservative(const Buffer& pairs, std::size_t count, long limit, const Buffer& status, const Buffer& toi, const Buffer& x0,
                            const Buffer& x1, StageEvents& events);
+  /// narrow_conservative_deep over `count` pairs into retry_status_ and retry_toi_, with deep_sub_boxes() each in
+  /// deep_store_.
+  void launch_deep(const Buffer& pairs, std::size_t count, const Buffer& x0, const Buffer& x1, StageEvents& events);
+  /// The queries `which` of `pairs` run again on the device, their status and TOI updated: with the narrow phase's
+  /// kernel and `limit`, or (deep) in the deep pass's build with kDeepSubBoxFactor times the sub-boxes each, from
+  /// deep_store_.
   void device_pass(StageEvents& events, const std::vector<std::size_t>& which, long limit, const std::vector<cl_uint4>& pairs,
-                   std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1);
+                   std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1, bool deep = false);
+  /// The queries `which` (status 3: out of a work item's sub-boxes) through the deep pass, as many at once as the
+  /// store's room holds (deep_batch); those that overflow it too keep status 3. Returns how many it ran, its wall
+  /// time added to `milliseconds`: none when the room holds not one query (a tight memory budget), and the host
+  /// decides them.
+  std::size_t deep_pass(StageEvents& events, const std::vector<std::size_t>& which, const std::vector<cl_uint4>& pairs, std::vector<cl_uchar>& status,
+                        std::vector<double>& toi, const Buffer& x0, const Buffer& x1, double& milliseconds);
+  /// Queries the deep pass's store holds at once: kDeepStoreMaxBytes, or kDeepStoreBytesPerElementary of each
+  /// pair a budgeted chunk has room for, whichever is less.
+  std::size_t deep_batch() const;
+  /// Sub-boxes of each query in the deep pass.
+  std::size_t deep_sub_boxes() const;
 
   NarrowPhaseChoice narrow_phase_;
   DeviceInfo device_;
@@ -281,7 +313,7 @@ class DevicePipeline {
   DeviceList out_;
   Buffer keep_;
   Buffer faces_, face_edges_, edges_, masks_, children_, node_face_, max_face_, leaf_node_buffer_, vertex_boxes_, counter_, status_, toi_,
-      out_status_, out_toi_, retry_pairs_, retry_status_, retry_toi_;
+      out_status_, out_toi_, retry_pairs_, retry_status_, retry_toi_, deep_store_;
 };
 
 template <class SetArguments>

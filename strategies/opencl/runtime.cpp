@@ -224,6 +224,10 @@ Context::Context(const DeviceInfo& device, const std::string& defines) : device_
   check(status, "clCreateContext");
   queue_ = clCreateCommandQueue(context_, device_.id, CL_QUEUE_PROFILING_ENABLE, &status);
   check(status, "clCreateCommandQueue");
+  programs_[static_cast<std::size_t>(Build::main)] = build_program(defines_);
+}
+
+cl_program Context::build_program(const std::string& defines) const {
   // Build options: the defines only, never an option that relaxes the arithmetic (mad enabling, fast or unsafe
   // math, finite math only, denormals as zero): the kernels must compute what the host computes.
   // CCDBENCH_OPENCL_BUILD_LOG=1: the build log on stderr after each build, with NVIDIA's -cl-nv-verbose (each
@@ -236,37 +240,42 @@ Context::Context(const DeviceInfo& device, const std::string& defines) : device_
   std::lock_guard lock(cache.mutex);
   const auto key = std::make_pair(device_.id, options);
   const auto cached = cache.binaries.find(key);
+  cl_int status = CL_SUCCESS;
+  cl_program program = nullptr;
   if (cached != cache.binaries.end()) {
     const unsigned char* binary = cached->second.data();
     const std::size_t size = cached->second.size();
     cl_int binary_status = CL_SUCCESS;
-    program_ = clCreateProgramWithBinary(context_, 1, &device_.id, &size, &binary, &binary_status, &status);
+    program = clCreateProgramWithBinary(context_, 1, &device_.id, &size, &binary, &binary_status, &status);
     if (status != CL_SUCCESS || binary_status != CL_SUCCESS) {
-      if (program_ != nullptr) clReleaseProgram(program_);
-      program_ = nullptr;
+      if (program != nullptr) clReleaseProgram(program);
+      program = nullptr;
     }
   }
-  if (program_ == nullptr) {
+  if (program == nullptr) {
     const char* source = kernel_source();
-    program_ = clCreateProgramWithSource(context_, 1, &source, nullptr, &status);
+    program = clCreateProgramWithSource(context_, 1, &source, nullptr, &status);
     check(status, "clCreateProgramWithSource");
   }
-  status = clBuildProgram(program_, 1, &device_.id, options.c_str(), nullptr, nullptr);
+  status = clBuildProgram(program, 1, &device_.id, options.c_str(), nullptr, nullptr);
   if (status != CL_SUCCESS) {
+    const std::string log = build_log(program, device_.id);
+    clReleaseProgram(program);
     throw OpenClError("OpenCL: the kernels do not build on device " + std::to_string(device_.index) + " (" + device_.name +
-                      "): " + error_name(status) + "\n" + build_log(program_, device_.id));
+                      "): " + error_name(status) + "\n" + log);
   }
-  if (log_build) std::cerr << "OpenCL build log (" << device_.name << ", " << options << "):\n" << build_log(program_, device_.id) << "\n";
+  if (log_build) std::cerr << "OpenCL build log (" << device_.name << ", " << options << "):\n" << build_log(program, device_.id) << "\n";
   if (cached == cache.binaries.end()) {
     std::size_t size = 0;
-    if (clGetProgramInfo(program_, CL_PROGRAM_BINARY_SIZES, sizeof(size), &size, nullptr) == CL_SUCCESS && size > 0) {
+    if (clGetProgramInfo(program, CL_PROGRAM_BINARY_SIZES, sizeof(size), &size, nullptr) == CL_SUCCESS && size > 0) {
       std::vector<unsigned char> binary(size);
       unsigned char* pointer = binary.data();
-      if (clGetProgramInfo(program_, CL_PROGRAM_BINARIES, sizeof(pointer), &pointer, nullptr) == CL_SUCCESS) {
+      if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof(pointer), &pointer, nullptr) == CL_SUCCESS) {
         cache.binaries.emplace(key, std::move(binary));
       }
     }
   }
+  return program;
 }
 
 namespace {
@@ -335,20 +344,25 @@ Context::~Context() {
   // Writes enqueued without waiting read host memory until they run: a strategy destroyed after an error must not
   // free that memory under them.
   if (queue_ != nullptr) clFinish(queue_);
-  for (auto& [name, kernel] : kernels_) clReleaseKernel(kernel);
-  if (program_ != nullptr) clReleaseProgram(program_);
+  for (auto& [name, kernel] : kernels_) clReleaseKernel(kernel.kernel);
+  for (cl_program program : programs_) {
+    if (program != nullptr) clReleaseProgram(program);
+  }
   if (queue_ != nullptr) clReleaseCommandQueue(queue_);
   if (context_ != nullptr) clReleaseContext(context_);
 }
 
-cl_kernel Context::kernel(const std::string& name) {
+cl_kernel Context::kernel(const std::string& name, Build build) {
   for (auto& [known, kernel] : kernels_) {
-    if (known == name) return kernel;
+    if (known == name && kernel.build == build) return kernel.kernel;
   }
+  cl_program& program = programs_[static_cast<std::size_t>(build)];
+  // The deep pass's build only when a query first needs it: most runs never do.
+  if (program == nullptr) program = build_program(build == Build::deep ? defines_ + " -DCCD_DEEP_PASS" : defines_);
   cl_int status = CL_SUCCESS;
-  cl_kernel kernel = clCreateKernel(program_, name.c_str(), &status);
+  cl_kernel kernel = clCreateKernel(program, name.c_str(), &status);
   check(status, ("clCreateKernel(" + name + ")").c_str());
-  kernels_.emplace_back(name, kernel);
+  kernels_.push_back({name, {build, kernel}});
   return kernel;
 }
 

@@ -13,6 +13,7 @@
 
 #include <CL/cl.h>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -111,8 +112,12 @@ class Context {
   const std::string& defines() const { return defines_; }
   cl_context context() const { return context_; }
   cl_command_queue queue() const { return queue_; }
-  /// The kernel named `name` (created once).
-  cl_kernel kernel(const std::string& name);
+  /// The programs a context builds from the embedded kernels: `main` when it is made; `deep` (-DCCD_DEEP_PASS: the
+  /// conservative search with its sub-boxes in device memory, kernels/prelude.cl) the first time one of its kernels
+  /// is asked for.
+  enum class Build { main, deep };
+  /// The kernel named `name` in `build`'s program (created once).
+  cl_kernel kernel(const std::string& name, Build build = Build::main);
   /// Waits for every enqueued command.
   void finish();
   /// Whether the device's arithmetic passed check_device_arithmetic in this context (a kept context is not checked
@@ -125,8 +130,14 @@ class Context {
   std::string defines_;
   cl_context context_ = nullptr;
   cl_command_queue queue_ = nullptr;
-  cl_program program_ = nullptr;
-  std::vector<std::pair<std::string, cl_kernel>> kernels_;
+  /// Builds the embedded kernels with `defines` (the cached binary when this process built them before).
+  cl_program build_program(const std::string& defines) const;
+  struct BuiltKernel {
+    Build build;
+    cl_kernel kernel;
+  };
+  std::array<cl_program, 2> programs_{};
+  std::vector<std::pair<std::string, BuiltKernel>> kernels_;
 };
 
 /// A device buffer that grows (never shrinks) and is reused across steps.

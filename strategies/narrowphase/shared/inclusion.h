@@ -48,7 +48,7 @@ static inline int ccd_within_thickness_at_start(const ccd_v3 r[8], double thickn
  * device). */
 static inline ccd_conservative_outcome ccd_conservative_test(const ccd_v3 original[8], double thickness_given, int vertex_face,
                                                              double tolerance_fraction, double toi_tolerance, long max_iterations, long give_up_after,
-                                                             ccd_sub_box* storage, int capacity) {
+                                                             CCD_SUB_BOX_SPACE ccd_sub_box* storage, int capacity) {
   ccd_conservative_outcome result = ccd_outcome_make(1, 0, INFINITY);
   ccd_v3 rows[8];
   for (int i = 0; i < 8; ++i) rows[i] = original[i];

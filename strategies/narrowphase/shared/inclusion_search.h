@@ -147,8 +147,8 @@ static inline int ccd_advance(ccd_inclusion* s, ccd_window* window) {
   return 1;
 }
 
-static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const ccd_window* windows, int count, double upper, ccd_sub_box* storage,
-                                                         int capacity) {
+static inline ccd_conservative_outcome ccd_window_search(ccd_inclusion* s, const ccd_window* windows, int count, double upper,
+                                                         CCD_SUB_BOX_SPACE ccd_sub_box* storage, int capacity) {
   ccd_conservative_outcome result = ccd_outcome_make(0, NAN, 0);
   int size = 0;
   for (int i = 0; i < count; ++i) {

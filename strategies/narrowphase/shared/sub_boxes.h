@@ -4,6 +4,14 @@
 #ifndef CCD_SHARED_SUB_BOXES_H
 #define CCD_SHARED_SUB_BOXES_H
 
+/* Where the heap's storage lives: nowhere named on the host, in a work item's private array on the device; the
+ * OpenCL build of the deep pass (kernels/prelude.cl) names `global`: its sub-boxes are held in device memory, room a
+ * private array has not (pipeline.hpp, kDeepSubBoxesPerWorkItem). OpenCL C 1.2 has no generic pointer, so the
+ * search is compiled once per address space. */
+#ifndef CCD_SUB_BOX_SPACE
+#define CCD_SUB_BOX_SPACE
+#endif
+
 typedef struct {
   double t0, t1, u0, u1, v0, v1;
   ccd_ulong order; /* ties broken by creation order, so the search is deterministic */
@@ -24,10 +32,12 @@ static inline ccd_sub_box ccd_sub_box_make(double t0, double t1, double u0, doub
 /* Earliest first: the order of the search's priority queue (a strict total order, so every heap pops alike). Among
  * boxes that start at the same time the newest comes first: the search then goes deep where it can (splits in u and
  * v keep t0), as a depth-first search would, instead of widening a front of equal boxes along a near contact. */
-static inline int ccd_earlier(const ccd_sub_box* a, const ccd_sub_box* b) { return a->t0 != b->t0 ? a->t0 < b->t0 : a->order > b->order; }
+static inline int ccd_earlier(const CCD_SUB_BOX_SPACE ccd_sub_box* a, const CCD_SUB_BOX_SPACE ccd_sub_box* b) {
+  return a->t0 != b->t0 ? a->t0 < b->t0 : a->order > b->order;
+}
 
 /* A binary min-heap of sub-boxes, earliest on top, over caller-owned storage. */
-static inline void ccd_heap_sift_down(ccd_sub_box* heap, int size, int i) {
+static inline void ccd_heap_sift_down(CCD_SUB_BOX_SPACE ccd_sub_box* heap, int size, int i) {
   for (;;) {
     const int left = 2 * i + 1, right = left + 1;
     int least = i;
@@ -40,7 +50,7 @@ static inline void ccd_heap_sift_down(ccd_sub_box* heap, int size, int i) {
     i = least;
   }
 }
-static inline void ccd_heap_push(ccd_sub_box* heap, int* size, ccd_sub_box box) {
+static inline void ccd_heap_push(CCD_SUB_BOX_SPACE ccd_sub_box* heap, int* size, ccd_sub_box box) {
   int i = (*size)++;
   heap[i] = box;
   while (i > 0) {
@@ -52,7 +62,7 @@ static inline void ccd_heap_push(ccd_sub_box* heap, int* size, ccd_sub_box box) 
     i = parent;
   }
 }
-static inline ccd_sub_box ccd_heap_pop(ccd_sub_box* heap, int* size) {
+static inline ccd_sub_box ccd_heap_pop(CCD_SUB_BOX_SPACE ccd_sub_box* heap, int* size) {
   const ccd_sub_box top = heap[0];
   heap[0] = heap[--*size];
   ccd_heap_sift_down(heap, *size, 0);

@@ -328,8 +328,9 @@ static inline int ccd_load_rows(uint4 p, global const uint* faces, global const 
   return vertex_face;
 }
 
+#ifndef CCD_DEEP_PASS
 /* status: 0 apart, 1 collides (toi set), 2 the query needs more than give_up_after iterations (a later device pass
- * decides it), 3 more sub-boxes than a work item holds (the host decides it). */
+ * decides it), 3 more sub-boxes than a work item holds (the deep pass decides it). */
 kernel void narrow_conservative(uint count, global const uint4* pairs, global const uint* faces, global const double* x0, global const double* x1,
                                 double thickness, double tolerance, double toi_tolerance, long max_iterations, long give_up_after,
                                 global uchar* status, global double* toi) {
@@ -343,6 +344,23 @@ kernel void narrow_conservative(uint count, global const uint4* pairs, global co
   status[i] = r.overflow ? (uchar)(r.gave_up ? 2 : 3) : (uchar)(r.collides ? 1 : 0);
   toi[i] = r.toi;
 }
+#else
+/* The queries that overflowed a work item's sub-boxes, each with `capacity` sub-boxes of its own in `sub_boxes`
+ * (device memory) and no limit on its iterations but the narrow phase's cap; status as above, 3 where even these
+ * overflow (the host decides it). */
+kernel void narrow_conservative_deep(uint count, global const uint4* pairs, global const uint* faces, global const double* x0,
+                                     global const double* x1, double thickness, double tolerance, double toi_tolerance, long max_iterations,
+                                     global ccd_sub_box* sub_boxes, uint capacity, global uchar* status, global double* toi) {
+  const uint i = get_global_id(0);
+  if (i >= count) return;
+  ccd_v3 rows[8];
+  const int vertex_face = ccd_load_rows(pairs[i], faces, x0, x1, rows);
+  const ccd_conservative_outcome r = ccd_conservative_test(rows, thickness, vertex_face, tolerance, toi_tolerance, max_iterations, 0,
+                                                           sub_boxes + (size_t)i * capacity, (int)capacity);
+  status[i] = r.overflow ? (uchar)3 : (uchar)(r.collides ? 1 : 0);
+  toi[i] = r.toi;
+}
+#endif
 
 kernel void narrow_cubic(uint count, global const uint4* pairs, global const uint* faces, global const double* x0, global const double* x1,
                          double thickness, double eta, global uchar* status, global double* toi) {

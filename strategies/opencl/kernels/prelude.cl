@@ -18,3 +18,10 @@ typedef ulong ccd_ulong;
 #ifndef CCD_DEVICE_SUB_BOXES
 #error "CCD_DEVICE_SUB_BOXES must be defined by the host (kernel_defines)"
 #endif
+
+/* The deep pass's build (-DCCD_DEEP_PASS; Context::kernel, Build::deep): the conservative search keeps its
+ * sub-boxes in device memory (narrow_conservative_deep), so the kernels that keep them in a private array are left
+ * out of it. */
+#ifdef CCD_DEEP_PASS
+#define CCD_SUB_BOX_SPACE global
+#endif

@@ -15,6 +15,7 @@ kernel void self_test_arithmetic(global const double* in, global double* out) {
   out[4] = 1.0 / in[6];
 }
 
+#ifndef CCD_DEEP_PASS
 /* Both narrow phases on `count` pairs (rows: 24 doubles per pair; kinds: 1 for vertex-face), as the host runs them. */
 kernel void self_test_pairs(uint count, global const double* rows, global const int* kinds, global const double* thickness, double tolerance,
                             double toi_tolerance, long max_iterations, double eta, global double* out) {
@@ -33,3 +34,4 @@ kernel void self_test_pairs(uint count, global const double* rows, global const 
   out[6 * i + 4] = q.toi;
   out[6 * i + 5] = q.reach;
 }
+#endif
