@@ -8,6 +8,7 @@
 #include "harness/run/cells.hpp"
 #include "harness/run/provenance.hpp"
 #include "harness/run/record_fields.hpp"
+#include "harness/run/scene_store.hpp"
 #include "harness/run/tables.hpp"
 #include "harness/truth_cache.hpp"
 #include "harness/work_queue.hpp"
@@ -29,42 +30,6 @@ namespace ccd::harness {
 using nlohmann::json;
 
 namespace {
-
-/// A scene at one of the run's thicknesses (nullopt: its own).
-struct SceneVariant {
-  const SceneSource* source;
-  std::optional<double> thickness;
-};
-
-/// Every scene at every thickness, scene by scene.
-std::vector<SceneVariant> scene_variants(const RunOptions& options) {
-  const std::vector<std::optional<double>> thicknesses =
-      options.thicknesses.empty() ? std::vector<std::optional<double>>{std::nullopt} : options.thicknesses;
-  std::vector<SceneVariant> variants;
-  for (const SceneSource& source : options.scenes) {
-    for (const std::optional<double>& thickness : thicknesses) variants.push_back({&source, thickness});
-  }
-  return variants;
-}
-
-/// Frames 0..count-1 of `sequence`, read in parallel: one by one, a paper scene's 100 frames took about as long as its
-/// cell on a GPU, and under MPI rank 0 reads every scene before any rank starts. A bad frame is reported as read in
-/// order: the first one's error.
-std::vector<std::vector<Vec3>> read_frames(const datasets::SceneSequence& sequence, std::size_t count) {
-  std::vector<std::vector<Vec3>> frames(count);
-  std::vector<std::exception_ptr> errors(count);
-  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t k) {
-    try {
-      frames[k] = sequence.frame(k);
-    } catch (...) {
-      errors[k] = std::current_exception();
-    }
-  });
-  for (const std::exception_ptr& error : errors) {
-    if (error) std::rethrow_exception(error);
-  }
-  return frames;
-}
 
 /// Makes each OpenCL strategy of the run on a thread of its own and readies its devices (Strategy::prepare): the
 /// context it leaves is the one the first cell on that device takes. A GPU's first context was a rank's longest start
@@ -95,54 +60,6 @@ class DeviceWarmUp {
 
  private:
   std::thread thread_;
-};
-
-/// The scenes this rank has loaded, by index in the run's variants: loaded when a work item first needs one, and
-/// at most kKept at once (a rank may alternate between scenes when the work queue hands out cells of several).
-class SceneStore {
- public:
-  SceneStore(const RunOptions& options, const std::vector<SceneVariant>& variants) : options_(options), variants_(variants) {}
-
-  SceneData& get(std::size_t index) {
-    for (auto it = loaded_.begin(); it != loaded_.end(); ++it) {
-      if (it->first != index) continue;
-      loaded_.splice(loaded_.begin(), loaded_, it);
-      return *loaded_.front().second;
-    }
-    const SceneVariant& variant = variants_.at(index);
-    const SceneSource& source = *variant.source;
-    auto data = std::make_unique<SceneData>(SceneData{source.label, source.load(), {}, {}, {}, 0, variant.thickness ? "command line" : "scene"});
-    if (variant.thickness) data->sequence.set_thickness(*variant.thickness);
-    data->steps = data->sequence.num_steps();
-    if (options_.max_steps > 0) data->steps = std::min(data->steps, options_.max_steps);
-    if (data->steps == 0) throw InputError(source.label, {}, "the scene has no steps (one frame)");
-    // The same scene at another δ has the same frames: copied, not read and checked again (a paper scene's 100 PLY
-    // frames take longer to read than its cell takes on a GPU).
-    const auto sibling =
-        std::find_if(loaded_.begin(), loaded_.end(), [&](const auto& held) { return variants_[held.first].source == variant.source; });
-    // (Checked against the scene as loaded now: one whose files changed between the two loads is read again.)
-    const std::size_t vertices = data->sequence.scene().topology().num_vertices();
-    if (sibling != loaded_.end() && sibling->second->frames.size() == data->steps + 1 && sibling->second->frames[0].size() == vertices) {
-      data->frames = sibling->second->frames;
-    } else {
-      data->frames = read_frames(data->sequence, data->steps + 1);
-    }
-    data->truth.resize(data->steps);
-    data->has_truth.assign(data->steps, false);
-    loaded_.emplace_front(index, std::move(data));
-    if (loaded_.size() > kKept) loaded_.pop_back();
-    return *loaded_.front().second;
-  }
-
- private:
-  static constexpr std::size_t kKept = 2;
-  const RunOptions& options_;
-  const std::vector<SceneVariant>& variants_;
-  std::list<std::pair<std::size_t, std::unique_ptr<SceneData>>> loaded_;
-
- public:
-  /// The scene a work item used last (the one a cell in progress runs on), or nullptr.
-  const SceneData* last() const { return loaded_.empty() ? nullptr : loaded_.front().second.get(); }
 };
 
 /// Where a finished cell goes: its place in the output, its file and key.
@@ -204,8 +121,14 @@ class Benchmark {
   /// (and this rank's memory); {"cell", scene, spec, file} runs a cell. Steps of a cell are never split: strategies
   /// keep state from step to step.
   std::string work_on(const std::string& payload);
-  /// Plans scene s: its kept cells go into cells_, its truth steps and pending cells become work items.
-  void plan_scene(std::size_t s);
+  /// Plans scene variant s, loaded as `data` with `content` its content digest: its kept cells go into cells_, its
+  /// truth steps and pending cells become work items.
+  void plan_scene(std::size_t s, const SceneData& data, const std::string& content);
+  /// Plans every scene variant at once (MPI's rank 0, before any rank starts), their loading side by side.
+  void plan_every_scene();
+  void say_loading(std::size_t s) {
+    say("run: loading " + variants_[s].source->label + (variants_[s].thickness ? " at δ " + significant(*variants_[s].thickness, 6) : std::string()));
+  }
   /// The cell of `spec` on scene s, kept from an earlier run (true) or to run; false when the strategy refuses the
   /// scene at one of several δ (left out and said so).
   struct Pending {
@@ -214,7 +137,7 @@ class Benchmark {
     CellKey key;
     std::size_t slot;  // cells keep the order of --strategy, kept or computed
   };
-  std::optional<Pending> plan_cell(std::size_t s, const strategies::StrategySpec& spec, const std::string& content);
+  std::optional<Pending> plan_cell(std::size_t s, const SceneData& data, const strategies::StrategySpec& spec, const std::string& content);
   /// Why a kept cell of `spec` may not stand for a fresh one in this run (docs/DESIGN.md §10 "Kept cells"), or "".
   std::string why_not_kept(const std::string& spec, const CellSummary& summary) const;
   /// The run's spec whose text is `text` (a work item names its cell's spec by it).
@@ -313,9 +236,9 @@ const strategies::StrategySpec& Benchmark::spec_named(const std::string& text) c
   throw std::logic_error("a work item names a strategy the run was not given: " + text);
 }
 
-std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const strategies::StrategySpec& spec, const std::string& content) {
+std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const SceneData& data, const strategies::StrategySpec& spec,
+                                                       const std::string& content) {
   const SceneSource& source = *variants_[s].source;
-  const SceneData& data = store_.get(s);
   const Scene& scene = data.sequence.scene();
   if (options_.thicknesses.size() > 1) {
     try {
@@ -367,16 +290,13 @@ std::optional<Benchmark::Pending> Benchmark::plan_cell(std::size_t s, const stra
   return std::nullopt;
 }
 
-void Benchmark::plan_scene(std::size_t s) {
+void Benchmark::plan_scene(std::size_t s, const SceneData& data, const std::string& content) {
   const SceneSource& source = *variants_[s].source;
-  say("run: loading " + source.label + (variants_[s].thickness ? " at δ " + significant(*variants_[s].thickness, 6) : std::string()));
-  const SceneData& data = store_.get(s);
   const std::size_t steps = data.steps;
   const Scene& scene = data.sequence.scene();
-  const std::string content = scene_content_digest(scene, data.frames);
   std::vector<Pending> pending;
   for (const strategies::StrategySpec& spec : options_.strategies) {
-    if (std::optional<Pending> cell = plan_cell(s, spec, content)) pending.push_back(std::move(*cell));
+    if (std::optional<Pending> cell = plan_cell(s, data, spec, content)) pending.push_back(std::move(*cell));
   }
   if (pending.empty()) return;
   // A strategy that refuses this scene (fcl at δ > 0) says so before any truth or timing is spent.
@@ -464,7 +384,9 @@ void Benchmark::run_all() {
       for (std::size_t s = 0; s < variants_.size(); ++s) {
         items_.clear();
         planned_.clear();
-        plan_scene(s);
+        say_loading(s);
+        const SceneData& data = store_.get(s);
+        plan_scene(s, data, scene_content_digest(data.sequence.scene(), data.frames));
         if (!items_.empty() && !warm_up) {
           warm_up.emplace(options_.strategies);
           warm_up->wait();
@@ -484,7 +406,7 @@ void Benchmark::run_all() {
     return;
   }
   const DeviceWarmUp warm_up(options_.strategies);  // while rank 0 plans every scene
-  for (std::size_t s = 0; s < variants_.size(); ++s) plan_scene(s);
+  plan_every_scene();
   cell_count_ = 0;
   for (const PlannedItem& item : planned_) cell_count_ += item.cells.size();
   say_on_termination("run: stopped before every cell finished (a rank died, or the run was interrupted): finished cells are kept in " +
@@ -492,6 +414,51 @@ void Benchmark::run_all() {
   distribute(items_, work(), done);
   say_on_termination({});
   results_log_.finish(std::cerr);
+}
+
+void Benchmark::plan_every_scene() {
+  // Every rank waits for this: rank 0 loads kScenesLoadedAtOnce scenes side by side (their frames read and hashed,
+  // most of the planning: one after another, the 12 variants of issue 66's sweep took 0.4-0.7 s on a GPU node), then
+  // plans their variants in order. A scene's variants load in turn, the later ones copying the first's frames; each
+  // keeps only its digest, which is all planning needs of the frames (a cell loads its scene where it runs). An error
+  // is reported as planning them one by one would: the first variant's.
+  constexpr std::size_t kScenesLoadedAtOnce = 4;  // (each scene's frames held until its digest is taken)
+  struct Loaded {
+    std::unique_ptr<SceneData> data;
+    std::string content;
+    std::exception_ptr error;
+  };
+  std::vector<std::size_t> firsts;  // each scene's first variant (variants are scene by scene)
+  for (std::size_t s = 0; s < variants_.size(); ++s) {
+    if (s == 0 || variants_[s].source != variants_[s - 1].source) firsts.push_back(s);
+  }
+  firsts.push_back(variants_.size());
+  for (std::size_t window = 0; window + 1 < firsts.size(); window += kScenesLoadedAtOnce) {
+    const std::size_t scenes = std::min(kScenesLoadedAtOnce, firsts.size() - 1 - window);
+    const std::size_t first = firsts[window], end = firsts[window + scenes];
+    std::vector<Loaded> loaded(end - first);
+    tbb::parallel_for(std::size_t{0}, scenes, [&](std::size_t k) {
+      SceneData* sibling = nullptr;
+      for (std::size_t s = firsts[window + k]; s < firsts[window + k + 1]; ++s) {
+        Loaded& into = loaded[s - first];
+        try {
+          into.data = store_.load(s, sibling);
+          into.content = scene_content_digest(into.data->sequence.scene(), into.data->frames);
+        } catch (...) {
+          into.error = std::current_exception();
+          break;
+        }
+        if (sibling != nullptr) std::vector<std::vector<Vec3>>().swap(sibling->frames);
+        sibling = into.data.get();
+      }
+      if (sibling != nullptr) std::vector<std::vector<Vec3>>().swap(sibling->frames);
+    });
+    for (std::size_t s = first; s < end; ++s) {
+      say_loading(s);
+      if (loaded[s - first].error) std::rethrow_exception(loaded[s - first].error);
+      plan_scene(s, *loaded[s - first].data, loaded[s - first].content);
+    }
+  }
 }
 
 RunResult Benchmark::take_result() {
