@@ -356,6 +356,7 @@ class FullOpenCl final : public Strategy {
     d.second_pass += part.decided.second_pass;
     d.third_pass += part.decided.third_pass;
     d.deep_pass += part.decided.deep_pass;
+    d.deep_colliding += part.decided.deep_colliding;
     d.on_host += part.decided.on_host;
     d.second_pass_ms += part.decided.second_pass_ms;
     d.third_pass_ms += part.decided.third_pass_ms;

@@ -47,6 +47,7 @@ ChunkRoom DevicePipeline::plan_room(std::uint64_t fixed, std::size_t least_candi
   for (Buffer* buffer : {&keep_, &status_, &out_status_, &retry_status_}) buffer->release_above(room.elementary);
   for (Buffer* buffer : {&toi_, &out_toi_, &retry_toi_}) buffer->release_above(room.elementary * sizeof(double));
   retry_pairs_.release_above(room.elementary * sizeof(cl_uint4));
+  deep_store_.release_above(room.elementary * kDeepStoreBytesPerElementary);
   return room;
 }
 

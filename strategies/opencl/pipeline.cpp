@@ -433,7 +433,7 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
     }
     return left;
   };
-  std::size_t second_pass = 0, third_pass = 0, deep = 0;
+  std::size_t second_pass = 0, third_pass = 0;
   if (conservative) {
     // Each later pass's wall time (it ends with a blocking download): part of the "narrow phase" stage, counted
     // apart so that the latency of a few long queries shows (reports/narrowphase/stages.md).
@@ -450,7 +450,7 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
       timed_pass(limit, limit > 0 ? into.second_pass_ms : into.third_pass_ms);
     }
     // What is left overflowed a work item's sub-boxes (status 3): the deep pass, with more of them in device memory.
-    deep = deep_pass(events, handed_back(false), pairs, status, toi, x0, x1, into.deep_pass_ms);
+    deep_pass(events, handed_back(false), pairs, status, toi, x0, x1, into);
   }
   const std::vector<std::size_t> on_host = handed_back(false);
   {
@@ -479,7 +479,6 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
   into.given_up += given_up.size();
   into.second_pass += second_pass;
   into.third_pass += third_pass;
-  into.deep_pass += deep;
   into.on_host += on_host.size();
 }
 
@@ -513,6 +512,7 @@ void DevicePipeline::collect(const Decided& decided, strategies::StepResult& res
   result.counters.extra.emplace_back("device_second_pass_ms", decided.second_pass_ms);
   result.counters.extra.emplace_back("device_third_pass_ms", decided.third_pass_ms);
   result.counters.extra.emplace_back("device_deep_pass_pairs", static_cast<double>(decided.deep_pass));
+  result.counters.extra.emplace_back("device_deep_pass_colliding", static_cast<double>(decided.deep_colliding));
   result.counters.extra.emplace_back("device_deep_pass_ms", decided.deep_pass_ms);
   result.counters.extra.emplace_back("host_decided_pairs", static_cast<double>(decided.on_host));
 }

@@ -18,6 +18,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -83,8 +84,8 @@ inline constexpr std::size_t kBytesPerElementary = 92 + kDeepStoreBytesPerElemen
 /// times as many, in device memory: 768 at the default 48, six times the host's first try (128, inclusion.cpp), so
 /// that nearly every such query ends on the device; one that overflows these too is decided on the host.
 inline constexpr std::size_t kDeepSubBoxFactor = 16;
-/// The most device memory the deep pass's store takes at once (without a tighter budget): 256 MiB, room for 6,000
-/// queries at 768 sub-boxes, as many as one step of the paper's pile hands back; more run in turn.
+/// The most device memory the deep pass's store takes at once (without a tighter budget): 256 MiB, room for 6,200
+/// queries at 768 sub-boxes, about what one step of the paper's pile hands back; more run in turn.
 inline constexpr std::size_t kDeepStoreMaxBytes = std::size_t{256} << 20;
 /// Bytes of one sub-box on the device (ccd_sub_box in narrowphase/shared/sub_boxes.h: six doubles and a counter).
 inline constexpr std::size_t kSubBoxBytes = 56;
@@ -105,7 +106,7 @@ struct ChunkRoom {
 struct Decided {
   std::vector<cl_uint4> pairs;
   std::vector<double> toi;
-  std::size_t given_up = 0, second_pass = 0, third_pass = 0, deep_pass = 0, on_host = 0;
+  std::size_t given_up = 0, second_pass = 0, third_pass = 0, deep_pass = 0, deep_colliding = 0, on_host = 0;
   /// Wall time of the later device passes (within the "narrow phase" stage).
   double second_pass_ms = 0, third_pass_ms = 0, deep_pass_ms = 0;
 };
@@ -264,6 +265,10 @@ class DevicePipeline {
 
   /// Bytes of the pipeline's own buffers.
   std::size_t bytes() const;
+  /// For a strategy that holds a step whole within its memory budget (apccd): `limit` tells, when the deep pass
+  /// runs, the most the pipeline's own buffers may hold (what the budget leaves over the strategy's). The deep
+  /// pass's store stays within what the other buffers leave of it; the host decides the queries it has no room for.
+  void limit_own_bytes(std::function<std::size_t()> limit) { own_bytes_limit_ = std::move(limit); }
 
   /// Each candidate yields at most 15 elementary pairs (6 vertex-face, 9 edge-edge): this keeps their count in 32 bits.
   static constexpr std::size_t kMaxCandidatesPerStep = 0xFFFFFFFFull / 15;
@@ -283,13 +288,14 @@ class DevicePipeline {
   void device_pass(StageEvents& events, const std::vector<std::size_t>& which, long limit, const std::vector<cl_uint4>& pairs,
                    std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1, bool deep = false);
   /// The queries `which` (status 3: out of a work item's sub-boxes) through the deep pass, as many at once as the
-  /// store's room holds (deep_batch); those that overflow it too keep status 3. Returns how many it ran, its wall
-  /// time added to `milliseconds`: none when the room holds not one query (a tight memory budget), and the host
-  /// decides them.
-  std::size_t deep_pass(StageEvents& events, const std::vector<std::size_t>& which, const std::vector<cl_uint4>& pairs, std::vector<cl_uchar>& status,
-                        std::vector<double>& toi, const Buffer& x0, const Buffer& x1, double& milliseconds);
-  /// Queries the deep pass's store holds at once: kDeepStoreMaxBytes, or kDeepStoreBytesPerElementary of each
-  /// pair a budgeted chunk has room for, whichever is less.
+  /// store's room holds (deep_batch); those that overflow it too keep status 3. Adds how many it ran (none when the
+  /// room holds not one query: a tight memory budget, and the host decides them), how many of them collide, and
+  /// its wall time to `into`.
+  void deep_pass(StageEvents& events, const std::vector<std::size_t>& which, const std::vector<cl_uint4>& pairs, std::vector<cl_uchar>& status,
+                 std::vector<double>& toi, const Buffer& x0, const Buffer& x1, Decided& into);
+  /// Queries the deep pass's store holds at once: within kDeepStoreMaxBytes and the largest allocation, within
+  /// kDeepStoreBytesPerElementary of each pair a budgeted chunk has room for (plan_room), and within what
+  /// limit_own_bytes leaves over the pipeline's other buffers.
   std::size_t deep_batch() const;
   /// Sub-boxes of each query in the deep pass.
   std::size_t deep_sub_boxes() const;
@@ -308,6 +314,8 @@ class DevicePipeline {
   std::size_t initial_elementary_capacity_ = 0;
   /// Entries each per-pair buffer of the narrow phase may hold (0: no budget planned).
   std::size_t pair_limit_ = 0;
+  /// limit_own_bytes's (empty: not set).
+  std::function<std::size_t()> own_bytes_limit_;
   /// Reserves `entries` of `entry_bytes` in `buffer`, within pair_limit_.
   void reserve_pairs(Buffer& buffer, std::size_t entries, std::size_t entry_bytes);
   DeviceList out_;

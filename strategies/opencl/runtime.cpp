@@ -357,7 +357,7 @@ cl_kernel Context::kernel(const std::string& name, Build build) {
     if (known == name && kernel.build == build) return kernel.kernel;
   }
   cl_program& program = programs_[static_cast<std::size_t>(build)];
-  // The deep pass's build only when a query first needs it: most runs never do.
+  // The deep pass's build when first asked for (DevicePipeline::prepare asks, for a conservative narrow phase).
   if (program == nullptr) program = build_program(build == Build::deep ? defines_ + " -DCCD_DEEP_PASS" : defines_);
   cl_int status = CL_SUCCESS;
   cl_kernel kernel = clCreateKernel(program, name.c_str(), &status);

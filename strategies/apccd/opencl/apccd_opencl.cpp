@@ -41,6 +41,7 @@ class ApccdOpenCl final : public Strategy {
     scene_ = &scene;
     pipeline_.init(scene, first_frame);
     memory_budget_ = pipeline_.budget_bytes();
+    pipeline_.limit_own_bytes([this] { return budget_left_to_pipeline(); });
     session_.init(settings_, scene, first_frame);
     history_ = ProximityHistory(settings_.history);
     opencl::Context& context = pipeline_.context();
@@ -343,6 +344,13 @@ class ApccdOpenCl final : public Strategy {
     cl_uint added[2] = {0, 0};
     download(context, counter_, added, 2);
     return added[0];
+  }
+
+  /// What memory= leaves the pipeline's own buffers over every other buffer of the step: the deep pass's store stays
+  /// within it (apccd holds its step whole, so the budget binds the step's peak).
+  std::size_t budget_left_to_pipeline() const {
+    const std::size_t others = device_bytes() - pipeline_.bytes();
+    return memory_budget_ > others ? memory_budget_ - others : 0;
   }
 
   std::size_t device_bytes() const {

@@ -1,12 +1,12 @@
 /* The sub-boxes of (t, u, v) the conservative narrow phase examines (inclusion.h), and the binary min-heap it keeps
- * them in, earliest first, over caller-owned storage (a work item's private array on the device). Needs a 64-bit
- * unsigned `ccd_ulong` from its environment. */
+ * them in, earliest first, over caller-owned storage (on the device, a work item's private array, or its share of
+ * device memory in the deep pass). Needs a 64-bit unsigned `ccd_ulong` from its environment. */
 #ifndef CCD_SHARED_SUB_BOXES_H
 #define CCD_SHARED_SUB_BOXES_H
 
 /* Where the heap's storage lives: nowhere named on the host, in a work item's private array on the device; the
  * OpenCL build of the deep pass (kernels/prelude.cl) names `global`: its sub-boxes are held in device memory, room a
- * private array has not (pipeline.hpp, kDeepSubBoxesPerWorkItem). OpenCL C 1.2 has no generic pointer, so the
+ * private array has not (opencl/pipeline.hpp, kDeepSubBoxFactor). OpenCL C 1.2 has no generic pointer, so the
  * search is compiled once per address space. */
 #ifndef CCD_SUB_BOX_SPACE
 #define CCD_SUB_BOX_SPACE
