@@ -126,9 +126,12 @@ void DevicePipeline::prepare() {
     check_device_arithmetic(*context_);
     context_->arithmetic_checked = true;
   }
-  // The deep pass's program too, so that no step's time holds a build: on an H200 its first build took 12.8 s
-  // (NVIDIA's own cache keeps it for later processes), inside the first step whose queries overflowed.
-  if (narrow_phase_.conservative()) context_->kernel("narrow_conservative_deep", Context::Build::deep);
+  // The deep pass's program too, built and checked here so that no step's time holds a build: on an H200 its first
+  // build took 12.8 s (NVIDIA's own cache keeps it for later processes), inside the first step whose queries overflowed.
+  if (narrow_phase_.conservative() && !context_->deep_pass_checked) {
+    check_deep_pass_arithmetic(*context_, deep_sub_boxes());
+    context_->deep_pass_checked = true;
+  }
 }
 
 void DevicePipeline::init(const Scene& scene, std::span<const Vec3> first_frame) {

@@ -87,8 +87,6 @@ inline constexpr std::size_t kDeepSubBoxFactor = 16;
 /// The most device memory the deep pass's store takes at once (without a tighter budget): 256 MiB, room for 6,200
 /// queries at 768 sub-boxes, about what one step of the paper's pile hands back; more run in turn.
 inline constexpr std::size_t kDeepStoreMaxBytes = std::size_t{256} << 20;
-/// Bytes of one sub-box on the device (ccd_sub_box in narrowphase/shared/sub_boxes.h: six doubles and a counter).
-inline constexpr std::size_t kSubBoxBytes = 56;
 inline constexpr std::size_t kBytesPerCandidate = 2 * sizeof(cl_uint);
 /// A chunk has room for at least one query's candidate pairs (a face against its neighbours and what it sweeps
 /// through: a few dozen in the densest public step) and one candidate's elementary pairs (15).

@@ -77,6 +77,10 @@ std::vector<DeviceInfo> choose_devices(const std::vector<DeviceInfo>& devices, c
 /// @throws std::invalid_argument saying what the device lacks.
 void require_double_precision(const DeviceInfo& device);
 
+/// Bytes of one sub-box on the device (ccd_sub_box in narrowphase/shared/sub_boxes.h: six doubles and a counter;
+/// self_test.cpp checks it against the host's).
+inline constexpr std::size_t kSubBoxBytes = 56;
+
 class Context;
 /// Gives a leased context back to the process's pool (lease_context).
 struct ContextReturn {
@@ -123,6 +127,8 @@ class Context {
   /// Whether the device's arithmetic passed check_device_arithmetic in this context (a kept context is not checked
   /// again: its device and program are the same).
   bool arithmetic_checked = false;
+  /// The same for the deep pass's build (check_deep_pass_arithmetic), made when a conservative strategy prepares.
+  bool deep_pass_checked = false;
 
  private:
   friend ContextLease lease_context(const DeviceInfo& device, const std::string& defines);

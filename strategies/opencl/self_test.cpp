@@ -33,6 +33,47 @@ std::string hex(double value) {
                               "; its answers could not match the CPU backend's, so it is not used");
 }
 
+/// The self-test's pairs (seeded): points, edges and faces at scales from 2^-900 to 2^900, moving by their size or
+/// much less, half of them with two points made to (nearly) meet.
+struct SelfTestPairs {
+  std::vector<double> rows = std::vector<double>(kPairs * 24), thickness = std::vector<double>(kPairs);
+  std::vector<int> kinds = std::vector<int>(kPairs);
+};
+SelfTestPairs self_test_pairs() {
+  SelfTestPairs p;
+  std::vector<double>& rows = p.rows;
+  std::vector<double>& thickness = p.thickness;
+  std::vector<int>& kinds = p.kinds;
+  std::mt19937_64 random(kSelfTestSeed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (std::size_t i = 0; i < kPairs; ++i) {
+    const int exponent = static_cast<int>(i % 19) * 100 - 900;
+    const double motion = i % 3 == 0 ? 1.0 : (i % 3 == 1 ? 0.1 : 1e-3);
+    for (int k = 0; k < 12; ++k) rows[24 * i + static_cast<std::size_t>(k)] = std::ldexp(unit(random), exponent);
+    for (int k = 12; k < 24; ++k) {
+      rows[24 * i + static_cast<std::size_t>(k)] = rows[24 * i + static_cast<std::size_t>(k - 12)] + std::ldexp(motion * unit(random), exponent);
+    }
+    if (i % 2 == 0) {  // the second point onto the first: a contact or a near miss
+      for (int k = 0; k < 3; ++k) rows[24 * i + 3 + static_cast<std::size_t>(k)] = rows[24 * i + static_cast<std::size_t>(k)] * (1 + 1e-9);
+    }
+    thickness[i] = i % 4 == 0 ? 0.0 : std::ldexp(0.05 * (1 + unit(random)), exponent);
+    kinds[i] = static_cast<int>(i % 2);
+  }
+  return p;
+}
+
+/// The conservative test of pair i of `p` on the host, with all the room it needs.
+narrowphase::shared::f64::ccd_conservative_outcome host_conservative(const SelfTestPairs& p, std::size_t i,
+                                                                     std::vector<narrowphase::shared::f64::ccd_sub_box>& storage) {
+  narrowphase::shared::f64::ccd_v3 r[8];
+  for (int k = 0; k < 8; ++k) {
+    const std::size_t at = 24 * i + 3 * static_cast<std::size_t>(k);
+    r[k] = narrowphase::shared::f64::ccd_v3_make(p.rows[at], p.rows[at + 1], p.rows[at + 2]);
+  }
+  return narrowphase::shared::f64::ccd_conservative_test(r, p.thickness[i], p.kinds[i], kTolerance, kToiTolerance, kMaxIterations, 0, storage.data(),
+                                                         static_cast<int>(storage.size()));
+}
+
 }  // namespace
 
 void check_device_arithmetic(Context& context) {
@@ -57,23 +98,10 @@ void check_device_arithmetic(Context& context) {
   }
 
   // Seeded pairs: random positions and motions at scales 2^-900..2^900, half of them nearly touching.
-  std::mt19937_64 random(kSelfTestSeed);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  std::vector<double> rows(kPairs * 24), thickness(kPairs);
-  std::vector<int> kinds(kPairs);
-  for (std::size_t i = 0; i < kPairs; ++i) {
-    const int exponent = static_cast<int>(i % 19) * 100 - 900;
-    const double motion = i % 3 == 0 ? 1.0 : (i % 3 == 1 ? 0.1 : 1e-3);
-    for (int k = 0; k < 12; ++k) rows[24 * i + static_cast<std::size_t>(k)] = std::ldexp(unit(random), exponent);
-    for (int k = 12; k < 24; ++k) {
-      rows[24 * i + static_cast<std::size_t>(k)] = rows[24 * i + static_cast<std::size_t>(k - 12)] + std::ldexp(motion * unit(random), exponent);
-    }
-    if (i % 2 == 0) {  // the second point onto the first: a contact or a near miss
-      for (int k = 0; k < 3; ++k) rows[24 * i + 3 + static_cast<std::size_t>(k)] = rows[24 * i + static_cast<std::size_t>(k)] * (1 + 1e-9);
-    }
-    thickness[i] = i % 4 == 0 ? 0.0 : std::ldexp(0.05 * (1 + unit(random)), exponent);
-    kinds[i] = static_cast<int>(i % 2);
-  }
+  const SelfTestPairs p = self_test_pairs();
+  const std::vector<double>& rows = p.rows;
+  const std::vector<double>& thickness = p.thickness;
+  const std::vector<int>& kinds = p.kinds;
   Buffer rows_buffer, kinds_buffer, thickness_buffer, out_buffer;
   upload(context, rows_buffer, rows.data(), rows.size());
   upload(context, kinds_buffer, kinds.data(), kinds.size());
@@ -108,6 +136,42 @@ void check_device_arithmetic(Context& context) {
       if (k < 3 && device[6 * i] < 0) continue;  // the device ran out of sub-boxes: the host decides such pairs
       const bool both_nan = std::isnan(d) && std::isnan(host[k]);
       if (!both_nan && !same_bits(d, host[k])) {
+        refuse(context, std::string(field[k]) + " differs on self-test pair " + std::to_string(i) + " of seed " + std::to_string(kSelfTestSeed) +
+                            " (device " + hex(d) + ", host " + hex(host[k]) + ")");
+      }
+    }
+  }
+}
+
+// The device's sub-box is the host's: the deep pass's store is sized by it.
+static_assert(sizeof(narrowphase::shared::f64::ccd_sub_box) == kSubBoxBytes);
+
+void check_deep_pass_arithmetic(Context& context, std::size_t capacity) {
+  const SelfTestPairs p = self_test_pairs();
+  Buffer rows, kinds, thickness, sub_boxes, out;
+  upload(context, rows, p.rows.data(), p.rows.size());
+  upload(context, kinds, p.kinds.data(), p.kinds.size());
+  upload(context, thickness, p.thickness.data(), p.thickness.size());
+  sub_boxes.reserve(context, kPairs * capacity * kSubBoxBytes);
+  out.reserve(context, kPairs * 3 * sizeof(double));
+  cl_kernel kernel = context.kernel("self_test_pairs_deep", Context::Build::deep);
+  const cl_double tolerance = kTolerance, toi_tolerance = kToiTolerance;
+  const cl_long max_iterations = kMaxIterations;
+  set_arguments(kernel, static_cast<cl_uint>(kPairs), rows.get(), kinds.get(), thickness.get(), tolerance, toi_tolerance, max_iterations,
+                sub_boxes.get(), static_cast<cl_uint>(capacity), out.get());
+  launch(context, kernel, kPairs, 64, nullptr);
+  std::vector<double> device(kPairs * 3);
+  download(context, out, device.data(), device.size());
+  const narrowphase::RoundToNearest rounding;
+  std::vector<narrowphase::shared::f64::ccd_sub_box> storage(1 << 16);
+  for (std::size_t i = 0; i < kPairs; ++i) {
+    if (device[3 * i] < 0) continue;  // out of these sub-boxes too: the host decides such pairs
+    const auto c = host_conservative(p, i, storage);
+    const double host[3] = {static_cast<double>(c.collides), c.toi, c.achieved_tolerance};
+    const char* field[3] = {"the deep pass's answer", "the deep pass's TOI", "the deep pass's tolerance"};
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double d = device[3 * i + k];
+      if (!(std::isnan(d) && std::isnan(host[k])) && !same_bits(d, host[k])) {
         refuse(context, std::string(field[k]) + " differs on self-test pair " + std::to_string(i) + " of seed " + std::to_string(kSelfTestSeed) +
                             " (device " + hex(d) + ", host " + hex(host[k]) + ")");
       }

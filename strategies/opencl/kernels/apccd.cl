@@ -3,6 +3,7 @@
  * rounding happens (a relative position is one subtraction per coordinate, a widened box as bvh.cpp's), so that
  * both backends test the same pairs. */
 
+#ifndef CCD_DEEP_PASS /* (none of apccd's stages in the deep pass's build, prelude.cl) */
 #include "strategies/narrowphase/shared/geometry.h"
 #include "strategies/narrowphase/shared/separation.h"
 
@@ -163,3 +164,4 @@ kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void compact_
   const uint slot = ccd_group_reserve(scratch, k, total);
   if (k && slot < capacity) out[slot] = pairs[i];
 }
+#endif

@@ -362,6 +362,7 @@ kernel void narrow_conservative_deep(uint count, global const uint4* pairs, glob
 }
 #endif
 
+#ifndef CCD_DEEP_PASS /* (the deep pass's build holds the conservative search alone: it compiles in half the time) */
 kernel void narrow_cubic(uint count, global const uint4* pairs, global const uint* faces, global const double* x0, global const double* x1,
                          double thickness, double eta, global uchar* status, global double* toi) {
   const uint i = get_global_id(0);
@@ -372,6 +373,7 @@ kernel void narrow_cubic(uint count, global const uint4* pairs, global const uin
   status[i] = (uchar)(r.collides ? 1 : 0);
   toi[i] = r.toi;
 }
+#endif
 
 /* The pairs whose status is not 0, with their status and TOI (in any order: the host sorts). */
 kernel __attribute__((reqd_work_group_size(CCD_GROUP_SIZE, 1, 1))) void compact(uint count, global const uint4* pairs, global const uchar* status,
