@@ -80,6 +80,9 @@ void require_double_precision(const DeviceInfo& device);
 /// Bytes of one sub-box on the device (ccd_sub_box in narrowphase/shared/sub_boxes.h: six doubles and a counter;
 /// self_test.cpp checks it against the host's).
 inline constexpr std::size_t kSubBoxBytes = 56;
+/// The third component of a vertex-face pair's uint4 (CCD_VERTEX_FACE in kernels/full.cl); an edge-edge pair's
+/// four are its vertices.
+inline constexpr cl_uint kVertexFacePair = 0xFFFFFFFFu;
 
 class Context;
 /// Gives a leased context back to the process's pool (lease_context).

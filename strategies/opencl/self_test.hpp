@@ -14,8 +14,8 @@ inline constexpr unsigned kSelfTestSeed = 20261123;
 /// @throws std::invalid_argument naming the first case where the device's result differs from the host's.
 void check_device_arithmetic(Context& context);
 
-/// The same for the deep pass's build (Context::Build::deep): the conservative test of the self-test's pairs with
-/// `capacity` sub-boxes each in device memory, bit for bit the host's.
+/// The same for the deep pass's build (Context::Build::deep): its kernel on the self-test's pairs with `capacity`
+/// sub-boxes each in device memory, each answer and TOI bit for bit the host's.
 /// @throws std::invalid_argument as check_device_arithmetic.
 void check_deep_pass_arithmetic(Context& context, std::size_t capacity);
 

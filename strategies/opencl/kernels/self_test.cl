@@ -34,18 +34,4 @@ kernel void self_test_pairs(uint count, global const double* rows, global const 
   out[6 * i + 4] = q.toi;
   out[6 * i + 5] = q.reach;
 }
-#else
-/* The conservative test of `count` pairs as the deep pass runs it, with `capacity` sub-boxes each in device memory. */
-kernel void self_test_pairs_deep(uint count, global const double* rows, global const int* kinds, global const double* thickness, double tolerance,
-                                 double toi_tolerance, long max_iterations, global ccd_sub_box* sub_boxes, uint capacity, global double* out) {
-  const uint i = get_global_id(0);
-  if (i >= count) return;
-  ccd_v3 r[8];
-  for (int k = 0; k < 8; ++k) r[k] = ccd_v3_make(rows[24 * i + 3 * k], rows[24 * i + 3 * k + 1], rows[24 * i + 3 * k + 2]);
-  const ccd_conservative_outcome c =
-      ccd_conservative_test(r, thickness[i], kinds[i], tolerance, toi_tolerance, max_iterations, 0, sub_boxes + (size_t)i * capacity, (int)capacity);
-  out[3 * i] = c.overflow ? -1.0 : (double)c.collides;
-  out[3 * i + 1] = c.toi;
-  out[3 * i + 2] = c.achieved_tolerance;
-}
 #endif
