@@ -19,6 +19,8 @@ constexpr double kToiTolerance = 1e-6;
 constexpr long kMaxIterations = 20000;
 constexpr double kEta = 1e-6;
 constexpr std::size_t kPairs = 512;
+/// The pairs' scales: pair i's coordinates are of size 2^(100 (i mod kScales) - 900).
+constexpr std::size_t kScales = 19;
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
 
@@ -48,7 +50,7 @@ SelfTestPairs self_test_pairs() {
   std::mt19937_64 random(kSelfTestSeed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   for (std::size_t i = 0; i < kPairs; ++i) {
-    const int exponent = static_cast<int>(i % 19) * 100 - 900;
+    const int exponent = static_cast<int>(i % kScales) * 100 - 900;
     const double motion = i % 3 == 0 ? 1.0 : (i % 3 == 1 ? 0.1 : 1e-3);
     for (int k = 0; k < 12; ++k) rows[24 * i + static_cast<std::size_t>(k)] = std::ldexp(unit(random), exponent);
     for (int k = 12; k < 24; ++k) {
@@ -149,8 +151,10 @@ static_assert(sizeof(narrowphase::shared::f64::ccd_sub_box) == kSubBoxBytes);
 
 void check_deep_pass_arithmetic(Context& context, std::size_t capacity) {
   // Each pair as the deep pass meets it: its four points as vertices 4i..4i+3 of x0 and x1, a vertex-face pair's
-  // face as face i; one launch a pair (its thickness is the kernel's argument), through the deep pass's own kernel.
-  const SelfTestPairs p = self_test_pairs();
+  // face as face i, through the deep pass's own kernel, whose thickness is one for a launch: every pair at δ = 0,
+  // then each scale's pairs (kScales) at the δ of one of them. (One launch a pair, each at its own δ, ran the 512
+  // searches one after another.)
+  SelfTestPairs p = self_test_pairs();
   std::vector<double> x0(kPairs * 12), x1(kPairs * 12);
   std::vector<cl_uint> faces(kPairs * 3);
   std::vector<cl_uint4> pairs(kPairs);
@@ -165,34 +169,46 @@ void check_deep_pass_arithmetic(Context& context, std::size_t capacity) {
   upload(context, x0_buffer, x0.data(), x0.size());
   upload(context, x1_buffer, x1.data(), x1.size());
   upload(context, faces_buffer, faces.data(), faces.size());
-  upload(context, pairs_buffer, pairs.data(), pairs.size());
   sub_boxes.reserve(context, kPairs * capacity * kSubBoxBytes);
   status.reserve(context, kPairs);
   toi.reserve(context, kPairs * sizeof(double));
   cl_kernel kernel = context.kernel("narrow_conservative_deep", Context::Build::deep);
   const cl_double tolerance = kTolerance, toi_tolerance = kToiTolerance;
   const cl_long max_iterations = kMaxIterations;
-  for (std::size_t i = 0; i < kPairs; ++i) {
-    set_arguments(kernel, static_cast<cl_uint>(i + 1), pairs_buffer.get(), faces_buffer.get(), x0_buffer.get(), x1_buffer.get(), p.thickness[i],
-                  tolerance, toi_tolerance, max_iterations, sub_boxes.get(), static_cast<cl_uint>(capacity), status.get(), toi.get());
-    launch_range(context, kernel, i, 1, 1, nullptr);
-  }
-  std::vector<cl_uchar> device_status(kPairs);
-  std::vector<double> device_toi(kPairs);
-  download(context, status, device_status.data(), kPairs);
-  download(context, toi, device_toi.data(), kPairs);
   const narrowphase::RoundToNearest rounding;
   std::vector<narrowphase::shared::f64::ccd_sub_box> storage(1 << 16);
-  for (std::size_t i = 0; i < kPairs; ++i) {
-    if (device_status[i] == 3) continue;  // out of these sub-boxes too: the host decides such pairs
-    const auto c = host_conservative(p, i, storage);
-    const double device[2] = {static_cast<double>(device_status[i]), device_toi[i]};
-    const double host[2] = {static_cast<double>(c.collides), c.toi};
-    const char* field[2] = {"the deep pass's answer", "the deep pass's TOI"};
-    for (std::size_t k = 0; k < 2; ++k) {
-      if (!(std::isnan(device[k]) && std::isnan(host[k])) && !same_bits(device[k], host[k])) {
-        refuse(context, std::string(field[k]) + " differs on self-test pair " + std::to_string(i) + " of seed " + std::to_string(kSelfTestSeed) +
-                            " (device " + hex(device[k]) + ", host " + hex(host[k]) + ")");
+  for (std::size_t group = 0; group <= kScales; ++group) {
+    // group kScales: every pair at δ = 0; else the pairs of scale `group` at the δ of its first pair that has one.
+    std::vector<std::size_t> members;
+    double thickness = 0;
+    for (std::size_t i = 0; i < kPairs; ++i) {
+      if (group < kScales && i % kScales != group) continue;
+      if (group < kScales && thickness == 0) thickness = p.thickness[i];
+      members.push_back(i);
+    }
+    std::vector<cl_uint4> launched(members.size());
+    for (std::size_t j = 0; j < members.size(); ++j) launched[j] = pairs[members[j]];
+    upload(context, pairs_buffer, launched.data(), launched.size());
+    set_arguments(kernel, static_cast<cl_uint>(launched.size()), pairs_buffer.get(), faces_buffer.get(), x0_buffer.get(), x1_buffer.get(), thickness,
+                  tolerance, toi_tolerance, max_iterations, sub_boxes.get(), static_cast<cl_uint>(capacity), status.get(), toi.get());
+    launch(context, kernel, launched.size(), 64, nullptr);
+    std::vector<cl_uchar> device_status(launched.size());
+    std::vector<double> device_toi(launched.size());
+    download(context, status, device_status.data(), launched.size());
+    download(context, toi, device_toi.data(), launched.size());
+    for (std::size_t j = 0; j < members.size(); ++j) {
+      if (device_status[j] == 3) continue;  // out of these sub-boxes too: the host decides such pairs
+      const std::size_t i = members[j];
+      p.thickness[i] = thickness;
+      const auto c = host_conservative(p, i, storage);
+      const double device[2] = {static_cast<double>(device_status[j]), device_toi[j]};
+      const double host[2] = {static_cast<double>(c.collides), c.toi};
+      const char* field[2] = {"the deep pass's answer", "the deep pass's TOI"};
+      for (std::size_t k = 0; k < 2; ++k) {
+        if (!(std::isnan(device[k]) && std::isnan(host[k])) && !same_bits(device[k], host[k])) {
+          refuse(context, std::string(field[k]) + " differs on self-test pair " + std::to_string(i) + " of seed " + std::to_string(kSelfTestSeed) +
+                              " at δ " + hex(thickness) + " (device " + hex(device[k]) + ", host " + hex(host[k]) + ")");
+        }
       }
     }
   }
