@@ -26,7 +26,6 @@ void DevicePipeline::launch_deep(const Buffer& pairs, std::size_t count, const B
   Context& context = *context_;
   cl_kernel kernel = context.kernel("narrow_conservative_deep", Context::Build::deep);
   const std::size_t capacity = deep_sub_boxes();
-  deep_store_.reserve(context, count * capacity * kSubBoxBytes, deep_batch() * capacity * kSubBoxBytes);
   const cl_double tolerance = narrow_phase_.form.accuracy, toi_tolerance = narrow_phase_.form.toi_tolerance;
   const cl_long max_iterations = narrow_phase_.form.max_iterations;
   set_arguments(kernel, static_cast<cl_uint>(count), pairs.get(), faces_.get(), x0.get(), x1.get(), scene_->thickness(), tolerance, toi_tolerance,
@@ -38,6 +37,8 @@ void DevicePipeline::deep_pass(StageEvents& events, const std::vector<std::size_
                                std::vector<cl_uchar>& status, std::vector<double>& toi, const Buffer& x0, const Buffer& x1, Decided& into) {
   const std::size_t batch = deep_batch();
   if (which.empty() || batch == 0) return;
+  const std::size_t query_bytes = deep_sub_boxes() * kSubBoxBytes;
+  deep_store_.reserve(*context_, std::min(batch, which.size()) * query_bytes, batch * query_bytes);
   // Its wall time (each batch ends with a blocking download), as the later passes' (pipeline.cpp, decide).
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t first = 0; first < which.size(); first += batch) {

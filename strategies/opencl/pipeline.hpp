@@ -278,7 +278,7 @@ class DevicePipeline {
   void launch_conservative(const Buffer& pairs, std::size_t count, long limit, const Buffer& status, const Buffer& toi, const Buffer& x0,
                            const Buffer& x1, StageEvents& events);
   /// narrow_conservative_deep over `count` pairs into retry_status_ and retry_toi_, with deep_sub_boxes() each in
-  /// deep_store_.
+  /// deep_store_ (deep_pass reserves it for its batches).
   void launch_deep(const Buffer& pairs, std::size_t count, const Buffer& x0, const Buffer& x1, StageEvents& events);
   /// The queries `which` of `pairs` run again on the device, their status and TOI updated: with the narrow phase's
   /// kernel and `limit`, or (deep) in the deep pass's build with kDeepSubBoxFactor times the sub-boxes each, from

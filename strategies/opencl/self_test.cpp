@@ -4,6 +4,7 @@
 #include "strategies/narrowphase/shared.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -23,6 +24,8 @@ constexpr std::size_t kPairs = 512;
 constexpr std::size_t kScales = 19;
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
+/// The device's output is the host's: the same bits, or both NaN (a TOI of a pair that does not collide).
+bool same_output(double device, double host) { return (std::isnan(device) && std::isnan(host)) || same_bits(device, host); }
 
 std::string hex(double value) {
   std::ostringstream out;
@@ -65,16 +68,21 @@ SelfTestPairs self_test_pairs() {
   return p;
 }
 
-/// The conservative test of pair i of `p` on the host, with all the room it needs.
-narrowphase::shared::f64::ccd_conservative_outcome host_conservative(const SelfTestPairs& p, std::size_t i,
-                                                                     std::vector<narrowphase::shared::f64::ccd_sub_box>& storage) {
-  narrowphase::shared::f64::ccd_v3 r[8];
-  for (int k = 0; k < 8; ++k) {
-    const std::size_t at = 24 * i + 3 * static_cast<std::size_t>(k);
+/// Pair i's eight rows.
+std::array<narrowphase::shared::f64::ccd_v3, 8> rows_of(const SelfTestPairs& p, std::size_t i) {
+  std::array<narrowphase::shared::f64::ccd_v3, 8> r;
+  for (std::size_t k = 0; k < 8; ++k) {
+    const std::size_t at = 24 * i + 3 * k;
     r[k] = narrowphase::shared::f64::ccd_v3_make(p.rows[at], p.rows[at + 1], p.rows[at + 2]);
   }
-  return narrowphase::shared::f64::ccd_conservative_test(r, p.thickness[i], p.kinds[i], kTolerance, kToiTolerance, kMaxIterations, 0, storage.data(),
-                                                         static_cast<int>(storage.size()));
+  return r;
+}
+
+/// The conservative test of pair i of `p` at `thickness` on the host, with all the room it needs.
+narrowphase::shared::f64::ccd_conservative_outcome host_conservative(const SelfTestPairs& p, std::size_t i, double thickness,
+                                                                     std::vector<narrowphase::shared::f64::ccd_sub_box>& storage) {
+  return narrowphase::shared::f64::ccd_conservative_test(rows_of(p, i).data(), thickness, p.kinds[i], kTolerance, kToiTolerance, kMaxIterations, 0,
+                                                         storage.data(), static_cast<int>(storage.size()));
 }
 
 }  // namespace
@@ -123,22 +131,15 @@ void check_device_arithmetic(Context& context) {
   const narrowphase::RoundToNearest rounding;
   std::vector<narrowphase::shared::f64::ccd_sub_box> storage(1 << 16);
   for (std::size_t i = 0; i < kPairs; ++i) {
-    narrowphase::shared::f64::ccd_v3 r[8];
-    for (int k = 0; k < 8; ++k) {
-      const std::size_t at = 24 * i + 3 * static_cast<std::size_t>(k);
-      r[k] = narrowphase::shared::f64::ccd_v3_make(rows[at], rows[at + 1], rows[at + 2]);
-    }
-    const auto c = narrowphase::shared::f64::ccd_conservative_test(r, thickness[i], kinds[i], kTolerance, kToiTolerance, kMaxIterations, 0,
-                                                                   storage.data(), static_cast<int>(storage.size()));
-    const auto q = narrowphase::shared::f64::ccd_cubic_test(r, thickness[i], kEta, kinds[i]);
+    const auto c = host_conservative(p, i, thickness[i], storage);
+    const auto q = narrowphase::shared::f64::ccd_cubic_test(rows_of(p, i).data(), thickness[i], kEta, kinds[i]);
     const double host[6] = {static_cast<double>(c.collides), c.toi, c.achieved_tolerance, static_cast<double>(q.collides), q.toi, q.reach};
     const char* field[6] = {"conservative's answer", "conservative's TOI", "conservative's tolerance",
                             "cubic64's answer",      "cubic64's TOI",      "cubic64's reach"};
     for (int k = 0; k < 6; ++k) {
       const double d = device[6 * i + static_cast<std::size_t>(k)];
       if (k < 3 && device[6 * i] < 0) continue;  // the device ran out of sub-boxes: the host decides such pairs
-      const bool both_nan = std::isnan(d) && std::isnan(host[k]);
-      if (!both_nan && !same_bits(d, host[k])) {
+      if (!same_output(d, host[k])) {
         refuse(context, std::string(field[k]) + " differs on self-test pair " + std::to_string(i) + " of seed " + std::to_string(kSelfTestSeed) +
                             " (device " + hex(d) + ", host " + hex(host[k]) + ")");
       }
@@ -154,7 +155,7 @@ void check_deep_pass_arithmetic(Context& context, std::size_t capacity) {
   // face as face i, through the deep pass's own kernel, whose thickness is one for a launch: every pair at δ = 0,
   // then each scale's pairs (kScales) at the δ of one of them. (One launch a pair, each at its own δ, ran the 512
   // searches one after another.)
-  SelfTestPairs p = self_test_pairs();
+  const SelfTestPairs p = self_test_pairs();
   std::vector<double> x0(kPairs * 12), x1(kPairs * 12);
   std::vector<cl_uint> faces(kPairs * 3);
   std::vector<cl_uint4> pairs(kPairs);
@@ -199,13 +200,12 @@ void check_deep_pass_arithmetic(Context& context, std::size_t capacity) {
     for (std::size_t j = 0; j < members.size(); ++j) {
       if (device_status[j] == 3) continue;  // out of these sub-boxes too: the host decides such pairs
       const std::size_t i = members[j];
-      p.thickness[i] = thickness;
-      const auto c = host_conservative(p, i, storage);
+      const auto c = host_conservative(p, i, thickness, storage);
       const double device[2] = {static_cast<double>(device_status[j]), device_toi[j]};
       const double host[2] = {static_cast<double>(c.collides), c.toi};
       const char* field[2] = {"the deep pass's answer", "the deep pass's TOI"};
       for (std::size_t k = 0; k < 2; ++k) {
-        if (!(std::isnan(device[k]) && std::isnan(host[k])) && !same_bits(device[k], host[k])) {
+        if (!same_output(device[k], host[k])) {
           refuse(context, std::string(field[k]) + " differs on self-test pair " + std::to_string(i) + " of seed " + std::to_string(kSelfTestSeed) +
                               " at δ " + hex(thickness) + " (device " + hex(device[k]) + ", host " + hex(host[k]) + ")");
         }
