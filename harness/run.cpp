@@ -419,7 +419,7 @@ void Benchmark::run_all() {
 void Benchmark::plan_every_scene() {
   // Every rank waits for this: rank 0 loads kScenesLoadedAtOnce scenes side by side (their frames read and hashed,
   // most of the planning: one after another, the 12 variants of issue 66's sweep took 0.4-0.7 s on a GPU node), then
-  // plans their variants in order. A scene's variants load in turn, the later ones copying the first's frames; each
+  // plans their variants in order. A scene's variants load in turn, each taking the frames of the one before; each
   // keeps only its digest, which is all planning needs of the frames (a cell loads its scene where it runs). An error
   // is reported as planning them one by one would: the first variant's.
   constexpr std::size_t kScenesLoadedAtOnce = 4;  // (each scene's frames held until its digest is taken)
@@ -442,13 +442,13 @@ void Benchmark::plan_every_scene() {
       for (std::size_t s = firsts[window + k]; s < firsts[window + k + 1]; ++s) {
         Loaded& into = loaded[s - first];
         try {
-          into.data = store_.load(s, sibling);
+          into.data = store_.load(s, sibling, true);
           into.content = scene_content_digest(into.data->sequence.scene(), into.data->frames);
         } catch (...) {
           into.error = std::current_exception();
           break;
         }
-        if (sibling != nullptr) std::vector<std::vector<Vec3>>().swap(sibling->frames);
+        if (sibling != nullptr) std::vector<std::vector<Vec3>>().swap(sibling->frames);  // (what a move left)
         sibling = into.data.get();
       }
       if (sibling != nullptr) std::vector<std::vector<Vec3>>().swap(sibling->frames);

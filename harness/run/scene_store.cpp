@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <exception>
+#include <utility>
 
 namespace ccd::harness {
 
@@ -55,7 +56,7 @@ SceneData& SceneStore::get(std::size_t index) {
   return *loaded_.front().second;
 }
 
-std::unique_ptr<SceneData> SceneStore::load(std::size_t index, const SceneData* sibling) const {
+std::unique_ptr<SceneData> SceneStore::load(std::size_t index, SceneData* sibling, bool take) const {
   const SceneVariant& variant = variants_.at(index);
   const SceneSource& source = *variant.source;
   auto data = std::make_unique<SceneData>(SceneData{source.label, source.load(), {}, {}, {}, 0, variant.thickness ? "command line" : "scene"});
@@ -63,12 +64,16 @@ std::unique_ptr<SceneData> SceneStore::load(std::size_t index, const SceneData* 
   data->steps = data->sequence.num_steps();
   if (options_.max_steps > 0) data->steps = std::min(data->steps, options_.max_steps);
   if (data->steps == 0) throw InputError(source.label, {}, "the scene has no steps (one frame)");
-  // The same scene at another δ has the same frames: copied, not read and checked again (a paper scene's 100 PLY
-  // frames take longer to read than its cell takes on a GPU).
+  // The same scene at another δ has the same frames: copied (or moved), not read and checked again (a paper scene's
+  // 100 PLY frames take longer to read than its cell takes on a GPU).
   // (Checked against the scene as loaded now: one whose files changed between the two loads is read again.)
   const std::size_t vertices = data->sequence.scene().topology().num_vertices();
   if (sibling != nullptr && sibling->frames.size() == data->steps + 1 && sibling->frames[0].size() == vertices) {
-    data->frames = sibling->frames;
+    if (take) {
+      data->frames = std::move(sibling->frames);
+    } else {
+      data->frames = sibling->frames;
+    }
   } else {
     data->frames = read_frames(data->sequence, data->steps + 1);
   }

@@ -32,9 +32,10 @@ class SceneStore {
 
   /// Variant `index`, loaded now unless held.
   SceneData& get(std::size_t index);
-  /// Variant `index` loaded, held by the caller (not this store): its frames read, or copied from `sibling` (the
-  /// same scene at another δ, as loaded just before) when its frames fit. Safe to call from several threads.
-  std::unique_ptr<SceneData> load(std::size_t index, const SceneData* sibling) const;
+  /// Variant `index` loaded, held by the caller (not this store): its frames read, or taken from `sibling` (the
+  /// same scene at another δ, as loaded just before) when its frames fit: copied, or moved where `take` (the caller
+  /// needs them no more). Safe to call from several threads.
+  std::unique_ptr<SceneData> load(std::size_t index, SceneData* sibling, bool take = false) const;
 
   /// The scene a work item used last (the one a cell in progress runs on), or nullptr.
   const SceneData* last() const { return loaded_.empty() ? nullptr : loaded_.front().second.get(); }
