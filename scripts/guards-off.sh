@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Shows that the plugin boundary's tests can fail: for each guard of the plugin boundary (docs/DESIGN.md §10), builds
 # ccdbench with that guard alone left out (CCDBENCH_PLUGIN_GUARDS_OFF=GUARD) into build/guards-off-GUARD, runs its tests
-# (tests/plugins/boundary_test.cpp; the gate's also in tests/harness/gate_test.cpp) and prints, per guard, each test and
-# the first lines of its failure, as it must fail without its guard. Exits 0 when every one of them failed, 1 when
-# one passed. About two minutes per guard on 2 cores (a Release build without benchmarks).
+# (tests/plugins/boundary_test.cpp; the fork's in isolation_test.cpp, the gate's also in tests/harness/gate_test.cpp)
+# and prints, per guard, each test and the first lines of its failure, as it must fail without its guard. Exits 0
+# when every one of them failed, 1 when one passed. About two minutes per guard on 2 cores (a Release build without
+# benchmarks).
 # Usage: scripts/guards-off.sh [GUARD...]   (default: every guard)
 # Such a build is for this and nothing else: its version line and every record's provenance say which guards are off.
 set -euo pipefail
@@ -20,11 +21,12 @@ declare -A tests=(
   [child_identity]="Boundary.AFileReplacedDuringARunGivesNoAnswersUnderTheOldDigest"
   [describe_in_child]="Boundary.APluginWhoseLoadCrashesIsRefusedNotTheRunsCrash"
   [lifeline]="Boundary.AChildDiesWithItsParentEvenWhileThePluginHangs"
+  [fork]="Isolation.APluginWhoseForkReturnsGivesNoOtherQuerysAnswer"
   [read_once]="Boundary.AnswersRewrittenWhileReadPutNoOtherDigestOnTheirVerdict Boundary.FoldersOfAnswersThatDifferHaveDifferentDigests"
   [repeats]="Boundary.AnswersThatChangeBetweenPassesAreAVerdictTheGateSees Boundary.ErrorsThatAppearInALaterPassAreNondeterminism"
   [gate]="Boundary.ErrorsCountedAsHitsStillFailTheGate Gate.ErrorsAndNondeterminismFailACellUnlessItsEntryAllowsThem"
 )
-order=(fenv input_copies exit chdir timeout identity child_identity describe_in_child lifeline read_once repeats gate)
+order=(fenv input_copies exit chdir timeout identity child_identity describe_in_child lifeline fork read_once repeats gate)
 guards=("$@")
 if ((${#guards[@]} == 0)); then guards=("${order[@]}"); fi
 for guard in "${guards[@]}"; do

@@ -101,6 +101,10 @@ int describe_plugin(const char* path) {
   return write_all(kReplyFd, reply.data(), reply.size()) ? 0 : 1;
 }
 
+/// This child's process id, from its start: a copy of it that the plugin forks inside a call returns from that call
+/// with another.
+pid_t g_child_pid = 0;
+
 /// A call into the plugin as the child makes it, held to what an in-process call is held to: a C++ exception
 /// thrown through its C functions, or a floating-point environment left otherwise than its load left it, is the
 /// call's error (the environment is put back), so that a plugin gets the same verdicts isolated as in-process.
@@ -114,6 +118,13 @@ std::string child_call(const Library& library, Call&& call) {
   } catch (...) {
     fault = "it threw an exception through the C ABI";
   }
+#if CCDBENCH_GUARD_FORK
+  // A copy of this child that the plugin forked inside the call (a fork whose copy returns, as a careless fork/exec
+  // does) ends here, before it writes an answer or reads a request: it would answer on this child's pipes and in its
+  // batch memory beside it, and a reply it wrote late (after the run read its last) would go unseen. The system call
+  // itself, as in end_own_group: the copy ends alone (the group is this child's), without exit handlers.
+  if (::getpid() != g_child_pid) ::syscall(SYS_exit_group, 0);
+#endif
 #if CCDBENCH_GUARD_FENV
   const FpEnvironment after = FpEnvironment::current();
   if (after != library.environment()) {
@@ -360,6 +371,7 @@ int serve_plugin(int argc, char** argv) {
   if (argc < 3) return 2;
   // This process runs the plugin, and nothing here is ccdbench's own work to guard: its exits are its own.
   set_plugin_host_process();
+  g_child_pid = ::getpid();
   watch_the_parent();
   const int status = serve(argc, argv);
 #if CCDBENCH_GUARD_LIFELINE

@@ -32,7 +32,8 @@
 //   BROKEN_FORK_RETURNS  answers each query by a hash of its rows (contact or apart, a TOI from the hash: every query
 //                       its own answer, the same in any process); on its Nth query (counted in its process; N from
 //                       CCDBENCH_TEST_FORK_ON, never when unset) it forks, and both processes return from the call,
-//                       as a careless fork/exec does: two processes answer on one pipe;
+//                       as a careless fork/exec does: two processes answer on one pipe. With CCDBENCH_TEST_PID_FILE
+//                       set, the copy appends "copy PID forked" to it, and "copy PID called" at each later call;
 //   BROKEN_FORK_AT_LOAD  its constructor forks a process that sleeps ten minutes in its process group, and appends
 //                       its pid to the file CCDBENCH_TEST_PID_FILE names;
 //   BROKEN_CREATE_ROUNDING its create leaves the rounding mode upward;
@@ -183,7 +184,13 @@ void answer(void*, const double* rows, double, ccdbench_answer* out) {
 #endif
 #ifdef BROKEN_FORK_RETURNS
   static const int fork_on = std::getenv("CCDBENCH_TEST_FORK_ON") ? std::atoi(std::getenv("CCDBENCH_TEST_FORK_ON")) : 0;
-  if (queries_answered == fork_on) ::fork();
+  static bool copy = false;
+  const char* calls = std::getenv("CCDBENCH_TEST_PID_FILE");
+  if (copy && calls) std::ofstream(calls, std::ios::app) << "copy " << ::getpid() << " called\n";
+  if (queries_answered == fork_on && ::fork() == 0) {
+    copy = true;
+    if (calls) std::ofstream(calls, std::ios::app) << "copy " << ::getpid() << " forked\n";
+  }
   std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over the rows' bytes
   const auto* bytes = reinterpret_cast<const unsigned char*>(rows);
   for (std::size_t i = 0; i < 24 * sizeof(double); ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
