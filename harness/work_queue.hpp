@@ -78,7 +78,8 @@ std::optional<std::size_t> next_ready_item(const std::vector<WorkItem>& items, c
 
 /// Carries out one item's payload on the rank that took it; returns the result, sent back to rank 0.
 using WorkFunction = std::function<std::string(const std::string& payload)>;
-/// Called on rank 0, on the calling thread, once per finished item, in the order results arrive.
+/// Called on rank 0, on the calling thread, once per finished item, in the order results arrive (under MPI, after
+/// the ranks that sent them have been handed their next item).
 using DoneFunction = std::function<void(std::size_t item, const std::string& result, int rank)>;
 
 /// Runs every item exactly once. Collective: every rank calls it. On rank 0, `items` is the plan and `done` sees

@@ -41,6 +41,9 @@ for ranks in ${RANKS:-1 $gpus}; do
   else
     launch=(mpirun -n "$ranks" --oversubscribe --bind-to none "$bin" --threads "$threads")
   fi
+  # An empty --out: a folder an earlier run left cells in makes the run rebuild results.jsonl from them, at its first
+  # cell and at its end (0.35 s each for this sweep's 36 cells), which is not this run's work.
+  rm -rf "/tmp/gpus-$name"
   nvidia-smi --query-gpu=index,utilization.gpu --format=csv,noheader,nounits -lms 100 > "$out/$name.smi" &
   sampler=$!
   start=$(date +%s%N)
