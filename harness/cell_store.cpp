@@ -165,8 +165,8 @@ ResultsLog::FileState append_whole(const std::filesystem::path& file, const std:
 }  // namespace
 
 void ResultsLog::add(const std::filesystem::path& file, const json& cell, std::ostream& warnings) {
-  const datasets::FileLock lock(out_ / ".results.lock");
-  const std::filesystem::path log = out_ / "results.jsonl";
+  const datasets::FileLock lock(out_ / kResultsLockFile);
+  const std::filesystem::path log = out_ / kResultsLogFile;
   const std::string name = file.filename().string();
   const std::string finished = finished_at_of(cell);
   const std::string key = reader_key(cell);
@@ -187,9 +187,9 @@ void ResultsLog::add(const std::filesystem::path& file, const json& cell, std::o
 }
 
 void ResultsLog::finish(std::ostream& warnings) {
-  const std::filesystem::path log = out_ / "results.jsonl";
+  const std::filesystem::path log = out_ / kResultsLogFile;
   if (!written_ && !std::filesystem::exists(log)) return;  // nothing to repair, and a run that finished no cell writes none
-  const datasets::FileLock lock(out_ / ".results.lock");
+  const datasets::FileLock lock(out_ / kResultsLockFile);
   if (!written_ || stale_ || state_of(log) != written_) rebuild(warnings);
 }
 
@@ -214,7 +214,7 @@ void ResultsLog::rebuild(std::ostream& warnings) {
   }
   std::sort(cells.begin(), cells.end(),
             [](const Finished& a, const Finished& b) { return std::tie(a.finished_at, a.name) < std::tie(b.finished_at, b.name); });
-  const std::filesystem::path log = out_ / "results.jsonl";
+  const std::filesystem::path log = out_ / kResultsLogFile;
   // Until the new log is in place, this run knows nothing of it: a failed commit leaves no state to append after.
   written_.reset();
   names_.clear();

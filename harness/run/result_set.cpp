@@ -37,9 +37,9 @@ ResultSet read_result_set(const std::filesystem::path& given, SummaryUse use) {
   ResultSet set;
   set.path = given;
   std::filesystem::path file = given;
-  if (std::filesystem::is_directory(given)) file = given / "results.jsonl";
+  if (std::filesystem::is_directory(given)) file = given / kResultsLogFile;
   // A run appends to its --out's results.jsonl under the folder's lock (harness/cell_store.hpp): read between appends.
-  const datasets::SharedFileLock between_appends(file.parent_path() / ".results.lock");
+  const datasets::SharedFileLock between_appends(file.parent_path() / kResultsLockFile);
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file, {}, std::filesystem::is_directory(given) ? "no results.jsonl: not a run's --out folder" : "cannot be read");
   std::vector<CellSummary> summaries;

@@ -15,6 +15,11 @@
 
 namespace ccd::harness {
 
+/// An --out folder's log of every finished cell of every run into it (cell_store.hpp, ResultsLog), and the lock
+/// that its writer holds while appending and a reader while reading.
+inline constexpr const char* kResultsLogFile = "results.jsonl";
+inline constexpr const char* kResultsLockFile = ".results.lock";
+
 /// One side's records: the cells' summaries (one per cell: the latest, by finished_at, where an --out folder keeps
 /// several runs' of one cell), and each cell's step records when the side has them.
 struct ResultSet {

@@ -2,6 +2,7 @@
 
 #include "datasets/atomic_file.hpp"
 #include "harness/run/provenance.hpp"
+#include "harness/run/result_set.hpp"
 #include "harness/work_queue.hpp"
 #include "strategies/narrowphase_registry.hpp"
 #include "strategies/registry.hpp"
@@ -259,7 +260,7 @@ void report_run(const RunResult& result, const RunOptions& options, std::ostream
     write_report(*options.report, table, result.cells, options.command_line);
     out << "report: " << (*options.report / kReportPage).string() << "\n";
   }
-  out << "results: " << (options.out / "results.jsonl").string() << " (every finished cell of every run into " << options.out.string() << ")\n";
+  out << "results: " << (options.out / kResultsLogFile).string() << " (every finished cell of every run into " << options.out.string() << ")\n";
 }
 
 }  // namespace ccd::harness
