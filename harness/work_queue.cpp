@@ -184,6 +184,26 @@ void local_worker(LocalChannel& channel, const std::vector<WorkItem>& items, con
   }
 }
 
+/// Hands `rank` (0: rank 0's own worker thread) its next item, or tells it to stop (nullopt).
+void hand_out(int rank, const std::vector<WorkItem>& items, std::optional<std::size_t> item, LocalChannel& channel) {
+  if (rank == 0) {
+    std::lock_guard lock(channel.mutex);
+    if (item) {
+      channel.assignment.emplace(*item, std::string());
+    } else {
+      channel.stop = true;
+    }
+    channel.wake.notify_one();
+  } else if (!item) {
+    send(rank, kStop, {});
+  } else {
+    std::string assignment;
+    put_u64(assignment, *item);
+    assignment += items[*item].payload;
+    send(rank, kAssign, assignment);
+  }
+}
+
 void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, const DoneFunction& done) {
   // Each item waiting (not handed out yet), then running, then finished: what next_ready_item reads.
   std::vector<bool> waiting(items.size(), true), finished(items.size(), false);
@@ -201,6 +221,15 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
     int rank;
   };
   std::vector<Finished> results;
+  // Each result to `done`, in order, each once: also before the run ends on an error, so that the cells finished
+  // before it are written (a rerun does only the rest).
+  auto write_results = [&] {
+    while (!results.empty()) {
+      const Finished result = std::move(results.front());
+      results.erase(results.begin());
+      done(result.index, result.result, result.rank);
+    }
+  };
   try {
     while (stopped < g_ranks.size) {
       bool progressed = false;
@@ -209,6 +238,7 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
         if (message->tag == kFailure) {
           const int code = static_cast<int>(get_u64(message->bytes, 0));
           std::cerr << "ccdbench: error: (rank " << message->source << ") " << message->bytes.substr(8) << '\n';
+          write_results();
           RankSession::end_all_ranks(code);
         }
         if (message->bytes.at(0) == '\1') {
@@ -236,6 +266,7 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
         }
       }
       if (local_error) {
+        write_results();
         local.join();
         std::rethrow_exception(local_error);
       }
@@ -244,33 +275,16 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
         if (!item && unassigned > 0) break;  // the rest waits for running items
         progressed = true;
         if (!item) {
-          if (*rank == 0) {
-            std::lock_guard lock(channel.mutex);
-            channel.stop = true;
-            channel.wake.notify_one();
-          } else {
-            send(*rank, kStop, {});
-          }
           ++stopped;
         } else {
           waiting[*item] = false;
           --unassigned;
           last_group[static_cast<std::size_t>(*rank)] = items[*item].group;
-          if (*rank == 0) {
-            std::lock_guard lock(channel.mutex);
-            channel.assignment.emplace(*item, std::string());
-            channel.wake.notify_one();
-          } else {
-            std::string assignment;
-            put_u64(assignment, *item);
-            assignment += items[*item].payload;
-            send(*rank, kAssign, assignment);
-          }
         }
+        hand_out(*rank, items, item, channel);
         rank = idle.erase(rank);
       }
-      for (const Finished& result : results) done(result.index, result.result, result.rank);
-      results.clear();
+      write_results();
       if (!progressed) std::this_thread::sleep_for(kPollInterval);
     }
   } catch (...) {
@@ -279,6 +293,10 @@ void coordinate(const std::vector<WorkItem>& items, const WorkFunction& work, co
     std::string text;
     const int code = exit_code_of(std::current_exception(), text);
     std::cerr << "ccdbench: error: " << text << '\n';
+    try {
+      write_results();  // what finished before the error (one that `done` itself threw is no longer among them)
+    } catch (...) {
+    }
     RankSession::end_all_ranks(code);  // does not return: coordinate runs only with more than one rank
     std::abort();
   }
