@@ -161,12 +161,16 @@ void write_scene_json(const std::filesystem::path& out, const std::string& name,
   write_json_file(out / "scene.json", document);
 }
 
-/// Whether `out` holds this generation whole: caches with the key, every PLY, and scene.json (written last).
-bool complete_in(const std::filesystem::path& out, const Setup& setup, const std::string& key, std::size_t frames) {
+/// Whether `out` holds this generation whole: caches with the key, every PLY, and scene.json (written last). The
+/// caches it opened (each verified whole) go into `opened`, in the objects' order.
+bool complete_in(const std::filesystem::path& out, const Setup& setup, const std::string& key, std::size_t frames,
+                 std::vector<std::unique_ptr<FrameSource>>& opened) {
   if (!std::filesystem::exists(out / "scene.json")) return false;
   for (const OutputObject& object : setup.objects) {
     try {
-      if (!open_frame_cache(out / "cache" / (object.name + ".frames"), key)) return false;
+      std::optional<std::unique_ptr<FrameSource>> cache = open_frame_cache(out / "cache" / (object.name + ".frames"), key);
+      if (!cache) return false;
+      opened.push_back(std::move(*cache));
     } catch (const InputError& corrupt) {
       // A corrupt or old cache is never used: the scene is generated again over it.
       std::cerr << "ccdbench: warning: " << corrupt.what() << "; the scene is generated again\n";
@@ -238,10 +242,10 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
     result.triangles += object.faces.size();
     if (object.kind == ObjectKind::deformable) result.cloth_triangles += object.faces.size();
   }
-  result.from_cache = complete_in(request.out, setup, key, written);
-
   std::vector<std::unique_ptr<FrameSource>> caches;
+  result.from_cache = complete_in(request.out, setup, key, written, caches);
   if (!result.from_cache) {
+    caches.clear();
     std::filesystem::remove(request.out / "scene.json");
     std::vector<std::unique_ptr<FrameCacheWriter>> writers;
     for (const OutputObject& object : setup.objects) {
@@ -269,8 +273,9 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
     }
     for (auto& writer : writers) writer->finish();
   }
-  for (const OutputObject& object : setup.objects) {
-    caches.push_back(open_frame_cache(request.out / "cache" / (object.name + ".frames")));
+  if (!result.from_cache) {
+    // The caches just written, read back and verified as any reader of them would.
+    for (const OutputObject& object : setup.objects) caches.push_back(open_frame_cache(request.out / "cache" / (object.name + ".frames")));
   }
   if (result.from_cache && request.report) {
     for (std::size_t frame = 0; frame < written; ++frame) {
