@@ -272,8 +272,6 @@ GenerateResult generate_procedural_scene(const GenerateRequest& request) {
       if (request.progress) request.progress(frame + 1, emitted);
     }
     for (auto& writer : writers) writer->finish();
-  }
-  if (!result.from_cache) {
     // The caches just written, read back and verified as any reader of them would.
     for (const OutputObject& object : setup.objects) caches.push_back(open_frame_cache(request.out / "cache" / (object.name + ".frames")));
   }

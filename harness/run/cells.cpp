@@ -119,7 +119,7 @@ void time_pass(const CellContext& cell, Passes& passes, int repeat, const CellPr
     passes.unattributed_sum += passes.step_ms[k].back() - result.stages.total_milliseconds();
     ++passes.unattributed_count;
     for (const auto& [stage, ms] : result.stages.entries()) passes.stage_ms[stage].push_back(ms);
-      // Every repeat's answers (pairs, TOI bits, and how many could not be given) against the first pass's, step
+      // Every later pass's answers (pairs, TOI bits, and how many could not be given) against the first pass's, step
       // by step: harness work, after the timed call.
 #if CCDBENCH_GUARD_REPEATS
     if (repeat > 0) {

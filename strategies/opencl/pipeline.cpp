@@ -94,7 +94,7 @@ NarrowPhaseChoice choose_narrow_phase(const std::string& strategy, std::unique_p
 std::string kernel_defines(std::size_t group_size, long sub_boxes) {
   return "-DCCD_GROUP_SIZE=" + std::to_string(group_size) + " -DCCD_DEVICE_SUB_BOXES=" + std::to_string(sub_boxes) +
          " -DCCD_BOX_ROUNDING_MARGIN=" + hexadecimal(bvh::kBoxRoundingMargin) + " -DCCD_TRAVERSAL_STACK=" + std::to_string(kTraversalStack) +
-         " -DCCD_VERTEX_FACE=" + std::to_string(DevicePipeline::kVertexFace) + "u -DCCD_EMPTY_KEY=" + std::to_string(kEmptyPendingKey) + "UL";
+         " -DCCD_VERTEX_FACE=" + std::to_string(kVertexFacePair) + "u -DCCD_EMPTY_KEY=" + std::to_string(kEmptyPendingKey) + "UL";
 }
 
 void DevicePositions::reset(Context& context, std::span<const Vec3> frame) {
@@ -463,7 +463,7 @@ void DevicePipeline::decide(const Buffer& elementary, std::size_t count, const S
       const std::size_t i = on_host[j];
       const cl_uint4& p = pairs[i];
       const narrowphase::NarrowPhaseResult r =
-          p.s[2] == kVertexFace
+          p.s[2] == kVertexFacePair
               ? host.vertex_face(pair_rows(scene_->topology(), step.x0, step.x1, VertexFacePair{p.s[0], p.s[1]}), scene_->thickness())
               : host.edge_edge(pair_rows(scene_->topology(), step.x0, step.x1, edge_pair(p)), scene_->thickness());
       status[i] = r.collides ? 1 : 0;
@@ -498,7 +498,7 @@ void DevicePipeline::collect(const Decided& decided, strategies::StepResult& res
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
       for (std::size_t i = c * kept / chunks; i < (c + 1) * kept / chunks; ++i) {
         const cl_uint4& p = decided.pairs[i];
-        if (p.s[2] == kVertexFace) {
+        if (p.s[2] == kVertexFacePair) {
           parts[c].add(VertexFacePair{p.s[0], p.s[1]}, decided.toi[i]);
         } else {
           parts[c].add(edge_pair(p), decided.toi[i]);
@@ -531,7 +531,7 @@ void DevicePipeline::add_tested_pairs(const Buffer& elementary, std::size_t coun
   std::vector<cl_uint4> all(count);
   download(*context_, elementary, all.data(), count);
   for (const cl_uint4& p : all) {
-    if (p.s[2] == kVertexFace) {
+    if (p.s[2] == kVertexFacePair) {
       tested.vertex_face.push_back({p.s[0], p.s[1]});
     } else {
       tested.edge_edge.push_back(edge_pair(p));

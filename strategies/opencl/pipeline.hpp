@@ -270,8 +270,6 @@ class DevicePipeline {
 
   /// Each candidate yields at most 15 elementary pairs (6 vertex-face, 9 edge-edge): this keeps their count in 32 bits.
   static constexpr std::size_t kMaxCandidatesPerStep = 0xFFFFFFFFull / 15;
-  /// The third component of a vertex-face pair's uint4 (CCD_VERTEX_FACE in kernels/full.cl).
-  static constexpr cl_uint kVertexFace = kVertexFacePair;
 
  private:
   void build_hierarchies(const Scene& scene, std::span<const Vec3> first_frame);

@@ -109,8 +109,8 @@ void mark_the_original() {
 /// before it writes a reply or an answer or reads a request: it would answer on this child's pipes and in its batch
 /// memory beside it, and a reply it wrote late (after the run read its last) would go unseen. Called after every
 /// call into the plugin, its load included. The system call itself, as in end_own_group: the copy ends alone (the
-/// group is this child's), without exit handlers. It stays a zombie until the child ends: the child reaping it could take
-/// a process the plugin itself waits for.
+/// group is this child's), without exit handlers. It stays a zombie until the child ends: the child reaping it could
+/// take a process the plugin itself waits for.
 void end_if_a_copy() {
 #if CCDBENCH_GUARD_FORK
   const bool copy = g_original_mark != nullptr ? *g_original_mark == 0 : ::getpid() != g_child_pid;
